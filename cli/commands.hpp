@@ -1,0 +1,28 @@
+#pragma once
+// The subcommands of `hbirl`. Each registers its options on the app and returns the
+// function to run once parsing succeeded; the function returns the exit status.
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace hbirl::cli {
+
+using Command = std::function<int()>;
+
+Command add_learn(CLI::App& app);
+Command add_validate(CLI::App& app);
+Command add_generate(CLI::App& app);
+
+// Print a JSON result to stdout, or to `path` when it is not empty.
+void emit(const std::string& text, const std::string& path);
+// Print warnings (one line each) to stderr.
+void warn_all(const std::string& source, const std::vector<std::string>& warnings);
+
+}  // namespace hbirl::cli
+
+#include "problem/problem_file.hpp"
+
+namespace hbirl::cli {
+// Read a problem file; warnings go to stderr, errors are rethrown as InputError whose
+// field starts with the file name ("examples/x.json: mdp.start: ...").
+Problem load_problem(const std::string& path);
+}  // namespace hbirl::cli

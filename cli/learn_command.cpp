@@ -1,0 +1,152 @@
+// hbirl learn: HiddenDataEM / MaxCausalEnt IRL on a problem file.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "learner/hidden_data_em.hpp"
+#include "learner/input_error.hpp"
+#include "learner/metrics.hpp"
+#include "problem/json_format.hpp"
+
+namespace hbirl::cli {
+
+namespace {
+
+struct LearnArgs {
+  std::string problem;
+  std::string from = "observations";
+  std::string optimizer = "lbfgs";
+  double l2 = 0.0;
+  int restarts = 4;
+  std::uint64_t seed = 1;
+  int threads = 0;
+  int max_iterations = 1000;
+  double tolerance = 1e-7;
+  double eg_radius = 50.0;
+  double eg_rate = 0.25;
+  std::string out;
+};
+
+std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+int run_learn(const LearnArgs& args) {
+  const Problem problem = load_problem(args.problem);
+  const Mdp& mdp = problem.mdp;
+  if (args.from == "observations") {
+    throw InputError("--from observations",
+                     "learning from observations needs the exact/MCMC E-step engines, which this "
+                     "version does not have yet; use --from truth");
+  }
+  std::unique_ptr<EStep> estep = std::make_unique<TruthEStep>(mdp, problem.truth_trajectories());
+
+  LearnOptions options;
+  options.optimizer.kind = args.optimizer == "eg" ? OptimizerKind::kExponentiatedGradient : OptimizerKind::kLbfgs;
+  options.optimizer.max_iterations = args.max_iterations;
+  options.optimizer.gradient_tolerance = args.tolerance;
+  options.optimizer.eg_radius = args.eg_radius;
+  options.optimizer.eg_learning_rate = args.eg_rate;
+  options.l2 = args.l2;
+  options.restarts = args.restarts;
+  options.seed = args.seed;
+  options.threads = args.threads;
+  const LearnResult learned = learn_reward(mdp, *estep, options);
+
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
+  const EStepResult expected = estep->expect(policy);
+  nlohmann::ordered_json out;
+  out["weights"] = to_vector(learned.theta);
+  if (!problem.feature_names.empty()) out["feature_names"] = problem.feature_names;
+  out["log_likelihood"] = learned.log_likelihood;
+  out["from"] = args.from;
+  out["objective"] = "causal_log_likelihood";
+  out["optimizer"] = to_string(options.optimizer.kind);
+  out["feature_count_error"] =
+      feature_count_error(mdp, expected.counts, estep->trajectory_lengths(), policy.policy);
+  if (problem.true_weights) {
+    const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.theta);
+    out["ile"] = ile.ile;
+    out["ile_relative"] = ile.relative();
+    out["policy_agreement"] = policy_agreement(mdp, *problem.true_weights, learned.theta);
+    out["true_weights"] = to_vector(*problem.true_weights);
+  }
+  out["selected_restart"] = learned.selected_restart;
+  nlohmann::ordered_json restarts = nlohmann::ordered_json::array();
+  for (const RestartResult& r : learned.restarts) {
+    nlohmann::ordered_json item;
+    item["initial_weights"] = to_vector(r.initial_theta);
+    item["weights"] = to_vector(r.theta);
+    item["log_likelihood"] = r.log_likelihood;
+    item["score"] = r.score;
+    item["em_iterations"] = r.em_iterations;
+    item["optimizer_iterations"] = r.optimizer_iterations;
+    item["converged"] = r.converged;
+    item["status"] = r.optimizer_status;
+    restarts.push_back(item);
+  }
+  out["restarts"] = restarts;
+  for (const RestartResult& r : learned.restarts) {
+    if (!r.converged) {
+      std::cerr << "hbirl: warning: a restart stopped before converging (" << r.optimizer_status
+                << "); see \"restarts\" in the output\n";
+      break;
+    }
+  }
+  emit(format_json(out), args.out);
+  return 0;
+}
+
+}  // namespace
+
+Command add_learn(CLI::App& app) {
+  auto args = std::make_shared<LearnArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "learn",
+      "Learn the expert's reward weights from a problem file and print them as JSON.\n"
+      "--from truth runs MaxCausalEnt IRL on the true trajectories (the 'True Trajectories'\n"
+      "baseline). The M-step maximises the causal log-likelihood of the demonstrated\n"
+      "state-action visits under the stationary soft policy (see docs/MODEL.md). Output keys:\n"
+      "weights, log_likelihood, feature_count_error, and with true_weights in the file also\n"
+      "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
+      "policy_agreement; then one entry per restart.");
+  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")
+      ->required();
+  cmd->add_option("--from", args->from,
+                  "What to learn from: 'observations' (HiddenDataEM on the observations) or "
+                  "'truth' (MaxCausalEnt on the truth trajectories)")
+      ->check(CLI::IsMember({"observations", "truth"}))
+      ->capture_default_str();
+  cmd->add_option("--optimizer", args->optimizer,
+                  "M-step optimiser: 'lbfgs' (L-BFGS) or 'eg' (the paper's adaptive exponentiated gradient)")
+      ->check(CLI::IsMember({"lbfgs", "eg"}))
+      ->capture_default_str();
+  cmd->add_option("--l2", args->l2, "L2 penalty weight on theta, per demonstrated step")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--restarts", args->restarts,
+                  "Restarts: the first from theta = 0, the others from U[-1,1]^K; the one with the "
+                  "highest (penalised) log-likelihood wins")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--seed", args->seed, "Seed of every random choice")->capture_default_str();
+  cmd->add_option("--threads", args->threads,
+                  "Threads for the restarts (0 = one per core); the result does not depend on it")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  cmd->add_option("--max-iterations", args->max_iterations, "Optimiser iteration limit per M-step")
+      ->check(CLI::Range(1, 100000000))
+      ->capture_default_str();
+  cmd->add_option("--tolerance", args->tolerance,
+                  "Optimiser stops when ||gradient|| <= tolerance * max(1, ||theta||)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--eg-radius", args->eg_radius, "EG only: search the L1 ball ||theta||_1 <= radius")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--eg-rate", args->eg_rate, "EG only: learning rate eta (<= 0.25 for its regret bound)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");
+  return [args] { return run_learn(*args); };
+}
+
+}  // namespace hbirl::cli

@@ -1,0 +1,58 @@
+#pragma once
+// HiddenDataEM (SPEC §2, paper §II-A) with random restarts.
+//
+// Each restart alternates
+//   E-step: N_hat = E[visits | data; theta]             (EStep::expect)
+//   M-step: theta = argmax_theta CausalLikelihood(N_hat) (maxcausalent.hpp)
+// until theta and the log-likelihood stop changing. With known trajectories the E-step
+// does not depend on theta and this is plain MaxCausalEnt IRL (one M-step).
+//
+// Restarts: restart 0 starts from theta = 0, restart r > 0 from theta ~ U[-1, 1]^K drawn
+// from the stream r of the seed. Selection rule: the restart with the highest
+// log-likelihood of the data, minus the L2 penalty when one is set; ties go to the
+// lowest restart index. Restarts run in parallel; the result is bit-identical for any
+// thread count.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "learner/estep.hpp"
+#include "learner/optimize.hpp"
+
+namespace hbirl {
+
+struct LearnOptions {
+  OptimizerOptions optimizer;
+  double l2 = 0.0;  // penalty on ||theta||^2, per demonstrated step (see CausalLikelihood)
+  int restarts = 1;
+  std::uint64_t seed = 1;
+  int threads = 0;  // 0 = one per core
+  int max_em_iterations = 100;
+  // EM stops when max|theta change| <= tol * max(1, max|theta|) and the
+  // log-likelihood change <= tol * max(1, |log-likelihood|).
+  double em_tolerance = 1e-7;
+  SoftViOptions soft_vi;
+};
+
+struct RestartResult {
+  Eigen::VectorXd initial_theta;
+  Eigen::VectorXd theta;
+  double log_likelihood = 0.0;  // log Pr(data | theta)
+  double score = 0.0;           // log_likelihood - (l2 / 2) M ||theta||^2: the selection score
+  int em_iterations = 0;
+  int optimizer_iterations = 0;  // summed over M-steps
+  bool converged = false;
+  std::string optimizer_status;
+};
+
+struct LearnResult {
+  Eigen::VectorXd theta;
+  double log_likelihood = 0.0;
+  int selected_restart = 0;
+  std::vector<RestartResult> restarts;
+};
+
+LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions& options);
+
+}  // namespace hbirl

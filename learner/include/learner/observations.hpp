@@ -1,0 +1,36 @@
+#pragma once
+// What the sensors give the learner (SPEC §1): at timestep t, N_t >= 0 observations,
+// each a symbol omega in Omega = {0 .. num_symbols-1} with a source distribution eta over
+// 1 + |E| sources (index 0 the subject, 1..|E| the confounding elements). N_t = 0 is
+// occlusion. Stored flat, one row per observation, so an E-step streams through memory.
+#include <Eigen/Core>
+#include <vector>
+
+namespace hbirl {
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct ObservedTrajectory {
+  std::vector<int> step_begin{0};  // observations of step t are rows [step_begin[t], step_begin[t+1])
+  std::vector<int> symbols;        // one per observation
+  RowMatrix eta;                   // one row per observation, 1 + |E| columns
+
+  int length() const { return static_cast<int>(step_begin.size()) - 1; }
+  int num_observations() const { return static_cast<int>(symbols.size()); }
+  int observations_at(int t) const {
+    return step_begin[static_cast<size_t>(t) + 1] - step_begin[static_cast<size_t>(t)];
+  }
+};
+
+// Dirichlet priors of the observation model (SPEC §1): alpha for the subject's
+// O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e.
+struct ObservationPrior {
+  int num_symbols = 0;
+  int num_confounders = 0;
+  Eigen::MatrixXd subject_alpha;     // (S*A) x num_symbols
+  Eigen::MatrixXd confounder_alpha;  // num_confounders x num_symbols
+  bool learn = true;                 // refine alpha inside the E-step (paper Algorithm 1)
+  double c = 0.1;                    // alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}
+};
+
+}  // namespace hbirl

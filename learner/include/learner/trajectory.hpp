@@ -1,0 +1,25 @@
+#pragma once
+// Trajectories X = ((s,a)_1 ... (s,a)_T) and what is computed straight from them.
+#include <vector>
+
+#include "learner/mdp.hpp"
+#include "learner/rng.hpp"
+
+namespace hbirl {
+
+struct StateAction {
+  int state;
+  int action;
+  friend bool operator==(const StateAction&, const StateAction&) = default;
+};
+
+using Trajectory = std::vector<StateAction>;
+
+// Samples up to `length` steps from the start distribution under `policy` (one
+// probability per (s, a) pair). Stops early when the next state is terminal.
+Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng);
+
+// N(s,a): how often each pair is visited, one entry per pair.
+Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories);
+
+}  // namespace hbirl

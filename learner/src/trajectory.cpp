@@ -1,0 +1,32 @@
+#include "learner/trajectory.hpp"
+
+namespace hbirl {
+
+Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng) {
+  Trajectory trajectory;
+  trajectory.reserve(static_cast<size_t>(std::max(length, 0)));
+  const int A = mdp.num_actions;
+  int s = rng.categorical(mdp.start);
+  for (int t = 0; t < length; ++t) {
+    const int a = rng.categorical(policy.segment(static_cast<Eigen::Index>(s) * A, A));
+    trajectory.push_back({s, a});
+    const int r = mdp.pair(s, a);
+    const int begin = mdp.transitions.outerIndexPtr()[r];
+    const int end = mdp.transitions.outerIndexPtr()[r + 1];
+    const int j = begin + rng.categorical(Eigen::Map<const Eigen::VectorXd>(
+                              mdp.transitions.valuePtr() + begin, end - begin));
+    s = mdp.transitions.innerIndexPtr()[j];
+    if (mdp.is_terminal(s)) break;
+  }
+  return trajectory;
+}
+
+Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories) {
+  Eigen::VectorXd counts = Eigen::VectorXd::Zero(mdp.num_pairs());
+  for (const auto& trajectory : trajectories) {
+    for (const auto& step : trajectory) counts[mdp.pair(step.state, step.action)] += 1.0;
+  }
+  return counts;
+}
+
+}  // namespace hbirl

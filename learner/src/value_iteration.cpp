@@ -1,0 +1,122 @@
+#include "learner/value_iteration.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "learner/policy_matrix.hpp"
+
+namespace hbirl {
+
+namespace {
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+constexpr int kMaxPolicyIterations = 1000;
+
+// q = R + gamma T v with -inf on impossible pairs and terminal states.
+void q_values(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::VectorXd& v,
+              Eigen::VectorXd& q) {
+  q.noalias() = mdp.transitions * v;
+  q = reward + mdp.discount * q;
+  for (int s = 0; s < mdp.num_states; ++s) {
+    for (int a = 0; a < mdp.num_actions; ++a) {
+      if (mdp.is_terminal(s) || !mdp.available(s, a)) q[mdp.pair(s, a)] = kNegInf;
+    }
+  }
+}
+
+Eigen::VectorXd solve_policy(PolicyMatrix& matrix, const Eigen::VectorXd& b) {
+  Eigen::VectorXd x = b;
+  if (!matrix.solve(b, x)) {
+    // Neumann series: x = b + gamma P_pi x, a contraction for gamma < 1.
+    const SparseRowMatrix& m = matrix.matrix();
+    for (int it = 0; it < 1000000; ++it) {
+      Eigen::VectorXd next = b + x - m * x;
+      const double change = (next - x).lpNorm<Eigen::Infinity>();
+      x.swap(next);
+      if (change <= 1e-14 * std::max(1.0, x.lpNorm<Eigen::Infinity>())) break;
+    }
+  }
+  return x;
+}
+}  // namespace
+
+OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, double tolerance) {
+  const int S = mdp.num_states;
+  const int A = mdp.num_actions;
+  OptimalPolicy result;
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(S);
+  Eigen::VectorXd v_new(S);
+  Eigen::VectorXd& q = result.q;
+  for (;;) {
+    q_values(mdp, reward, v, q);
+    for (int s = 0; s < S; ++s) {
+      v_new[s] = mdp.is_terminal(s) ? 0.0 : q.segment(static_cast<Eigen::Index>(s) * A, A).maxCoeff();
+    }
+    ++result.iterations;
+    const double change = (v_new - v).lpNorm<Eigen::Infinity>();
+    v.swap(v_new);
+    if (!std::isfinite(change)) throw std::domain_error("value_iteration: reward is not finite");
+    if (change <= tolerance * std::max(1.0, v.lpNorm<Eigen::Infinity>())) break;
+  }
+  q_values(mdp, reward, v, q);
+  result.actions.assign(static_cast<size_t>(S), -1);
+  for (int s = 0; s < S; ++s) {
+    if (mdp.is_terminal(s)) continue;
+    Eigen::Index best = 0;
+    q.segment(static_cast<Eigen::Index>(s) * A, A).maxCoeff(&best);
+    result.actions[static_cast<size_t>(s)] = static_cast<int>(best);
+  }
+  // Policy iteration polish: switch an action only for a gain beyond rounding noise.
+  for (;;) {
+    result.value = policy_evaluation(mdp, reward, result.actions);
+    q_values(mdp, reward, result.value, q);
+    const double noise = 1e-12 * std::max(1.0, result.value.lpNorm<Eigen::Infinity>());
+    bool improved = false;
+    for (int s = 0; s < S; ++s) {
+      if (mdp.is_terminal(s)) continue;
+      Eigen::Index best = 0;
+      const double best_q = q.segment(static_cast<Eigen::Index>(s) * A, A).maxCoeff(&best);
+      if (best_q > q[mdp.pair(s, result.actions[static_cast<size_t>(s)])] + noise) {
+        result.actions[static_cast<size_t>(s)] = static_cast<int>(best);
+        improved = true;
+      }
+    }
+    if (!improved || ++result.policy_iterations >= kMaxPolicyIterations) break;
+  }
+  return result;
+}
+
+Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
+                                  const std::vector<int>& actions) {
+  if (actions.size() != static_cast<size_t>(mdp.num_states)) {
+    throw std::invalid_argument("policy_evaluation: one action per state expected");
+  }
+  Eigen::VectorXd policy = Eigen::VectorXd::Zero(mdp.num_pairs());
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s)) continue;
+    const int a = actions[static_cast<size_t>(s)];
+    if (a < 0 || a >= mdp.num_actions || !mdp.available(s, a)) {
+      throw std::invalid_argument("policy_evaluation: impossible action in state " + std::to_string(s));
+    }
+    policy[mdp.pair(s, a)] = 1.0;
+  }
+  return policy_evaluation(mdp, reward, policy);
+}
+
+Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
+                                  const Eigen::VectorXd& policy) {
+  const int A = mdp.num_actions;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(mdp.num_states);
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s)) continue;
+    for (int a = 0; a < A; ++a) {
+      const int r = s * A + a;
+      if (policy[r] > 0.0) b[s] += policy[r] * reward[r];
+    }
+  }
+  PolicyMatrix matrix(mdp);
+  matrix.set_policy(policy);
+  return solve_policy(matrix, b);
+}
+
+}  // namespace hbirl

@@ -1,0 +1,44 @@
+#pragma once
+// The problem file of SPEC §6: the user's MDP and demonstration as one JSON document.
+// Everything is validated here, at the edge; a bad file raises InputError naming the
+// field and position, e.g. "demonstration[3].steps[2].observations[0]: eta has 2
+// entries, expected 3". The full format is documented in README.md ("Problem files").
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "learner/mdp.hpp"
+#include "learner/observations.hpp"
+#include "learner/trajectory.hpp"
+
+namespace hbirl {
+
+struct DemonstratedTrajectory {
+  std::optional<ObservedTrajectory> steps;  // what the sensors saw
+  std::optional<Trajectory> truth;          // the true (s, a) pairs, for baselines and metrics
+};
+
+struct Problem {
+  Mdp mdp;
+  std::vector<std::string> state_names;    // empty when the file gives none
+  std::vector<std::string> action_names;
+  std::vector<std::string> feature_names;
+  std::optional<ObservationPrior> observation_model;
+  std::vector<DemonstratedTrajectory> demonstration;
+  std::optional<Eigen::VectorXd> true_weights;
+
+  // The truth trajectories; throws InputError naming the first trajectory without one.
+  std::vector<Trajectory> truth_trajectories() const;
+};
+
+// Parse and validate. `source` names the document in messages only. Unknown keys add a
+// line to *warnings (when not null) and are otherwise ignored.
+Problem parse_problem(const std::string& text, std::vector<std::string>* warnings = nullptr);
+// Read a file; a missing or unreadable file is an InputError with an empty field.
+Problem read_problem_file(const std::string& path, std::vector<std::string>* warnings = nullptr);
+
+// The problem as a JSON document in the same format (round-trips through parse_problem).
+nlohmann::ordered_json problem_to_json(const Problem& problem);
+
+}  // namespace hbirl

@@ -1,0 +1,516 @@
+#include "problem/problem_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "problem/json_node.hpp"
+
+namespace hbirl {
+
+namespace {
+
+// Probabilities given in a file may be rounded (1/3 as 0.333333); sums within this of 1
+// are accepted and renormalised exactly.
+constexpr double kFileSumTolerance = 1e-6;
+constexpr long long kMaxPairs = std::numeric_limits<int>::max() / 2;
+constexpr long long kMaxFeatureCells = 1LL << 28;  // (S*A) x K doubles: 2 GiB
+
+std::string fmt(double x) {
+  std::ostringstream out;
+  out.precision(10);
+  out << x;
+  return out.str();
+}
+
+std::string pair_name(int s, int a) {
+  return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")";
+}
+
+std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what) {
+  const size_t n = node.size();
+  if (static_cast<long long>(n) != expected) {
+    node.fail("has " + std::to_string(n) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
+  }
+  std::vector<std::string> names;
+  for (size_t i = 0; i < n; ++i) names.push_back(node[i].as_string());
+  return names;
+}
+
+// Fails on the first repeated key, naming both entries.
+template <typename Key>
+void reject_duplicates(std::vector<std::pair<Key, size_t>> keys, const JsonNode& list,
+                       const char* what) {
+  std::sort(keys.begin(), keys.end());
+  for (size_t i = 1; i < keys.size(); ++i) {
+    if (keys[i].first == keys[i - 1].first) {
+      list[keys[i].second].fail(std::string("duplicate ") + what + " (also given at index " +
+                                std::to_string(keys[i - 1].second) + ")");
+    }
+  }
+}
+
+struct Sizes {
+  int states = 0;
+  int actions = 0;
+  int features = 0;
+};
+
+Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
+  node.check_keys({"num_states", "num_actions", "num_features", "transitions", "start", "features",
+                   "discount", "terminal", "impossible_actions", "state_names", "action_names",
+                   "feature_names"},
+                  warnings);
+  Sizes n;
+  n.states = static_cast<int>(node.at("num_states").as_int(1, std::numeric_limits<int>::max()));
+  n.actions = static_cast<int>(node.at("num_actions").as_int(1, std::numeric_limits<int>::max()));
+  n.features = static_cast<int>(node.at("num_features").as_int(0, std::numeric_limits<int>::max()));
+  const long long pairs = static_cast<long long>(n.states) * n.actions;
+  if (pairs > kMaxPairs) node.at("num_actions").fail("num_states * num_actions is too large");
+  if (pairs * std::max(n.features, 1) > kMaxFeatureCells) {
+    node.at("num_features").fail("num_states * num_actions * num_features is too large");
+  }
+
+  double discount = 0.95;
+  if (auto d = node.find("discount")) {
+    discount = d->as_number();
+    if (!(discount >= 0.0 && discount < 1.0)) d->fail("expected a number in [0, 1), got " + fmt(discount));
+  }
+
+  std::vector<int> terminal;
+  std::vector<char> is_terminal(static_cast<size_t>(n.states), 0);
+  if (auto t = node.find("terminal")) {
+    for (size_t i = 0; i < t->size(); ++i) {
+      const int s = static_cast<int>((*t)[i].as_int(0, n.states - 1));
+      terminal.push_back(s);
+      is_terminal[static_cast<size_t>(s)] = 1;
+    }
+  }
+
+  std::vector<char> impossible(static_cast<size_t>(pairs), 0);
+  if (auto list = node.find("impossible_actions")) {
+    for (size_t i = 0; i < list->size(); ++i) {
+      const JsonNode e = (*list)[i];
+      e.expect_tuple(2, "[state, action]");
+      const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
+      const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
+      impossible[static_cast<size_t>(s) * n.actions + a] = 1;
+    }
+  }
+
+  // Transitions [s, a, s', p].
+  const JsonNode list = node.at("transitions");
+  std::vector<TransitionEntry> transitions;
+  std::vector<double> row_sum(static_cast<size_t>(pairs), 0.0);
+  std::vector<size_t> row_first(static_cast<size_t>(pairs), std::numeric_limits<size_t>::max());
+  std::vector<std::pair<std::pair<long long, int>, size_t>> keys;
+  const size_t count = list.size();
+  transitions.reserve(count);
+  keys.reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    const JsonNode e = list[i];
+    e.expect_tuple(4, "[state, action, next_state, probability]");
+    const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
+    const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
+    const int s2 = static_cast<int>(e[2].as_int(0, n.states - 1));
+    const double p = e[3].as_number(0.0, 1.0);
+    const long long r = static_cast<long long>(s) * n.actions + a;
+    if (impossible[static_cast<size_t>(r)]) {
+      e.fail("gives a transition for " + pair_name(s, a) + ", which mdp.impossible_actions lists as impossible");
+    }
+    transitions.push_back({s, a, s2, p});
+    keys.push_back({{r, s2}, i});
+    row_sum[static_cast<size_t>(r)] += p;
+    row_first[static_cast<size_t>(r)] = std::min(row_first[static_cast<size_t>(r)], i);
+  }
+  reject_duplicates(std::move(keys), list, "transition");
+  for (long long r = 0; r < pairs; ++r) {
+    const int s = static_cast<int>(r / n.actions);
+    const int a = static_cast<int>(r % n.actions);
+    const size_t first = row_first[static_cast<size_t>(r)];
+    if (first == std::numeric_limits<size_t>::max()) {
+      if (!is_terminal[static_cast<size_t>(s)] && !impossible[static_cast<size_t>(r)]) {
+        list.fail("no entries for " + pair_name(s, a) +
+                  "; every action of a non-terminal state needs transitions summing to 1 "
+                  "(or a place in mdp.impossible_actions)");
+      }
+      continue;
+    }
+    const double sum = row_sum[static_cast<size_t>(r)];
+    if (std::abs(sum - 1.0) > kFileSumTolerance) {
+      list[first].fail("probabilities for " + pair_name(s, a) + " sum to " + fmt(sum) + ", expected 1");
+    }
+  }
+  for (auto& t : transitions) t.probability /= row_sum[static_cast<size_t>(t.state) * n.actions + t.action];
+
+  // Start distribution [s, p]; default uniform over non-terminal states.
+  Eigen::VectorXd start = Eigen::VectorXd::Zero(n.states);
+  if (auto st = node.find("start")) {
+    std::vector<std::pair<int, size_t>> seen;
+    double sum = 0.0;
+    for (size_t i = 0; i < st->size(); ++i) {
+      const JsonNode e = (*st)[i];
+      e.expect_tuple(2, "[state, probability]");
+      const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
+      const double p = e[1].as_number(0.0, 1.0);
+      if (p > 0.0 && is_terminal[static_cast<size_t>(s)]) e.fail("start state " + std::to_string(s) + " is terminal");
+      start[s] = p;
+      sum += p;
+      seen.push_back({s, i});
+    }
+    reject_duplicates(std::move(seen), *st, "start state");
+    if (std::abs(sum - 1.0) > kFileSumTolerance) st->fail("probabilities sum to " + fmt(sum) + ", expected 1");
+    start /= sum;
+  } else {
+    const auto live = std::count(is_terminal.begin(), is_terminal.end(), 0);
+    if (live == 0) node.at("terminal").fail("every state is terminal");
+    for (int s = 0; s < n.states; ++s) {
+      if (!is_terminal[static_cast<size_t>(s)]) start[s] = 1.0 / static_cast<double>(live);
+    }
+  }
+
+  // Features [s, a, k, value]; absent entries are 0.
+  std::vector<FeatureEntry> features;
+  if (auto fl = node.find("features")) {
+    std::vector<std::pair<std::pair<long long, int>, size_t>> seen;
+    for (size_t i = 0; i < fl->size(); ++i) {
+      const JsonNode e = (*fl)[i];
+      e.expect_tuple(4, "[state, action, feature, value]");
+      const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
+      const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
+      if (n.features == 0) e[2].fail("mdp.num_features is 0, so there is no feature to set");
+      const int k = static_cast<int>(e[2].as_int(0, n.features - 1));
+      const double v = e[3].as_number();
+      features.push_back({s, a, k, v});
+      seen.push_back({{static_cast<long long>(s) * n.actions + a, k}, i});
+    }
+    reject_duplicates(std::move(seen), *fl, "feature entry");
+  }
+
+  if (auto names = node.find("state_names")) problem.state_names = read_names(*names, n.states, "state");
+  if (auto names = node.find("action_names")) problem.action_names = read_names(*names, n.actions, "action");
+  if (auto names = node.find("feature_names")) problem.feature_names = read_names(*names, n.features, "feature");
+
+  Mdp mdp = make_mdp(n.states, n.actions, n.features, transitions, features, start, terminal, discount);
+  mdp.validate();  // anything left (e.g. a non-terminal state whose actions are all impossible)
+  return mdp;
+}
+
+ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
+                                        std::vector<std::string>* warnings) {
+  node.check_keys({"num_symbols", "num_confounders", "subject_alpha", "subject_alpha_default",
+                   "confounder_alpha", "confounder_alpha_default", "learn", "c"},
+                  warnings);
+  ObservationPrior prior;
+  prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
+  prior.num_confounders = static_cast<int>(node.at("num_confounders").as_int(0, 1 << 16));
+  if (static_cast<long long>(mdp.num_pairs()) * prior.num_symbols > kMaxFeatureCells) {
+    node.at("num_symbols").fail("num_states * num_actions * num_symbols is too large");
+  }
+  double subject_default = 1.0;
+  if (auto d = node.find("subject_alpha_default")) subject_default = d->as_number(0.0, 1e300);
+  double confounder_default = 1.0;
+  if (auto d = node.find("confounder_alpha_default")) confounder_default = d->as_number(0.0, 1e300);
+  prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), prior.num_symbols, subject_default);
+  prior.confounder_alpha =
+      Eigen::MatrixXd::Constant(prior.num_confounders, prior.num_symbols, confounder_default);
+  if (auto list = node.find("subject_alpha")) {
+    for (size_t i = 0; i < list->size(); ++i) {
+      const JsonNode e = (*list)[i];
+      e.expect_tuple(4, "[state, action, symbol, alpha]");
+      const int s = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
+      const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
+      const int w = static_cast<int>(e[2].as_int(0, prior.num_symbols - 1));
+      prior.subject_alpha(mdp.pair(s, a), w) = e[3].as_number(0.0, 1e300);
+    }
+  }
+  if (auto list = node.find("confounder_alpha")) {
+    for (size_t i = 0; i < list->size(); ++i) {
+      const JsonNode e = (*list)[i];
+      e.expect_tuple(3, "[confounder, symbol, alpha]");
+      if (prior.num_confounders == 0) e[0].fail("observation_model.num_confounders is 0");
+      const int c = static_cast<int>(e[0].as_int(0, prior.num_confounders - 1));
+      const int w = static_cast<int>(e[1].as_int(0, prior.num_symbols - 1));
+      prior.confounder_alpha(c, w) = e[2].as_number(0.0, 1e300);
+    }
+  }
+  // The Dirichlet mean needs a positive total per distribution.
+  for (int s = 0; s < mdp.num_states; ++s) {
+    for (int a = 0; a < mdp.num_actions; ++a) {
+      if (mdp.is_terminal(s) || !mdp.available(s, a)) continue;
+      if (!(prior.subject_alpha.row(mdp.pair(s, a)).sum() > 0.0)) {
+        node.at("subject_alpha").fail("alpha of " + pair_name(s, a) + " sums to 0; set a positive entry or subject_alpha_default");
+      }
+    }
+  }
+  for (int c = 0; c < prior.num_confounders; ++c) {
+    if (!(prior.confounder_alpha.row(c).sum() > 0.0)) {
+      (node.has("confounder_alpha") ? node.at("confounder_alpha") : node)
+          .fail("alpha of confounder " + std::to_string(c) + " sums to 0; set a positive entry or confounder_alpha_default");
+    }
+  }
+  if (auto l = node.find("learn")) prior.learn = l->as_bool();
+  if (auto c = node.find("c")) {
+    prior.c = c->as_number();
+    if (!(prior.c > 0.0 && prior.c <= 1.0)) c->fail("expected a number in (0, 1], got " + fmt(prior.c));
+  }
+  return prior;
+}
+
+ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<ObservationPrior>& prior,
+                              std::vector<std::string>* warnings) {
+  ObservedTrajectory out;
+  const size_t length = steps.size();
+  if (length == 0) steps.fail("is empty; a trajectory needs at least one step");
+  // First pass: count, so the flat arrays are allocated once.
+  size_t total = 0;
+  for (size_t t = 0; t < length; ++t) {
+    const JsonNode step = steps[t];
+    step.check_keys({"observations"}, warnings);
+    total += step.at("observations").size();
+  }
+  if (total > 0 && !prior) {
+    steps.fail("has observations but the file has no observation_model");
+  }
+  const int sources = prior ? 1 + prior->num_confounders : 1;
+  out.symbols.reserve(total);
+  out.eta.resize(static_cast<Eigen::Index>(total), sources);
+  out.step_begin.reserve(length + 1);
+  Eigen::Index row = 0;
+  for (size_t t = 0; t < length; ++t) {
+    const JsonNode list = steps[t].at("observations");
+    for (size_t n = 0; n < list.size(); ++n) {
+      const JsonNode obs = list[n];
+      obs.expect_tuple(2, "[symbol, [eta...]]");
+      const int symbol = static_cast<int>(obs[0].as_int(0, prior->num_symbols - 1));
+      const JsonNode eta = obs[1];
+      const size_t m = eta.size();
+      if (static_cast<int>(m) != sources) {
+        obs.fail("eta has " + std::to_string(m) + " entries, expected " + std::to_string(sources) +
+                 " (the subject and " + std::to_string(prior->num_confounders) + " confounders)");
+      }
+      double sum = 0.0;
+      for (size_t j = 0; j < m; ++j) {
+        const double p = eta[j].as_number(0.0, 1.0);
+        out.eta(row, static_cast<Eigen::Index>(j)) = p;
+        sum += p;
+      }
+      if (std::abs(sum - 1.0) > kFileSumTolerance) obs.fail("eta sums to " + fmt(sum) + ", expected 1");
+      out.eta.row(row) /= sum;
+      out.symbols.push_back(symbol);
+      ++row;
+    }
+    out.step_begin.push_back(static_cast<int>(row));
+  }
+  return out;
+}
+
+Trajectory read_truth(const JsonNode& node, const Mdp& mdp) {
+  Trajectory truth;
+  const size_t length = node.size();
+  if (length == 0) node.fail("is empty; a trajectory needs at least one step");
+  for (size_t t = 0; t < length; ++t) {
+    const JsonNode e = node[t];
+    e.expect_tuple(2, "[state, action]");
+    const int s = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
+    const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
+    if (mdp.is_terminal(s)) {
+      e.fail("state " + std::to_string(s) + " is terminal; a trajectory ends when it enters a terminal state");
+    }
+    if (!mdp.available(s, a)) e.fail("action " + std::to_string(a) + " is impossible in state " + std::to_string(s));
+    if (t > 0) {
+      const StateAction prev = truth.back();
+      if (mdp.transitions.coeff(mdp.pair(prev.state, prev.action), s) <= 0.0) {
+        e.fail("state " + std::to_string(s) + " cannot follow " + pair_name(prev.state, prev.action));
+      }
+    }
+    truth.push_back({s, a});
+  }
+  return truth;
+}
+
+Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warnings) {
+  const JsonNode root(doc, "");
+  if (!doc.is_object()) root.fail("the problem file must be a JSON object");
+  root.check_keys({"mdp", "observation_model", "demonstration", "true_weights"}, warnings);
+  Problem problem;
+  problem.mdp = read_mdp(root.at("mdp"), problem, warnings);
+  if (auto om = root.find("observation_model")) {
+    problem.observation_model = read_observation_model(*om, problem.mdp, warnings);
+  }
+  const JsonNode demo = root.at("demonstration");
+  const size_t count = demo.size();
+  if (count == 0) demo.fail("is empty; give at least one trajectory");
+  for (size_t i = 0; i < count; ++i) {
+    const JsonNode item = demo[i];
+    item.check_keys({"steps", "truth"}, warnings);
+    DemonstratedTrajectory trajectory;
+    if (auto steps = item.find("steps")) {
+      trajectory.steps = read_steps(*steps, problem.observation_model, warnings);
+    }
+    if (auto truth = item.find("truth")) trajectory.truth = read_truth(*truth, problem.mdp);
+    if (!trajectory.steps && !trajectory.truth) item.fail("has neither \"steps\" nor \"truth\"");
+    if (trajectory.steps && trajectory.truth &&
+        static_cast<size_t>(trajectory.steps->length()) != trajectory.truth->size()) {
+      item.at("truth").fail("has " + std::to_string(trajectory.truth->size()) + " steps but \"steps\" has " +
+                            std::to_string(trajectory.steps->length()));
+    }
+    problem.demonstration.push_back(std::move(trajectory));
+  }
+  if (auto tw = root.find("true_weights")) {
+    const size_t k = tw->size();
+    if (static_cast<int>(k) != problem.mdp.num_features()) {
+      tw->fail("has " + std::to_string(k) + " entries, expected " + std::to_string(problem.mdp.num_features()) +
+               " (mdp.num_features)");
+    }
+    Eigen::VectorXd w(static_cast<Eigen::Index>(k));
+    for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = (*tw)[i].as_number();
+    problem.true_weights = w;
+  }
+  return problem;
+}
+
+}  // namespace
+
+std::vector<Trajectory> Problem::truth_trajectories() const {
+  std::vector<Trajectory> out;
+  for (size_t i = 0; i < demonstration.size(); ++i) {
+    if (!demonstration[i].truth) {
+      throw InputError("demonstration[" + std::to_string(i) + "].truth", "missing (learning from the truth needs it for every trajectory)");
+    }
+    out.push_back(*demonstration[i].truth);
+  }
+  return out;
+}
+
+Problem parse_problem(const std::string& text, std::vector<std::string>* warnings) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    // "[json.exception.parse_error.101] parse error at line 2, column 5: ..." -> drop the tag.
+    std::string what = e.what();
+    const auto tag_end = what.find("] ");
+    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
+    if (e.id == 406) what += " (NaN and infinity are not JSON numbers)";  // number overflow
+    throw InputError("", "malformed JSON: " + what);
+  }
+  return parse_document(doc, warnings);
+}
+
+Problem read_problem_file(const std::string& path, std::vector<std::string>* warnings) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError("", "cannot read: it is a directory");
+  errno = 0;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError("", "cannot read: " + std::string(std::strerror(errno ? errno : EIO)));
+  return parse_problem(text, warnings);
+}
+
+nlohmann::ordered_json problem_to_json(const Problem& problem) {
+  using J = nlohmann::ordered_json;
+  const Mdp& mdp = problem.mdp;
+  J m;
+  m["num_states"] = mdp.num_states;
+  m["num_actions"] = mdp.num_actions;
+  m["num_features"] = mdp.num_features();
+  m["discount"] = mdp.discount;
+  if (!problem.state_names.empty()) m["state_names"] = problem.state_names;
+  if (!problem.action_names.empty()) m["action_names"] = problem.action_names;
+  if (!problem.feature_names.empty()) m["feature_names"] = problem.feature_names;
+  J terminal = J::array();
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s)) terminal.push_back(s);
+  }
+  if (!terminal.empty()) m["terminal"] = terminal;
+  J impossible = J::array();
+  J transitions = J::array();
+  for (int s = 0; s < mdp.num_states; ++s) {
+    for (int a = 0; a < mdp.num_actions; ++a) {
+      const int r = mdp.pair(s, a);
+      if (!mdp.is_terminal(s) && !mdp.available(s, a)) impossible.push_back({s, a});
+      for (SparseRowMatrix::InnerIterator it(mdp.transitions, r); it; ++it) {
+        transitions.push_back({s, a, it.col(), it.value()});
+      }
+    }
+  }
+  if (!impossible.empty()) m["impossible_actions"] = impossible;
+  m["transitions"] = transitions;
+  J start = J::array();
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.start[s] > 0.0) start.push_back({s, mdp.start[s]});
+  }
+  m["start"] = start;
+  J features = J::array();
+  for (int r = 0; r < mdp.num_pairs(); ++r) {
+    for (int k = 0; k < mdp.num_features(); ++k) {
+      if (mdp.features(r, k) != 0.0) {
+        features.push_back({r / mdp.num_actions, r % mdp.num_actions, k, mdp.features(r, k)});
+      }
+    }
+  }
+  m["features"] = features;
+
+  J doc;
+  doc["mdp"] = m;
+  if (problem.observation_model) {
+    const ObservationPrior& p = *problem.observation_model;
+    J om;
+    om["num_symbols"] = p.num_symbols;
+    om["num_confounders"] = p.num_confounders;
+    J sa = J::array();
+    for (int r = 0; r < p.subject_alpha.rows(); ++r) {
+      for (int w = 0; w < p.num_symbols; ++w) {
+        sa.push_back({r / mdp.num_actions, r % mdp.num_actions, w, p.subject_alpha(r, w)});
+      }
+    }
+    om["subject_alpha"] = sa;
+    J ca = J::array();
+    for (int c = 0; c < p.num_confounders; ++c) {
+      for (int w = 0; w < p.num_symbols; ++w) ca.push_back({c, w, p.confounder_alpha(c, w)});
+    }
+    om["confounder_alpha"] = ca;
+    om["learn"] = p.learn;
+    om["c"] = p.c;
+    doc["observation_model"] = om;
+  }
+  J demo = J::array();
+  for (const auto& trajectory : problem.demonstration) {
+    J item;
+    if (trajectory.steps) {
+      const ObservedTrajectory& o = *trajectory.steps;
+      J steps = J::array();
+      for (int t = 0; t < o.length(); ++t) {
+        J observations = J::array();
+        for (int i = o.step_begin[static_cast<size_t>(t)]; i < o.step_begin[static_cast<size_t>(t) + 1]; ++i) {
+          std::vector<double> eta(o.eta.row(i).data(), o.eta.row(i).data() + o.eta.cols());
+          observations.push_back(J::array({o.symbols[static_cast<size_t>(i)], eta}));
+        }
+        steps.push_back(J{{"observations", observations}});
+      }
+      item["steps"] = steps;
+    }
+    if (trajectory.truth) {
+      J truth = J::array();
+      for (const auto& step : *trajectory.truth) truth.push_back({step.state, step.action});
+      item["truth"] = truth;
+    }
+    demo.push_back(item);
+  }
+  doc["demonstration"] = demo;
+  if (problem.true_weights) {
+    doc["true_weights"] = std::vector<double>(problem.true_weights->data(),
+                                              problem.true_weights->data() + problem.true_weights->size());
+  }
+  return doc;
+}
+
+}  // namespace hbirl
