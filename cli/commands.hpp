@@ -19,10 +19,13 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 
 }  // namespace hbirl::cli
 
+#include "learner/input_error.hpp"
 #include "problem/problem_file.hpp"
 
 namespace hbirl::cli {
 // Read a problem file; warnings go to stderr, errors are rethrown as InputError whose
 // field starts with the file name ("examples/x.json: mdp.start: ...").
 Problem load_problem(const std::string& path);
+// An InputError about the content of the file at `path`, with the file name prefixed.
+InputError in_file(const std::string& path, const InputError& e);
 }  // namespace hbirl::cli

@@ -32,8 +32,12 @@ Problem load_problem(const std::string& path) {
     warn_all(path, warnings);
     return problem;
   } catch (const InputError& e) {
-    throw InputError(e.field().empty() ? path : path + ": " + e.field(), e.message());
+    throw in_file(path, e);
   }
+}
+
+InputError in_file(const std::string& path, const InputError& e) {
+  return InputError(e.field().empty() ? path : path + ": " + e.field(), e.message());
 }
 
 }  // namespace hbirl::cli

@@ -21,7 +21,7 @@ struct LearnArgs {
   std::uint64_t seed = 1;
   int threads = 0;
   int max_iterations = 1000;
-  double tolerance = 1e-7;
+  double tolerance = 1e-9;
   double eg_radius = 50.0;
   double eg_rate = 0.25;
   std::string out;
@@ -37,7 +37,13 @@ int run_learn(const LearnArgs& args) {
                      "learning from observations needs the exact/MCMC E-step engines, which this "
                      "version does not have yet; use --from truth");
   }
-  std::unique_ptr<EStep> estep = std::make_unique<TruthEStep>(mdp, problem.truth_trajectories());
+  std::vector<Trajectory> truth;
+  try {
+    truth = problem.truth_trajectories();
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
+  std::unique_ptr<EStep> estep = std::make_unique<TruthEStep>(mdp, std::move(truth));
 
   LearnOptions options;
   options.optimizer.kind = args.optimizer == "eg" ? OptimizerKind::kExponentiatedGradient : OptimizerKind::kLbfgs;

@@ -10,6 +10,10 @@ namespace hbirl {
 
 namespace {
 
+// See maximize_lbfgs: the gradient size below which a stalled line search counts as
+// convergence.
+constexpr double kWorkingPrecision = 1e-6;
+
 struct LbfgsContext {
   const Objective* f = nullptr;
   Eigen::VectorXd x;
@@ -113,6 +117,16 @@ OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0,
       code == LBFGS_SUCCESS || code == LBFGS_STOP || code == LBFGS_ALREADY_MINIMIZED;
   result.status = lbfgs_status(code);
   finish(f, result, options);
+  // Near the optimum the objective stops changing in double precision before the
+  // gradient reaches a tight tolerance, and the line search gives up. That is the best
+  // attainable point when the gradient is already small.
+  const bool line_search_stop = code == LBFGSERR_ROUNDING_ERROR || code == LBFGSERR_MINIMUMSTEP ||
+                                code == LBFGSERR_MAXIMUMLINESEARCH || code == LBFGSERR_WIDTHTOOSMALL;
+  if (!result.converged && line_search_stop &&
+      result.gradient_norm <= kWorkingPrecision * std::max(1.0, result.x.norm())) {
+    result.converged = true;
+    result.status = "converged to working precision (" + result.status + ")";
+  }
   return result;
 }
 

@@ -109,7 +109,7 @@ long long JsonNode::as_int(long long lo, long long hi) const {
   long long x = 0;
   if (v.is_number_unsigned()) {
     const auto u = v.get<unsigned long long>();
-    if (u > static_cast<unsigned long long>(hi)) fail("expected an integer" + range + ", got " + describe());
+    if (u > static_cast<unsigned long long>(hi)) fail("expected an integer" + range + ", got " + std::to_string(u));
     x = static_cast<long long>(u);
   } else if (v.is_number_integer()) {
     x = v.get<long long>();

@@ -17,8 +17,10 @@ enum class OptimizerKind {
 struct OptimizerOptions {
   OptimizerKind kind = OptimizerKind::kLbfgs;
   int max_iterations = 1000;
-  // Converged when ||gradient||_2 <= gradient_tolerance * max(1, ||x||_2).
-  double gradient_tolerance = 1e-7;
+  // Converged when ||gradient||_2 <= gradient_tolerance * max(1, ||x||_2). L-BFGS also
+  // counts a line search that can no longer improve the objective in double precision
+  // as converged when ||gradient||_2 <= 1e-6 * max(1, ||x||_2) ("working precision").
+  double gradient_tolerance = 1e-9;
   // EG works on the L1 ball ||x||_1 <= eg_radius (x = radius * (w+ - w-), w on the
   // simplex of 2K experts); a solution on the boundary means the radius was too small.
   double eg_radius = 50.0;

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Every test: install what is missing, build with warnings as errors, run the test
+# suite, then build and run it again under AddressSanitizer + UndefinedBehaviorSanitizer.
+# The benchmarks are built (so they keep compiling) but not run; see docs/BENCHMARKS.md.
+set -euo pipefail
+cd "$(dirname "$0")"
+scripts/install-deps.sh
+jobs="$(nproc)"
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DHBIRL_WERROR=ON >/dev/null
+cmake --build build -j"$jobs"
+ctest --test-dir build --output-on-failure -j"$jobs"
+
+cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHBIRL_WERROR=ON \
+      -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
+cmake --build build-sanitize -j"$jobs"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-sanitize --output-on-failure -j"$jobs"

@@ -1,0 +1,245 @@
+// The `hbirl` binary as a user meets it: exit status, what goes to stdout and stderr.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Outcome {
+  int status = -1;
+  std::string out;
+  std::string err;
+  int err_lines() const {
+    int n = 0;
+    for (char c : err) n += c == '\n';
+    return n;
+  }
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hbirl_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Outcome run(const std::string& args) {
+    const fs::path out = dir_ / "stdout";
+    const fs::path err = dir_ / "stderr";
+    const std::string cmd = std::string("'") + HBIRL_BIN + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+    const int raw = std::system(cmd.c_str());
+    Outcome r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+
+  // A bad problem file must give exit 2, nothing on stdout, one stderr line naming it.
+  void expect_rejected(const std::string& text, const std::string& fragment) {
+    const fs::path p = write("bad.json", text);
+    const Outcome r = run("learn --from truth --problem '" + p.string() + "'");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err_lines(), 1) << r.err;
+    EXPECT_NE(r.err.find("hbirl: error: " + p.string() + ": "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
+  }
+
+  static std::string example(const std::string& name) {
+    return std::string(HBIRL_SOURCE_DIR) + "/examples/" + name;
+  }
+
+  static json corridor() {
+    std::ifstream in(example("corridor.json"));
+    return json::parse(in);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, HelpForEveryCommand) {
+  for (const char* args : {"--help", "learn --help", "validate --help", "generate --help",
+                           "generate gridworld --help"}) {
+    const Outcome r = run(args);
+    EXPECT_EQ(r.status, 0) << args;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << args;
+    EXPECT_EQ(r.err, "") << args;
+  }
+  EXPECT_NE(run("learn --help").out.find("--problem"), std::string::npos);
+  EXPECT_EQ(run("--version").status, 0);
+}
+
+TEST_F(Cli, UsageErrors) {
+  for (const char* args : {"", "frobnicate", "learn", "learn --problem x.json --from nowhere",
+                           "learn --problem x.json --restarts 0", "learn --bogus"}) {
+    const Outcome r = run(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_EQ(r.out, "") << args;
+    EXPECT_EQ(r.err_lines(), 1) << args << ": " << r.err;
+  }
+}
+
+TEST_F(Cli, LearnsFromTruthAndPrintsJson) {
+  const Outcome r = run("learn --from truth --problem '" + example("gridworld_5x5.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  ASSERT_EQ(out["weights"].size(), 4u);
+  EXPECT_TRUE(out["log_likelihood"].is_number());
+  EXPECT_TRUE(out["ile"].is_number());
+  EXPECT_TRUE(out["feature_count_error"].is_number());
+  EXPECT_TRUE(out["policy_agreement"].is_number());
+  // The example's goal is the bottom-right corner.
+  const std::vector<double> w = out["weights"];
+  EXPECT_EQ(std::max_element(w.begin(), w.end()) - w.begin(), 3);
+  EXPECT_LT(out["ile_relative"].get<double>(), 2e-3);
+}
+
+TEST_F(Cli, SameBitsWhateverTheThreadCount) {
+  const std::string base = "learn --from truth --restarts 6 --seed 9 --problem '" + example("gridworld_5x5.json") + "'";
+  const Outcome one = run(base + " --threads 1");
+  const Outcome four = run(base + " --threads 4");
+  ASSERT_EQ(one.status, 0);
+  EXPECT_EQ(one.out, four.out);
+  EXPECT_EQ(one.out, run(base + " --threads 1").out);
+  EXPECT_NE(one.out, run("learn --from truth --restarts 6 --seed 10 --problem '" + example("gridworld_5x5.json") + "'").out);
+}
+
+TEST_F(Cli, BothOptimisersRecoverTheCorridorPolicy) {
+  for (const char* optimizer : {"lbfgs", "eg"}) {
+    const Outcome r = run(std::string("learn --from truth --optimizer ") + optimizer + " --problem '" + example("corridor.json") + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const json out = json::parse(r.out);
+    EXPECT_EQ(out["optimizer"], optimizer);
+    EXPECT_EQ(out["policy_agreement"].get<double>(), 1.0);
+  }
+}
+
+TEST_F(Cli, ValidateSummarises) {
+  const Outcome r = run("validate --problem '" + example("corridor.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["trajectories"], 6);
+  EXPECT_EQ(out["observations"], 3);
+  EXPECT_EQ(out["occluded_steps"], 1);
+}
+
+TEST_F(Cli, GenerateThenLearn) {
+  const fs::path p = dir_ / "grid.json";
+  const Outcome g = run("generate gridworld --size 4 --trajectories 30 --goal 2 --seed 5 --out '" + p.string() + "'");
+  ASSERT_EQ(g.status, 0) << g.err;
+  EXPECT_EQ(g.out, "");
+  const Outcome r = run("learn --from truth --problem '" + p.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<double> w = json::parse(r.out)["weights"];
+  EXPECT_EQ(std::max_element(w.begin(), w.end()) - w.begin(), 2);
+}
+
+TEST_F(Cli, MissingAndUnreadableFiles) {
+  Outcome r = run("learn --from truth --problem '" + (dir_ / "nope.json").string() + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(r.err_lines(), 1);
+  EXPECT_NE(r.err.find("cannot open: No such file or directory"), std::string::npos) << r.err;
+  r = run("learn --from truth --problem '" + dir_.string() + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, MalformedJson) { expect_rejected("{\"mdp\": [1, 2,", "malformed JSON"); }
+
+TEST_F(Cli, WrongType) {
+  json d = corridor();
+  d["mdp"]["num_actions"] = "two";
+  expect_rejected(d.dump(), "mdp.num_actions: expected an integer");
+}
+
+TEST_F(Cli, ProbabilitiesNotSummingToOne) {
+  json d = corridor();
+  d["mdp"]["transitions"][1][3] = 0.5;
+  expect_rejected(d.dump(), "mdp.transitions[1]: probabilities for (s=0, a=1) sum to 0.7, expected 1");
+}
+
+TEST_F(Cli, NonFiniteNumber) {
+  json d = corridor();
+  std::string text = d.dump();
+  text.replace(text.find("0.9"), 3, "1e999");
+  expect_rejected(text, "NaN and infinity are not JSON numbers");
+}
+
+TEST_F(Cli, NegativeValue) {
+  json d = corridor();
+  d["mdp"]["start"][0][1] = -0.5;
+  expect_rejected(d.dump(), "mdp.start[0][1]: expected a number in [0, 1], got -0.5");
+}
+
+TEST_F(Cli, OutOfRangeIndex) {
+  json d = corridor();
+  d["demonstration"][0]["steps"][2]["observations"][0][0] = 9;
+  expect_rejected(d.dump(), "demonstration[0].steps[2].observations[0][0]: expected an integer in [0, 1], got 9");
+}
+
+TEST_F(Cli, WrongEtaLength) {
+  json d = corridor();
+  d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.5, 0.25, 0.25};
+  expect_rejected(d.dump(), "demonstration[0].steps[0].observations[0]: eta has 3 entries, expected 2");
+}
+
+TEST_F(Cli, EmptyDemonstration) {
+  json d = corridor();
+  d["demonstration"] = json::array();
+  expect_rejected(d.dump(), "demonstration: is empty");
+}
+
+TEST_F(Cli, NoTruthForLearningFromTruth) {
+  json d = corridor();
+  d["demonstration"][1].erase("truth");
+  d["demonstration"][1]["steps"] = {{{"observations", json::array()}}};
+  expect_rejected(d.dump(), "demonstration[1].truth: missing");
+}
+
+TEST_F(Cli, UnknownKeysOnlyWarn) {
+  json d = corridor();
+  d["mdp"]["discout"] = 0.9;
+  const fs::path p = write("warn.json", d.dump());
+  const Outcome r = run("learn --from truth --problem '" + p.string() + "'");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NO_THROW(json::parse(r.out));
+  EXPECT_NE(r.err.find("hbirl: warning: " + p.string() + ": mdp.discout: unknown key, ignored (did you mean \"discount\"?)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(Cli, LearningFromObservationsIsNotYetAvailable) {
+  const Outcome r = run("learn --problem '" + example("corridor.json") + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("use --from truth"), std::string::npos) << r.err;
+}
+
+}  // namespace

@@ -1,0 +1,266 @@
+#include "problem/problem_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "learner/input_error.hpp"
+
+namespace hbirl {
+namespace {
+
+using nlohmann::json;
+
+// The SPEC §6 example, extended with names and a terminal-free 3-state MDP.
+json spec_example() {
+  return json::parse(R"({
+    "mdp": {
+      "num_states": 3, "num_actions": 2, "num_features": 2,
+      "transitions": [[0, 0, 1, 1.0], [0, 1, 2, 0.7], [0, 1, 0, 0.3], [1, 0, 1, 1.0],
+                      [1, 1, 2, 1.0], [2, 0, 2, 1.0], [2, 1, 0, 1.0]],
+      "start": [[0, 1.0]],
+      "features": [[1, 0, 0, 1.0], [2, 1, 1, 1.0]],
+      "discount": 0.95
+    },
+    "observation_model": {
+      "num_symbols": 4, "num_confounders": 2,
+      "subject_alpha": [[0, 0, 3, 12.0]], "subject_alpha_default": 1.0,
+      "confounder_alpha": [[0, 1, 5.0]], "confounder_alpha_default": 1.0,
+      "learn": true, "c": 0.1
+    },
+    "demonstration": [
+      { "steps": [
+          { "observations": [[3, [0.6, 0.2, 0.2]], [1, [0.1, 0.8, 0.1]]] },
+          { "observations": [] }
+        ],
+        "truth": [[0, 1], [2, 0]] }
+    ],
+    "true_weights": [0.0, 1.0]
+  })");
+}
+
+// Parses `doc` after `mutate` and expects an InputError naming `field` whose message
+// contains `fragment`.
+void expect_error(const std::function<void(json&)>& mutate, const std::string& field,
+                  const std::string& fragment) {
+  json doc = spec_example();
+  mutate(doc);
+  try {
+    parse_problem(doc.dump());
+    ADD_FAILURE() << "accepted; expected an error at " << field;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), field) << e.what();
+    EXPECT_NE(e.message().find(fragment), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line: " << e.what();
+  }
+}
+
+TEST(ProblemFile, SpecExampleParses) {
+  std::vector<std::string> warnings;
+  const Problem p = parse_problem(spec_example().dump(), &warnings);
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_EQ(p.mdp.num_states, 3);
+  EXPECT_EQ(p.mdp.num_features(), 2);
+  EXPECT_DOUBLE_EQ(p.mdp.transitions.coeff(p.mdp.pair(0, 1), 2), 0.7);
+  EXPECT_DOUBLE_EQ(p.mdp.features(p.mdp.pair(2, 1), 1), 1.0);
+  ASSERT_TRUE(p.observation_model);
+  EXPECT_DOUBLE_EQ(p.observation_model->subject_alpha(p.mdp.pair(0, 0), 3), 12.0);
+  EXPECT_DOUBLE_EQ(p.observation_model->subject_alpha(p.mdp.pair(1, 1), 2), 1.0);
+  EXPECT_DOUBLE_EQ(p.observation_model->confounder_alpha(0, 1), 5.0);
+  ASSERT_EQ(p.demonstration.size(), 1u);
+  const ObservedTrajectory& steps = *p.demonstration[0].steps;
+  EXPECT_EQ(steps.length(), 2);
+  EXPECT_EQ(steps.observations_at(0), 2);
+  EXPECT_EQ(steps.observations_at(1), 0);  // occluded
+  EXPECT_EQ(steps.symbols[1], 1);
+  EXPECT_DOUBLE_EQ(steps.eta(1, 1), 0.8);
+  EXPECT_EQ(*p.demonstration[0].truth, (Trajectory{{0, 1}, {2, 0}}));
+  EXPECT_EQ(*p.true_weights, Eigen::Vector2d(0.0, 1.0));
+}
+
+TEST(ProblemFile, RoundTripsThroughJson) {
+  const Problem p = parse_problem(spec_example().dump());
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  EXPECT_TRUE(p.mdp.transitions.isApprox(q.mdp.transitions, 0.0));
+  EXPECT_EQ(p.mdp.features, q.mdp.features);
+  EXPECT_EQ(p.mdp.start, q.mdp.start);
+  EXPECT_EQ(p.observation_model->subject_alpha, q.observation_model->subject_alpha);
+  EXPECT_EQ(p.observation_model->confounder_alpha, q.observation_model->confounder_alpha);
+  EXPECT_EQ(p.demonstration[0].steps->eta, q.demonstration[0].steps->eta);
+  EXPECT_EQ(p.demonstration[0].steps->step_begin, q.demonstration[0].steps->step_begin);
+  EXPECT_EQ(*p.demonstration[0].truth, *q.demonstration[0].truth);
+}
+
+TEST(ProblemFile, MalformedJson) {
+  try {
+    parse_problem("{\n  \"mdp\": {,\n}");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("malformed JSON"), std::string::npos);
+    EXPECT_NE(e.message().find("line 2, column 11"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_problem(""), InputError);
+  EXPECT_THROW(parse_problem("[1, 2]"), InputError);
+}
+
+TEST(ProblemFile, WrongTypes) {
+  expect_error([](json& d) { d["mdp"]["num_states"] = "3"; }, "mdp.num_states", "expected an integer");
+  expect_error([](json& d) { d["mdp"]["num_states"] = 2.5; }, "mdp.num_states", "expected an integer");
+  expect_error([](json& d) { d["mdp"]["transitions"] = json::object(); }, "mdp.transitions", "expected an array");
+  expect_error([](json& d) { d["mdp"]["transitions"][1] = {0, 1, 2}; }, "mdp.transitions[1]",
+               "expected [state, action, next_state, probability]");
+  expect_error([](json& d) { d["mdp"]["transitions"][1][3] = "0.7"; }, "mdp.transitions[1][3]", "expected a number");
+  expect_error([](json& d) { d["observation_model"]["learn"] = 1; }, "observation_model.learn", "true or false");
+  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0] = 3; },
+               "demonstration[0].steps[0].observations[0]", "expected [symbol, [eta...]]");
+  expect_error([](json& d) { d["demonstration"] = json::object(); }, "demonstration", "expected an array");
+  expect_error([](json& d) { d["mdp"]["state_names"] = {"a", 2, "c"}; }, "mdp.state_names[1]", "expected a string");
+}
+
+TEST(ProblemFile, MissingRequiredFields) {
+  expect_error([](json& d) { d["mdp"].erase("transitions"); }, "mdp.transitions", "missing");
+  expect_error([](json& d) { d.erase("demonstration"); }, "demonstration", "missing");
+  expect_error([](json& d) { d["demonstration"][0]["steps"][1].erase("observations"); },
+               "demonstration[0].steps[1].observations", "missing");
+}
+
+TEST(ProblemFile, ProbabilitiesNotSummingToOne) {
+  expect_error([](json& d) { d["mdp"]["transitions"][1][3] = 0.6; }, "mdp.transitions[1]",
+               "probabilities for (s=0, a=1) sum to 0.9");
+  expect_error([](json& d) { d["mdp"]["start"] = {{0, 0.5}, {1, 0.4}}; }, "mdp.start", "sum to 0.9");
+  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.6, 0.2, 0.1}; },
+               "demonstration[0].steps[0].observations[0]", "eta sums to 0.9");
+  expect_error([](json& d) { d["mdp"]["transitions"].erase(0); }, "mdp.transitions", "no entries for (s=0, a=0)");
+}
+
+TEST(ProblemFile, RoundedProbabilitiesAreRenormalised) {
+  json d = spec_example();
+  d["mdp"]["transitions"][1][3] = 0.6999995;
+  const Problem p = parse_problem(d.dump());
+  EXPECT_NEAR(p.mdp.transitions.coeff(p.mdp.pair(0, 1), 2) + p.mdp.transitions.coeff(p.mdp.pair(0, 1), 0), 1.0, 1e-15);
+}
+
+TEST(ProblemFile, NonFiniteNumbers) {
+  // JSON has no NaN or infinity: they arrive as syntax errors or overflowing literals.
+  json d = spec_example();
+  std::string text = d.dump();
+  const std::string needle = "0.7";
+  std::string nan_text = text;
+  nan_text.replace(nan_text.find(needle), needle.size(), "NaN");
+  EXPECT_THROW(parse_problem(nan_text), InputError);
+  std::string inf_text = text;
+  inf_text.replace(inf_text.find(needle), needle.size(), "1e999");
+  try {
+    parse_problem(inf_text);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("NaN and infinity are not JSON numbers"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ProblemFile, NegativeValues) {
+  expect_error([](json& d) { d["mdp"]["transitions"][1][3] = -0.7; }, "mdp.transitions[1][3]", "expected a number in [0, 1]");
+  expect_error([](json& d) { d["mdp"]["num_states"] = -3; }, "mdp.num_states", "expected an integer in [1,");
+  expect_error([](json& d) { d["observation_model"]["subject_alpha"][0][3] = -1.0; },
+               "observation_model.subject_alpha[0][3]", "expected a number in [0,");
+  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][1][1] = {-0.1, 1.0, 0.1}; },
+               "demonstration[0].steps[0].observations[1][1][0]", "expected a number in [0, 1]");
+  expect_error([](json& d) { d["mdp"]["discount"] = -0.5; }, "mdp.discount", "expected a number in [0, 1)");
+}
+
+TEST(ProblemFile, OutOfRangeIndices) {
+  expect_error([](json& d) { d["mdp"]["transitions"][0][2] = 3; }, "mdp.transitions[0][2]", "expected an integer in [0, 2]");
+  expect_error([](json& d) { d["mdp"]["features"][0][2] = 2; }, "mdp.features[0][2]", "expected an integer in [0, 1]");
+  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][0] = 4; },
+               "demonstration[0].steps[0].observations[0][0]", "expected an integer in [0, 3]");
+  expect_error([](json& d) { d["demonstration"][0]["truth"][1] = {5, 0}; }, "demonstration[0].truth[1][0]",
+               "expected an integer in [0, 2]");
+  expect_error([](json& d) { d["observation_model"]["confounder_alpha"][0][0] = 2; },
+               "observation_model.confounder_alpha[0][0]", "expected an integer in [0, 1]");
+  expect_error([](json& d) { d["mdp"]["terminal"] = {7}; }, "mdp.terminal[0]", "expected an integer in [0, 2]");
+}
+
+TEST(ProblemFile, InconsistentContent) {
+  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.5, 0.5}; },
+               "demonstration[0].steps[0].observations[0]", "eta has 2 entries, expected 3");
+  expect_error([](json& d) { d["demonstration"][0]["truth"] = {{0, 1}, {1, 0}}; }, "demonstration[0].truth[1]",
+               "state 1 cannot follow (s=0, a=1)");
+  expect_error([](json& d) { d["demonstration"][0]["truth"] = {{0, 1}}; }, "demonstration[0].truth",
+               "has 1 steps but \"steps\" has 2");
+  expect_error([](json& d) { d["true_weights"] = {1.0}; }, "true_weights", "has 1 entries, expected 2");
+  expect_error([](json& d) { d["mdp"]["transitions"].push_back({0, 0, 1, 0.0}); }, "mdp.transitions[7]",
+               "duplicate transition (also given at index 0)");
+  expect_error([](json& d) { d["mdp"]["terminal"] = {0}; }, "mdp.start[0]", "start state 0 is terminal");
+  expect_error([](json& d) { d.erase("observation_model"); }, "demonstration[0].steps",
+               "has observations but the file has no observation_model");
+  expect_error([](json& d) { d["mdp"]["state_names"] = {"a", "b"}; }, "mdp.state_names", "has 2 names, expected 3");
+}
+
+TEST(ProblemFile, EmptyDemonstration) {
+  expect_error([](json& d) { d["demonstration"] = json::array(); }, "demonstration", "is empty");
+  expect_error([](json& d) { d["demonstration"][0] = json::object(); }, "demonstration[0]", "has neither");
+  expect_error([](json& d) { d["demonstration"][0]["steps"] = json::array(); d["demonstration"][0].erase("truth"); },
+               "demonstration[0].steps", "is empty");
+  expect_error([](json& d) { d["demonstration"][0]["truth"] = json::array(); }, "demonstration[0].truth", "is empty");
+}
+
+TEST(ProblemFile, UnknownKeysWarnButParse) {
+  json d = spec_example();
+  d["mdp"]["transitons"] = json::array();
+  d["extra"] = 1;
+  d["comment"] = "comments are fine";
+  d["mdp"]["_note"] = "so are keys starting with an underscore";
+  std::vector<std::string> warnings;
+  EXPECT_NO_THROW(parse_problem(d.dump(), &warnings));
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0], "extra: unknown key, ignored");
+  EXPECT_EQ(warnings[1], "mdp.transitons: unknown key, ignored (did you mean \"transitions\"?)");
+}
+
+TEST(ProblemFile, DefaultsAndExtensions) {
+  json d = spec_example();
+  d["mdp"].erase("start");
+  d["mdp"].erase("discount");
+  d["mdp"]["terminal"] = {1};
+  d["mdp"]["transitions"] = {{0, 0, 1, 1.0}, {0, 1, 2, 0.7}, {0, 1, 0, 0.3}, {2, 0, 2, 1.0}};
+  d["mdp"]["impossible_actions"] = {{2, 1}};
+  d["demonstration"][0]["truth"] = {{0, 1}, {2, 0}};
+  const Problem p = parse_problem(d.dump());
+  EXPECT_DOUBLE_EQ(p.mdp.discount, 0.95);
+  EXPECT_DOUBLE_EQ(p.mdp.start[0], 0.5);  // uniform over the non-terminal states 0 and 2
+  EXPECT_DOUBLE_EQ(p.mdp.start[1], 0.0);
+  EXPECT_TRUE(p.mdp.is_terminal(1));
+  EXPECT_FALSE(p.mdp.available(2, 1));
+  expect_error([](json& x) { x["mdp"]["impossible_actions"] = {{0, 0}}; }, "mdp.transitions[0]",
+               "which mdp.impossible_actions lists as impossible");
+}
+
+TEST(ProblemFile, MissingAndUnreadableFiles) {
+  try {
+    read_problem_file("/nonexistent/problem.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("cannot open"), std::string::npos);
+  }
+  try {
+    read_problem_file("/tmp");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("is a directory"), std::string::npos);
+  }
+}
+
+TEST(ProblemFile, TruthTrajectoriesNeedTruthEverywhere) {
+  json d = spec_example();
+  d["demonstration"][0].erase("truth");
+  const Problem p = parse_problem(d.dump());
+  try {
+    p.truth_trajectories();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "demonstration[0].truth");
+  }
+}
+
+}  // namespace
+}  // namespace hbirl
