@@ -47,6 +47,9 @@ class CausalLikelihood {
   double log_likelihood() const { return log_likelihood_; }
   const SoftSolution& solution() const { return solver_.solution(); }
   double total_count() const { return total_; }
+  // Solve the next evaluation's soft Bellman equation from V = 0 (benchmarks use this to
+  // time a cold evaluation; normally each solve starts from the previous one).
+  void cold_start() { solver_.forget_warm_start(); }
   double l2() const { return l2_; }
 
  private:

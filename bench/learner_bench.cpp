@@ -1,0 +1,81 @@
+// Speed of the learner core (docs/BENCHMARKS.md has the figures and the command).
+#include <benchmark/benchmark.h>
+
+#include "learner/hidden_data_em.hpp"
+#include "learner/maxcausalent.hpp"
+#include "sim_driver/gridworld.hpp"
+
+namespace hbirl {
+namespace {
+
+GridworldTask task(int size, int trajectories, int length) {
+  Rng rng(1);
+  GridworldOptions options;
+  options.size = size;
+  return make_gridworld_task(options, trajectories, length, rng);
+}
+
+// Weights away from the truth, as an optimiser would meet them.
+Eigen::VectorXd probe_weights() { return Eigen::Vector4d(0.3, -0.2, 0.5, 0.1); }
+
+void BM_SoftValueIteration(benchmark::State& state) {
+  const GridworldTask t = task(static_cast<int>(state.range(0)), 1, 1);
+  SoftViOptions options;
+  options.method = state.range(1) == 0 ? SoftViMethod::kNewton : SoftViMethod::kFixedPoint;
+  const Eigen::VectorXd reward = t.mdp.reward(probe_weights());
+  SoftBellmanSolver solver(t.mdp, options);
+  int backups = 0;
+  for (auto _ : state) {
+    solver.forget_warm_start();
+    benchmark::DoNotOptimize(solver.solve(reward).value.data());
+    backups = solver.solution().iterations;
+  }
+  state.counters["backups"] = backups;
+  state.counters["states"] = t.mdp.num_states;
+  state.SetLabel(options.method == SoftViMethod::kNewton ? "newton" : "fixed-point");
+}
+BENCHMARK(BM_SoftValueIteration)->ArgsProduct({{5, 45}, {0, 1}})->Unit(benchmark::kMicrosecond);
+
+// One objective + gradient evaluation from a cold start: soft value iteration (the
+// backward pass) and the adjoint solve (the forward pass), for 20 trajectories.
+void BM_Gradient(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  const int length = static_cast<int>(state.range(1));
+  const GridworldTask t = task(size, 20, length);
+  CausalLikelihood objective(t.mdp, visit_counts(t.mdp, t.trajectories));
+  const Eigen::VectorXd theta = probe_weights();
+  Eigen::VectorXd gradient(4);
+  for (auto _ : state) {
+    objective.cold_start();
+    benchmark::DoNotOptimize(objective.evaluate(theta, &gradient));
+  }
+  state.counters["states"] = t.mdp.num_states;
+}
+BENCHMARK(BM_Gradient)->Args({5, 10})->Args({5, 30})->Args({10, 30})->Args({20, 30})->Args({45, 30})
+    ->Unit(benchmark::kMicrosecond);
+
+// A full MaxCausalEnt solve on the 5x5 gridworld with 20 trajectories of 10 steps: the
+// whole of `hbirl learn --from truth` but for reading the file (one thread).
+void BM_MaxCausalEntSolve(benchmark::State& state) {
+  const GridworldTask t = task(5, 20, 10);
+  const TruthEStep estep(t.mdp, t.trajectories);
+  LearnOptions options;
+  options.restarts = static_cast<int>(state.range(0));
+  options.optimizer.kind = state.range(1) == 0 ? OptimizerKind::kLbfgs : OptimizerKind::kExponentiatedGradient;
+  options.threads = 1;
+  int iterations = 0;
+  for (auto _ : state) {
+    const LearnResult result = learn_reward(t.mdp, estep, options);
+    iterations = result.restarts[0].optimizer_iterations;
+    benchmark::DoNotOptimize(result.theta.data());
+  }
+  state.counters["restarts"] = options.restarts;
+  state.counters["iterations"] = iterations;
+  state.SetLabel(to_string(options.optimizer.kind));
+}
+BENCHMARK(BM_MaxCausalEntSolve)->Args({1, 0})->Args({4, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace hbirl
+
+BENCHMARK_MAIN();
