@@ -68,15 +68,7 @@ TEST(CausalLikelihood, ObjectiveIsTheLogLikelihoodOfTheSoftPolicy) {
 TEST(CausalLikelihood, GradientMatchesFiniteDifferences) {
   Rng rng(42);
   for (int trial = 0; trial < 40; ++trial) {
-    testing::RandomMdpOptions o;
-    o.states = 2 + trial % 9;
-    o.actions = 1 + trial % 4;
-    o.features = 1 + trial % 5;
-    o.successors = std::min(3, o.states);
-    o.terminal = (trial % 3 == 0 && o.states > 2) ? 1 : 0;
-    o.impossible = trial % 2 == 0;
-    o.deterministic = trial % 4 == 1;
-    o.discount = trial % 5 == 0 ? 0.99 : (trial % 5 == 1 ? 0.0 : 0.9);
+    const testing::RandomMdpOptions o = testing::varied_options(trial);
     const Mdp mdp = testing::random_mdp(o, rng);
     const double l2 = trial % 3 == 1 ? 0.1 : 0.0;
     CausalLikelihood objective(mdp, random_counts(mdp, rng), l2);

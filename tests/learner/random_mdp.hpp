@@ -54,6 +54,22 @@ inline Mdp random_mdp(const RandomMdpOptions& o, Rng& rng) {
   return mdp;
 }
 
+// The trial-th member of a family that cycles through sizes (2-10 states, 1-4 actions,
+// 1-5 features), terminal states, impossible actions, deterministic transitions and
+// discounts 0, 0.9 and 0.99.
+inline RandomMdpOptions varied_options(int trial) {
+  RandomMdpOptions o;
+  o.states = 2 + trial % 9;
+  o.actions = 1 + trial % 4;
+  o.features = 1 + trial % 5;
+  o.successors = std::min(3, o.states);
+  o.terminal = (trial % 3 == 0 && o.states > 2) ? 1 : 0;
+  o.impossible = trial % 2 == 0;
+  o.deterministic = trial % 4 == 1;
+  o.discount = trial % 5 == 0 ? 0.99 : (trial % 5 == 1 ? 0.0 : 0.9);
+  return o;
+}
+
 inline Eigen::VectorXd random_vector(int n, Rng& rng, double scale = 1.0) {
   Eigen::VectorXd v(n);
   for (int i = 0; i < n; ++i) v[i] = rng.uniform(-scale, scale);

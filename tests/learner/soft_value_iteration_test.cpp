@@ -94,15 +94,8 @@ void expect_soft_bellman(const Mdp& mdp, const Eigen::VectorXd& reward, const So
 
 TEST(SoftValueIteration, NewtonAndFixedPointSolveTheSoftBellmanEquation) {
   Rng rng(7);
-  for (int trial = 0; trial < 30; ++trial) {
-    testing::RandomMdpOptions o;
-    o.states = 3 + trial % 7;
-    o.actions = 1 + trial % 4;
-    o.terminal = trial % 3 == 0 ? 1 : 0;
-    o.impossible = trial % 2 == 1;
-    o.deterministic = trial % 5 == 0;
-    o.successors = std::min(3, o.states);
-    o.discount = trial % 4 == 0 ? 0.99 : 0.9;
+  for (int trial = 0; trial < 40; ++trial) {
+    const testing::RandomMdpOptions o = testing::varied_options(trial);
     const Mdp mdp = testing::random_mdp(o, rng);
     const Eigen::VectorXd reward = mdp.reward(testing::random_vector(o.features, rng, 3.0));
     SoftViOptions fixed;
@@ -113,7 +106,10 @@ TEST(SoftValueIteration, NewtonAndFixedPointSolveTheSoftBellmanEquation) {
     expect_soft_bellman(mdp, reward, newton, 1e-10);
     EXPECT_LT((newton.value - plain.value).lpNorm<Eigen::Infinity>(), 1e-9 * std::max(1.0, plain.value.lpNorm<Eigen::Infinity>()))
         << "trial " << trial;
-    EXPECT_LT(newton.iterations, plain.iterations);
+    EXPECT_LE(newton.iterations, plain.iterations);
+    if (o.discount >= 0.9) {
+      EXPECT_LT(newton.iterations * 10, plain.iterations) << "trial " << trial;
+    }
   }
 }
 
