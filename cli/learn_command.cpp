@@ -58,7 +58,8 @@ int run_learn(const LearnArgs& args) {
   const LearnResult learned = learn_reward(mdp, *estep, options);
 
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
-  const EStepResult expected = estep->expect(policy);
+  EStepState state = estep->initial_state(0);
+  const EStepResult expected = estep->expect(policy, state);
   nlohmann::ordered_json out;
   out["weights"] = to_vector(learned.theta);
   if (!problem.feature_names.empty()) out["feature_names"] = problem.feature_names;

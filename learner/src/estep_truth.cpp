@@ -5,7 +5,7 @@ namespace hbirl {
 TruthEStep::TruthEStep(const Mdp& mdp, std::vector<Trajectory> trajectories)
     : trajectories_(std::move(trajectories)), counts_(visit_counts(mdp, trajectories_)) {}
 
-EStepResult TruthEStep::expect(const SoftSolution& policy) const {
+EStepResult TruthEStep::expect(const SoftSolution& policy, EStepState& /*state*/) const {
   EStepResult result;
   result.counts = counts_;
   double ll = 0.0;

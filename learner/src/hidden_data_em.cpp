@@ -11,11 +11,12 @@ namespace hbirl {
 namespace {
 
 RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
-                          Eigen::VectorXd theta) {
+                          Eigen::VectorXd theta, std::uint64_t seed, int index) {
   RestartResult result;
   result.initial_theta = theta;
   SoftBellmanSolver solver(mdp, options.soft_vi);
-  EStepResult expected = estep.expect(solver.solve(mdp.reward(theta)));
+  EStepState state = estep.initial_state(seed);
+  EStepResult expected = estep.expect(solver.solve(mdp.reward(theta)), state);
   double total = expected.counts.sum();
   for (int it = 1; it <= options.max_em_iterations; ++it) {
     CausalLikelihood objective(mdp, expected.counts, options.l2, options.soft_vi);
@@ -29,22 +30,24 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
     const double theta_change = (m_step.x - theta).lpNorm<Eigen::Infinity>();
     theta = m_step.x;
     const double previous_ll = expected.log_likelihood;
-    expected = estep.expect(solver.solve(mdp.reward(theta)));
+    expected = estep.expect(solver.solve(mdp.reward(theta)), state);
     total = expected.counts.sum();
+    if (options.on_iteration) options.on_iteration(index, it, expected.log_likelihood, theta, expected);
     if (!estep.depends_on_policy()) {
       result.converged = m_step.converged;
       break;
     }
-    const double tol = options.em_tolerance;
-    if (theta_change <= tol * std::max(1.0, theta.lpNorm<Eigen::Infinity>()) &&
+    if (expected.alpha_converged &&
+        theta_change <= options.theta_tolerance * std::max(1.0, theta.lpNorm<Eigen::Infinity>()) &&
         std::abs(expected.log_likelihood - previous_ll) <=
-            tol * std::max(1.0, std::abs(expected.log_likelihood))) {
+            options.likelihood_tolerance * std::max(1.0, std::abs(expected.log_likelihood))) {
       result.converged = true;
       break;
     }
   }
   result.theta = theta;
   result.log_likelihood = expected.log_likelihood;
+  result.alpha = state.alpha;
   result.score = expected.log_likelihood - 0.5 * options.l2 * total * theta.squaredNorm();
   return result;
 }
@@ -69,7 +72,8 @@ LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions&
   result.restarts.resize(static_cast<size_t>(options.restarts));
   parallel_for(options.restarts, options.threads, [&](int r) {
     result.restarts[static_cast<size_t>(r)] =
-        run_restart(mdp, estep, options, starts[static_cast<size_t>(r)]);
+        run_restart(mdp, estep, options, starts[static_cast<size_t>(r)],
+                    root.split(0x5EED0000ull + static_cast<std::uint64_t>(r)).next_u64(), r);
   });
   for (int r = 1; r < options.restarts; ++r) {
     if (result.restarts[static_cast<size_t>(r)].score >

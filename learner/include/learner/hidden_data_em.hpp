@@ -28,11 +28,16 @@ struct LearnOptions {
   int restarts = 1;
   std::uint64_t seed = 1;
   int threads = 0;  // 0 = one per core
-  int max_em_iterations = 100;
-  // EM stops when max|theta change| <= tol * max(1, max|theta|) and the
-  // log-likelihood change <= tol * max(1, |log-likelihood|).
-  double em_tolerance = 1e-7;
+  int max_em_iterations = 300;
+  // EM stops when max|theta change| <= theta_tolerance * max(1, max|theta|), the
+  // log-likelihood change <= likelihood_tolerance * max(1, |log-likelihood|), and the
+  // E-step reports its observation model converged.
+  double theta_tolerance = 1e-4;
+  double likelihood_tolerance = 1e-7;
   SoftViOptions soft_vi;
+  // Called after every EM iteration (from the restart's thread): restart index,
+  // iteration, log-likelihood, theta, and the E-step's report.
+  std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&)> on_iteration;
 };
 
 struct RestartResult {
@@ -44,6 +49,7 @@ struct RestartResult {
   int optimizer_iterations = 0;  // summed over M-steps
   bool converged = false;
   std::string optimizer_status;
+  std::optional<ObservationPrior> alpha;  // the refined observation-model parameters, if any
 };
 
 struct LearnResult {

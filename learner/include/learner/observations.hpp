@@ -14,13 +14,22 @@ struct ObservedTrajectory {
   std::vector<int> step_begin{0};  // observations of step t are rows [step_begin[t], step_begin[t+1])
   std::vector<int> symbols;        // one per observation
   RowMatrix eta;                   // one row per observation, 1 + |E| columns
+  // Optional multiplicities: observation n stands for weights[n] identical ones (see
+  // merge_identical_observations). Empty means every weight is 1.
+  std::vector<double> weights;
 
   int length() const { return static_cast<int>(step_begin.size()) - 1; }
   int num_observations() const { return static_cast<int>(symbols.size()); }
   int observations_at(int t) const {
     return step_begin[static_cast<size_t>(t) + 1] - step_begin[static_cast<size_t>(t)];
   }
+  double weight(int n) const { return weights.empty() ? 1.0 : weights[static_cast<size_t>(n)]; }
 };
+
+// The same trajectory with identical (symbol, eta) observations of a step merged into
+// one with a multiplicity: an exact rewrite of the emission product that makes the
+// E-step's cost grow with the number of distinct observations, not all of them.
+ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory);
 
 // Dirichlet priors of the observation model (SPEC §1): alpha for the subject's
 // O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e.

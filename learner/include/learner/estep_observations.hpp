@@ -1,0 +1,85 @@
+#pragma once
+// The E-step on observations (SPEC §2, paper Algorithm 1): for a policy, compute the
+// posterior over each trajectory with a posterior engine (exact forward-backward by
+// default, or the paper's MCMC), and refine the observation model inside:
+//   repeat: statistics = sum over trajectories of engine(policy, O)
+//           alpha = c * alpha_dot + (1 - c) * alpha;  O = Dirichlet mean of alpha
+//   until O stops changing (alpha_tolerance, weighted by how much the data see each row)
+// The refined alpha is carried to the next EM iteration in the EStepState (warm start);
+// the first call starts from the prior. An E-step call makes at most
+// max_alpha_iterations refinements and reports whether O converged; HiddenDataEM only
+// stops once it has, so the loop of Algorithm 1 runs to convergence interleaved with the
+// M-steps rather than from scratch for every intermediate theta (same fixed point, a
+// fraction of the forward-backward passes). With learn = false, O is the prior's mean.
+#include <memory>
+
+#include "learner/estep.hpp"
+#include "learner/estep_exact.hpp"
+#include "learner/rng.hpp"
+
+namespace hbirl {
+
+// One trajectory's posterior, by whatever method.
+class PosteriorEngine {
+ public:
+  virtual ~PosteriorEngine() = default;
+  virtual TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
+                                        const ObservedTrajectory& trajectory, Rng& rng) = 0;
+  virtual void accumulate(const SoftSolution& policy, const ObservationModel& model,
+                          const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) = 0;
+};
+
+class ExactPosteriorEngine final : public PosteriorEngine {
+ public:
+  explicit ExactPosteriorEngine(const Mdp& mdp) : engine_(mdp) {}
+  TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
+                                const ObservedTrajectory& trajectory, Rng&) override {
+    return engine_.posterior(policy, model, trajectory);
+  }
+  void accumulate(const SoftSolution& policy, const ObservationModel& model,
+                  const ObservedTrajectory& trajectory, Rng&, EStepStatistics& out) override {
+    engine_.accumulate(policy, model, trajectory, out);
+  }
+
+ private:
+  ExactEngine engine_;
+};
+
+// Makes a fresh engine (each thread gets its own workspace).
+using EngineFactory = std::function<std::unique_ptr<PosteriorEngine>(const Mdp&)>;
+EngineFactory exact_engine_factory();
+
+struct ObservationEStepOptions {
+  EngineFactory engine = exact_engine_factory();
+  // O has converged when max_r min(1, N_hat(r)) * max_w |O_new(r, w) - O(r, w)| and the
+  // confounders' max |O_new - O| are at most this.
+  double alpha_tolerance = 1e-4;
+  int max_alpha_iterations = 10;  // per E-step call
+  int threads = 1;                // over blocks of trajectories; the result does not depend on it
+};
+
+class ObservationEStep final : public EStep {
+ public:
+  ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories, ObservationPrior prior,
+                   ObservationEStepOptions options = {});
+
+  EStepState initial_state(std::uint64_t seed) const override;
+  EStepResult expect(const SoftSolution& policy, EStepState& state) const override;
+  bool depends_on_policy() const override { return true; }
+  std::vector<int> trajectory_lengths() const override;
+
+  // The posterior statistics for one observation model, summed over trajectories in a
+  // fixed order of fixed-size blocks (bit-identical for any thread count).
+  EStepStatistics statistics(const SoftSolution& policy, const ObservationModel& model, std::uint64_t seed) const;
+
+  const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
+  const ObservationPrior& prior() const { return prior_; }
+
+ private:
+  const Mdp& mdp_;
+  std::vector<ObservedTrajectory> trajectories_;
+  ObservationPrior prior_;
+  ObservationEStepOptions options_;
+};
+
+}  // namespace hbirl

@@ -1,0 +1,214 @@
+#include "learner/estep_exact.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace hbirl {
+
+namespace {
+
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+// log sum_j exp(x_j) over a contiguous range; -inf for an empty or all -inf range.
+double log_sum_exp(const double* x, Eigen::Index n) {
+  double m = kNegInf;
+  for (Eigen::Index j = 0; j < n; ++j) m = std::max(m, x[j]);
+  if (m == kNegInf) return kNegInf;
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < n; ++j) sum += std::exp(x[j] - m);
+  return m + std::log(sum);
+}
+
+// log sum_j exp(w_j + v[index_j]) over one row of a sparse matrix of log weights.
+double log_sum_exp_row(const SparseRowMatrix& log_w, int row, const double* v) {
+  const int begin = log_w.outerIndexPtr()[row];
+  const int end = log_w.outerIndexPtr()[row + 1];
+  const int* index = log_w.innerIndexPtr();
+  const double* w = log_w.valuePtr();
+  double m = kNegInf;
+  for (int j = begin; j < end; ++j) m = std::max(m, w[j] + v[index[j]]);
+  if (m == kNegInf) return kNegInf;
+  double sum = 0.0;
+  for (int j = begin; j < end; ++j) sum += std::exp(w[j] + v[index[j]] - m);
+  return m + std::log(sum);
+}
+
+// out = log(M exp(x)) for a sparse non-negative M, computed as exp(x - max) -> sparse
+// product -> log + max: vectorised, and exact as long as no finite entry of x lies more
+// than ~700 below the maximum (exp would underflow). Returns false, touching nothing,
+// when that is not so; the caller then takes the per-row log-sum-exp.
+bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::VectorXd& out) {
+  double hi = kNegInf;
+  double lo = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    if (x[i] == kNegInf) continue;
+    hi = std::max(hi, x[i]);
+    lo = std::min(lo, x[i]);
+  }
+  if (hi == kNegInf) {
+    out.setConstant(m.rows(), kNegInf);
+    return true;
+  }
+  if (hi - lo > 700.0) return false;
+  const Eigen::VectorXd scaled = (x.array() == kNegInf).select(0.0, (x.array() - hi).exp());
+  out = (m * scaled).array().log() + hi;
+  return true;
+}
+
+}  // namespace
+
+EStepStatistics EStepStatistics::zero(int pairs, int confounders, int symbols) {
+  EStepStatistics s;
+  s.counts = Eigen::VectorXd::Zero(pairs);
+  s.alpha_dot = AlphaCounts::zero(pairs, confounders, symbols);
+  return s;
+}
+
+EStepStatistics& EStepStatistics::operator+=(const EStepStatistics& other) {
+  counts += other.counts;
+  alpha_dot += other.alpha_dot;
+  log_likelihood += other.log_likelihood;
+  impossible += other.impossible;
+  return *this;
+}
+
+ExactEngine::ExactEngine(const Mdp& mdp) : mdp_(mdp) {
+  incoming_ = mdp.transitions.transpose();
+  log_transitions_ = mdp.transitions;
+  for (Eigen::Index j = 0; j < log_transitions_.nonZeros(); ++j) {
+    log_transitions_.valuePtr()[j] = std::log(log_transitions_.valuePtr()[j]);
+  }
+  log_incoming_ = log_transitions_.transpose();
+  log_start_ = mdp.start.array().log();
+  marginal_.resize(mdp.num_pairs());
+  p_.resize(mdp.num_pairs());
+  scratch_.resize(mdp.num_states);
+}
+
+double ExactEngine::mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n) {
+  const int w = trajectory.symbols[static_cast<size_t>(n)];
+  const double eta0 = trajectory.eta(n, 0);
+  double confounded = 0.0;
+  for (int e = 0; e < model.num_confounders(); ++e) confounded += trajectory.eta(n, e + 1) * model.confounders(e, w);
+  p_ = eta0 * model.subject.col(w).array() + confounded;
+  return confounded;
+}
+
+double ExactEngine::forward_backward(const SoftSolution& policy, const ObservationModel& model,
+                                     const ObservedTrajectory& trajectory) {
+  const int T = trajectory.length();
+  const int S = mdp_.num_states;
+  const int A = mdp_.num_actions;
+  const int P = mdp_.num_pairs();
+  log_emission_.setZero(T, P);
+  for (int t = 0; t < T; ++t) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+      mixture(model, trajectory, n);
+      log_emission_.row(t).array() += trajectory.weight(n) * p_.log().transpose();
+    }
+  }
+  // Forward: log alpha_t(s,a) = log d_t(s) + log pi(a|s) + log e_t(s,a), where
+  // log d_t(s) = logsumexp over the pairs r leading into s of log alpha_{t-1}(r) + log T(s|r).
+  log_alpha_.resize(T, P);
+  for (int t = 0; t < T; ++t) {
+    if (t == 0) {
+      scratch_ = log_start_;
+    } else if (!shifted_product(incoming_, log_alpha_.row(t - 1).transpose(), scratch_)) {
+      for (int s = 0; s < S; ++s) scratch_[s] = log_sum_exp_row(log_incoming_, s, log_alpha_.row(t - 1).data());
+    }
+    for (int s = 0; s < S; ++s) {
+      if (mdp_.is_terminal(s)) scratch_[s] = kNegInf;  // never occupied at a step
+      for (int a = 0; a < A; ++a) {
+        const int r = s * A + a;
+        const double lp = policy.log_policy[r];
+        log_alpha_(t, r) = (scratch_[s] == kNegInf || lp == kNegInf) ? kNegInf : scratch_[s] + lp + log_emission_(t, r);
+      }
+    }
+  }
+  const double ll = log_sum_exp(log_alpha_.row(T - 1).data(), P);
+  if (ll == kNegInf || std::isnan(ll)) return kNegInf;
+  // Backward: log beta_t(r) = logsumexp_s' [log T(s'|r) + log g_{t+1}(s')],
+  //           log g(s') = logsumexp_a' [log pi(a'|s') + log e(s',a') + log beta(s',a')].
+  log_beta_.resize(T, P);
+  log_beta_.row(T - 1).setZero();
+  Eigen::VectorXd terms(P);
+  for (int t = T - 2; t >= 0; --t) {
+    for (int r = 0; r < P; ++r) {
+      const double lp = policy.log_policy[r];
+      terms[r] = lp == kNegInf ? kNegInf : lp + log_emission_(t + 1, r) + log_beta_(t + 1, r);
+    }
+    for (int s = 0; s < S; ++s) {
+      scratch_[s] = mdp_.is_terminal(s) ? kNegInf : log_sum_exp(terms.data() + static_cast<Eigen::Index>(s) * A, A);
+    }
+    Eigen::VectorXd row(P);
+    if (!shifted_product(mdp_.transitions, scratch_, row)) {
+      for (int r = 0; r < P; ++r) row[r] = log_sum_exp_row(log_transitions_, r, scratch_.data());
+    }
+    log_beta_.row(t) = row.transpose();
+  }
+  return ll;
+}
+
+void ExactEngine::marginal(int t, double log_likelihood) {
+  for (int r = 0; r < mdp_.num_pairs(); ++r) {
+    const double x = log_alpha_(t, r);
+    marginal_[r] = x == kNegInf ? 0.0 : std::exp(x + log_beta_(t, r) - log_likelihood);
+  }
+}
+
+TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const ObservationModel& model,
+                                           const ObservedTrajectory& trajectory) {
+  TrajectoryPosterior out;
+  const int T = trajectory.length();
+  out.log_likelihood = forward_backward(policy, model, trajectory);
+  out.marginals = RowMatrix::Zero(T, mdp_.num_pairs());
+  out.sources = RowMatrix::Zero(trajectory.num_observations(), 1 + model.num_confounders());
+  if (out.log_likelihood == kNegInf) {
+    out.sources.setConstant(std::numeric_limits<double>::quiet_NaN());
+    out.marginals.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return out;
+  }
+  for (int t = 0; t < T; ++t) {
+    marginal(t, out.log_likelihood);
+    out.marginals.row(t) = marginal_.transpose();
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+      mixture(model, trajectory, n);
+      const int w = trajectory.symbols[static_cast<size_t>(n)];
+      // gamma / p, with 0 where gamma = 0 (p may be 0 there).
+      const Eigen::ArrayXd ratio = (marginal_.array() > 0.0).select(marginal_.array() / p_, 0.0);
+      out.sources(n, 0) = trajectory.eta(n, 0) * (ratio * model.subject.col(w).array()).sum();
+      const double total = ratio.sum();
+      for (int e = 0; e < model.num_confounders(); ++e) {
+        out.sources(n, e + 1) = trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
+      }
+    }
+  }
+  return out;
+}
+
+void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel& model,
+                             const ObservedTrajectory& trajectory, EStepStatistics& out) {
+  const double ll = forward_backward(policy, model, trajectory);
+  if (ll == kNegInf) {
+    ++out.impossible;
+    return;
+  }
+  out.log_likelihood += ll;
+  for (int t = 0; t < trajectory.length(); ++t) {
+    marginal(t, ll);
+    out.counts += marginal_;
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+      mixture(model, trajectory, n);
+      const int w = trajectory.symbols[static_cast<size_t>(n)];
+      const Eigen::ArrayXd ratio = (marginal_.array() > 0.0).select(marginal_.array() / p_, 0.0);
+      const double weight = trajectory.weight(n);
+      out.alpha_dot.subject.col(w).array() += (weight * trajectory.eta(n, 0)) * ratio * model.subject.col(w).array();
+      const double total = weight * ratio.sum();
+      for (int e = 0; e < model.num_confounders(); ++e) {
+        out.alpha_dot.confounders(e, w) += trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
+      }
+    }
+  }
+}
+
+}  // namespace hbirl

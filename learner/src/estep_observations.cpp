@@ -1,0 +1,104 @@
+#include "learner/estep_observations.hpp"
+
+#include "learner/input_error.hpp"
+#include "learner/parallel.hpp"
+
+namespace hbirl {
+
+namespace {
+// Trajectories per block: the unit of parallel work and of summation order.
+constexpr int kBlock = 16;
+}  // namespace
+
+EngineFactory exact_engine_factory() {
+  return [](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<ExactPosteriorEngine>(mdp); };
+}
+
+ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories,
+                                   ObservationPrior prior, ObservationEStepOptions options)
+    : mdp_(mdp), prior_(std::move(prior)), options_(std::move(options)) {
+  for (const auto& t : trajectories) trajectories_.push_back(merge_identical_observations(t));
+  if (trajectories_.empty()) throw InputError("demonstration", "no trajectories with observations");
+  if (prior_.subject_alpha.rows() != mdp.num_pairs() || prior_.subject_alpha.cols() != prior_.num_symbols ||
+      prior_.confounder_alpha.rows() != prior_.num_confounders || prior_.confounder_alpha.cols() != prior_.num_symbols) {
+    throw InputError("observation_model", "alpha has the wrong shape");
+  }
+  for (size_t i = 0; i < trajectories_.size(); ++i) {
+    const ObservedTrajectory& t = trajectories_[i];
+    if (t.length() < 1) throw InputError("demonstration[" + std::to_string(i) + "].steps", "is empty");
+    if (t.num_observations() > 0 && t.eta.cols() != 1 + prior_.num_confounders) {
+      throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
+    }
+  }
+}
+
+EStepState ObservationEStep::initial_state(std::uint64_t seed) const {
+  EStepState state;
+  state.seed = seed;
+  state.alpha = prior_;
+  return state;
+}
+
+std::vector<int> ObservationEStep::trajectory_lengths() const {
+  std::vector<int> lengths;
+  for (const auto& t : trajectories_) lengths.push_back(t.length());
+  return lengths;
+}
+
+EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const ObservationModel& model,
+                                             std::uint64_t seed) const {
+  const int n = static_cast<int>(trajectories_.size());
+  const int blocks = (n + kBlock - 1) / kBlock;
+  const int P = mdp_.num_pairs();
+  const int E = model.num_confounders();
+  const int W = model.num_symbols();
+  std::vector<EStepStatistics> partial(static_cast<size_t>(blocks));
+  const Rng root(seed);
+  parallel_for(blocks, options_.threads, [&](int b) {
+    std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
+    EStepStatistics& out = partial[static_cast<size_t>(b)];
+    out = EStepStatistics::zero(P, E, W);
+    for (int i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      Rng rng = root.split(static_cast<std::uint64_t>(i));
+      engine->accumulate(policy, model, trajectories_[static_cast<size_t>(i)], rng, out);
+    }
+  });
+  EStepStatistics total = EStepStatistics::zero(P, E, W);
+  for (const auto& part : partial) total += part;
+  return total;
+}
+
+EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& state) const {
+  if (!state.alpha) state.alpha = prior_;
+  ObservationPrior& alpha = *state.alpha;
+  ObservationModel model = dirichlet_mean(alpha);
+  EStepResult result;
+  result.alpha_converged = !alpha.learn;
+  EStepStatistics stats;
+  for (int it = 0; it < std::max(1, options_.max_alpha_iterations); ++it) {
+    const std::uint64_t call_seed = Rng(state.seed, state.calls++).next_u64();
+    stats = statistics(policy, model, call_seed);
+    if (!alpha.learn) break;
+    update_alpha(alpha, stats.alpha_dot, alpha.c);
+    ObservationModel next = dirichlet_mean(alpha);
+    // How much O moved where the data can see it: a pair's row counts in proportion to
+    // its expected visits (up to one), since rows of pairs the posterior never visits do
+    // not change any posterior while they slowly forget their prior.
+    const Eigen::VectorXd seen = stats.counts.cwiseMin(1.0);
+    const Eigen::VectorXd row_change = (next.subject - model.subject).cwiseAbs().rowwise().maxCoeff();
+    double change = seen.cwiseProduct(row_change).maxCoeff();
+    if (model.num_confounders() > 0) change = std::max(change, (next.confounders - model.confounders).cwiseAbs().maxCoeff());
+    model = std::move(next);
+    ++result.alpha_iterations;
+    if (change <= options_.alpha_tolerance) {
+      result.alpha_converged = true;
+      break;
+    }
+  }
+  result.counts = std::move(stats.counts);
+  result.log_likelihood = stats.log_likelihood;
+  result.impossible_trajectories = stats.impossible;
+  return result;
+}
+
+}  // namespace hbirl

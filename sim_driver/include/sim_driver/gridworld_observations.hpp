@@ -1,0 +1,50 @@
+#pragma once
+// What the learner sees in the paper's Gridworld (SPEC §3): 4 symbols, one per corner.
+// The subject's true O makes symbol k exponentially more likely as the agent nears corner
+// k, O_s(k) ∝ exp(-decay * manhattan(s, corner k)), whatever the action; each
+// confounding element has a random observation function (a Dirichlet(1) draw). At each
+// timestep `per_step` observations are made, each from the subject or one of the
+// elements with equal probability, and labelled with a source distribution eta.
+#include "learner/observations.hpp"
+#include "learner/rng.hpp"
+#include "learner/trajectory.hpp"
+#include "sim_driver/gridworld.hpp"
+
+namespace hbirl {
+
+enum class EtaKind {
+  kUniform,    // eta = 1 / (1 + |E|) for every source
+  kPlausible,  // with probability 0.8 the true source gets 0.6, else a random source does; the rest evenly
+  kSubject,    // eta = (1, 0, ..., 0): every observation treated as the subject's ("Ignore CE")
+};
+
+struct GridworldObservationOptions {
+  int confounders = 3;
+  int per_step = 40;
+  double decay = 1.0;
+  EtaKind eta = EtaKind::kPlausible;
+};
+
+// The subject's true O, one row per (s, a) pair (identical across actions).
+Eigen::MatrixXd gridworld_subject_observation_model(int size, double decay);
+// Random observation functions for the confounding elements, one row each.
+Eigen::MatrixXd random_confounder_observation_model(int confounders, Rng& rng);
+
+struct GridworldObservations {
+  std::vector<ObservedTrajectory> trajectories;
+  std::vector<std::vector<int>> true_sources;  // per trajectory, per observation: 0 subject, e + 1 element e
+};
+
+// Observes trajectories: each observation's source is drawn uniformly from the subject and
+// the elements; the symbol from that source's O. eta by `options.eta` (kSubject makes eta
+// a single entry, as for a model without confounders).
+GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
+                                        const Eigen::MatrixXd& subject_o, const Eigen::MatrixXd& confounder_o,
+                                        const GridworldObservationOptions& options, Rng& rng);
+
+// The informative subject prior of SPEC §3: symbol counts per (s, a) from a controlled run
+// (the subject alone, true states known), plus `pseudo_count` everywhere.
+Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
+                                     const Eigen::MatrixXd& subject_o, int per_step, double pseudo_count, Rng& rng);
+
+}  // namespace hbirl
