@@ -9,6 +9,7 @@ namespace hbirl::cli {
 using Command = std::function<int()>;
 
 Command add_learn(CLI::App& app);
+Command add_posterior(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_generate(CLI::App& app);
 
@@ -19,6 +20,7 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 
 }  // namespace hbirl::cli
 
+#include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
 #include "problem/problem_file.hpp"
 
@@ -28,4 +30,8 @@ namespace hbirl::cli {
 Problem load_problem(const std::string& path);
 // An InputError about the content of the file at `path`, with the file name prefixed.
 InputError in_file(const std::string& path, const InputError& e);
+
+// The posterior engines by name ("exact", ...), for --engine.
+std::vector<std::string> engine_names();
+EngineFactory engine_factory(const std::string& name);
 }  // namespace hbirl::cli

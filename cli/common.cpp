@@ -41,3 +41,14 @@ InputError in_file(const std::string& path, const InputError& e) {
 }
 
 }  // namespace hbirl::cli
+
+namespace hbirl::cli {
+
+std::vector<std::string> engine_names() { return {"exact"}; }
+
+EngineFactory engine_factory(const std::string& name) {
+  if (name == "exact") return exact_engine_factory();
+  throw InputError("--engine", "unknown engine \"" + name + "\"");
+}
+
+}  // namespace hbirl::cli

@@ -1,8 +1,11 @@
 // hbirl learn: HiddenDataEM / MaxCausalEnt IRL on a problem file.
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include "commands.hpp"
+#include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
@@ -24,26 +27,68 @@ struct LearnArgs {
   double tolerance = 1e-9;
   double eg_radius = 50.0;
   double eg_rate = 0.25;
+  std::string engine = "exact";
+  int max_em_iterations = 300;
+  double alpha_tolerance = 1e-4;
+  int max_alpha_iterations = 10;
+  bool verbose = false;
   std::string out;
 };
 
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
+// The observation-based E-step for the problem (every trajectory needs steps).
+std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, const LearnArgs& args) {
+  if (!problem.observation_model) {
+    throw in_file(args.problem, InputError("observation_model", "missing; learning from observations needs it (or use --from truth)"));
+  }
+  std::vector<ObservedTrajectory> trajectories;
+  for (size_t i = 0; i < problem.demonstration.size(); ++i) {
+    if (!problem.demonstration[i].steps) {
+      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps",
+                                             "missing; learning from observations needs it for every trajectory"));
+    }
+    trajectories.push_back(*problem.demonstration[i].steps);
+  }
+  ObservationEStepOptions options;
+  options.engine = engine_factory(args.engine);
+  options.alpha_tolerance = args.alpha_tolerance;
+  options.max_alpha_iterations = args.max_alpha_iterations;
+  // Restarts run in parallel; a single restart spreads its E-step over the threads instead.
+  options.threads = args.restarts == 1 ? args.threads : 1;
+  return std::make_unique<ObservationEStep>(problem.mdp, std::move(trajectories), *problem.observation_model, options);
+}
+
+nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model) {
+  nlohmann::ordered_json subject = nlohmann::ordered_json::array();
+  for (int r = 0; r < mdp.num_pairs(); ++r) {
+    const Eigen::VectorXd row = model.subject.row(r).transpose();
+    subject.push_back({r / mdp.num_actions, r % mdp.num_actions, to_vector(row)});
+  }
+  nlohmann::ordered_json confounders = nlohmann::ordered_json::array();
+  for (int e = 0; e < model.num_confounders(); ++e) confounders.push_back(to_vector(model.confounders.row(e).transpose()));
+  return {{"subject", subject}, {"confounders", confounders}};
+}
+
 int run_learn(const LearnArgs& args) {
   const Problem problem = load_problem(args.problem);
   const Mdp& mdp = problem.mdp;
-  if (args.from == "observations") {
-    throw InputError("--from observations",
-                     "learning from observations needs the exact/MCMC E-step engines, which this "
-                     "version does not have yet; use --from truth");
+  const bool from_truth = args.from == "truth";
+  std::unique_ptr<EStep> estep;
+  const ObservationEStep* observed = nullptr;
+  if (from_truth) {
+    std::vector<Trajectory> truth;
+    try {
+      truth = problem.truth_trajectories();
+    } catch (const InputError& e) {
+      throw in_file(args.problem, e);
+    }
+    estep = std::make_unique<TruthEStep>(mdp, std::move(truth));
+  } else {
+    auto e = observation_estep(problem, args);
+    observed = e.get();
+    estep = std::move(e);
   }
-  std::vector<Trajectory> truth;
-  try {
-    truth = problem.truth_trajectories();
-  } catch (const InputError& e) {
-    throw in_file(args.problem, e);
-  }
-  std::unique_ptr<EStep> estep = std::make_unique<TruthEStep>(mdp, std::move(truth));
 
   LearnOptions options;
   options.optimizer.kind = args.optimizer == "eg" ? OptimizerKind::kExponentiatedGradient : OptimizerKind::kLbfgs;
@@ -55,20 +100,39 @@ int run_learn(const LearnArgs& args) {
   options.restarts = args.restarts;
   options.seed = args.seed;
   options.threads = args.threads;
+  options.max_em_iterations = args.max_em_iterations;
+  if (args.verbose) {
+    options.on_iteration = [](int restart, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e) {
+      std::ostringstream line;
+      line << "hbirl: restart " << restart << " EM iteration " << iteration << ": log-likelihood " << ll
+           << ", theta [" << theta.transpose() << "], observation-model updates " << e.alpha_iterations
+           << (e.alpha_converged ? " (converged)" : "") << "\n";
+      std::cerr << line.str();
+    };
+  }
   const LearnResult learned = learn_reward(mdp, *estep, options);
+  const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
 
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
-  EStepState state = estep->initial_state(0);
-  const EStepResult expected = estep->expect(policy, state);
+  Eigen::VectorXd counts;
+  std::optional<ObservationModel> model;
+  if (observed != nullptr) {
+    model = dirichlet_mean(best.alpha ? *best.alpha : *problem.observation_model);
+    counts = observed->statistics(policy, *model, args.seed).counts;
+  } else {
+    EStepState state = estep->initial_state(0);
+    counts = estep->expect(policy, state).counts;
+  }
   nlohmann::ordered_json out;
   out["weights"] = to_vector(learned.theta);
   if (!problem.feature_names.empty()) out["feature_names"] = problem.feature_names;
   out["log_likelihood"] = learned.log_likelihood;
   out["from"] = args.from;
+  if (!from_truth) out["engine"] = args.engine;
   out["objective"] = "causal_log_likelihood";
   out["optimizer"] = to_string(options.optimizer.kind);
-  out["feature_count_error"] =
-      feature_count_error(mdp, expected.counts, estep->trajectory_lengths(), policy.policy);
+  out["em_iterations"] = best.em_iterations;
+  out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) {
     const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.theta);
     out["ile"] = ile.ile;
@@ -76,6 +140,7 @@ int run_learn(const LearnArgs& args) {
     out["policy_agreement"] = policy_agreement(mdp, *problem.true_weights, learned.theta);
     out["true_weights"] = to_vector(*problem.true_weights);
   }
+  if (model) out["observation_model"] = model_json(mdp, *model);
   out["selected_restart"] = learned.selected_restart;
   nlohmann::ordered_json restarts = nlohmann::ordered_json::array();
   for (const RestartResult& r : learned.restarts) {
@@ -93,7 +158,10 @@ int run_learn(const LearnArgs& args) {
   out["restarts"] = restarts;
   for (const RestartResult& r : learned.restarts) {
     if (!r.converged) {
-      std::cerr << "hbirl: warning: a restart stopped before converging (" << r.optimizer_status
+      std::cerr << "hbirl: warning: a restart stopped before converging ("
+                << (r.em_iterations >= options.max_em_iterations && estep->depends_on_policy()
+                        ? "EM iteration limit " + std::to_string(options.max_em_iterations)
+                        : "M-step: " + r.optimizer_status)
                 << "); see \"restarts\" in the output\n";
       break;
     }
@@ -152,6 +220,22 @@ Command add_learn(CLI::App& app) {
   cmd->add_option("--eg-rate", args->eg_rate, "EG only: learning rate eta (<= 0.25 for its regret bound)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  cmd->add_option("--engine", args->engine,
+                  "E-step engine for --from observations: 'exact' (forward-backward) or 'mcmc' (the paper's sampler)")
+      ->check(CLI::IsMember(engine_names()))
+      ->capture_default_str();
+  cmd->add_option("--max-em-iterations", args->max_em_iterations, "HiddenDataEM iteration limit")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--alpha-tolerance", args->alpha_tolerance,
+                  "The observation model has converged when O moves less than this (see docs/MODEL.md)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--max-alpha-iterations", args->max_alpha_iterations,
+                  "Observation-model refinements per E-step (EM continues until O has converged)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_flag("--verbose,-v", args->verbose, "Report every EM iteration on stderr");
   cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");
   return [args] { return run_learn(*args); };
 }

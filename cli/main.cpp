@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
     commands.emplace_back(app.get_subcommands({}).back(), std::move(command));
   };
   remember(hbirl::cli::add_learn(app));
+  remember(hbirl::cli::add_posterior(app));
   remember(hbirl::cli::add_validate(app));
   remember(hbirl::cli::add_generate(app));
   try {

@@ -125,12 +125,20 @@ double ExactEngine::forward_backward(const SoftSolution& policy, const Observati
       }
     }
   }
-  const double ll = log_sum_exp(log_alpha_.row(T - 1).data(), P);
-  if (ll == kNegInf || std::isnan(ll)) return kNegInf;
   // Backward: log beta_t(r) = logsumexp_s' [log T(s'|r) + log g_{t+1}(s')],
   //           log g(s') = logsumexp_a' [log pi(a'|s') + log e(s',a') + log beta(s',a')].
+  // At the last step beta is 1, or Pr(next state is terminal | r) when the trajectory
+  // is known to have ended by entering a terminal state.
   log_beta_.resize(T, P);
-  log_beta_.row(T - 1).setZero();
+  if (trajectory.ends_in_terminal) {
+    for (int s = 0; s < S; ++s) scratch_[s] = mdp_.is_terminal(s) ? 0.0 : kNegInf;
+    for (int r = 0; r < P; ++r) log_beta_(T - 1, r) = log_sum_exp_row(log_transitions_, r, scratch_.data());
+  } else {
+    log_beta_.row(T - 1).setZero();
+  }
+  Eigen::VectorXd last = log_alpha_.row(T - 1).transpose() + log_beta_.row(T - 1).transpose();
+  const double ll = log_sum_exp(last.data(), P);
+  if (ll == kNegInf || std::isnan(ll)) return kNegInf;
   Eigen::VectorXd terms(P);
   for (int t = T - 2; t >= 0; --t) {
     for (int r = 0; r < P; ++r) {

@@ -7,6 +7,7 @@ namespace hbirl {
 
 ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory) {
   ObservedTrajectory out;
+  out.ends_in_terminal = trajectory.ends_in_terminal;
   const Eigen::Index sources = trajectory.eta.cols();
   std::vector<int> rows;
   std::vector<double> weights;

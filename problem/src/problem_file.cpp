@@ -344,17 +344,38 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
   if (auto om = root.find("observation_model")) {
     problem.observation_model = read_observation_model(*om, problem.mdp, warnings);
   }
+  const bool has_terminal =
+      std::find(problem.mdp.terminal.begin(), problem.mdp.terminal.end(), 1) != problem.mdp.terminal.end();
   const JsonNode demo = root.at("demonstration");
   const size_t count = demo.size();
   if (count == 0) demo.fail("is empty; give at least one trajectory");
   for (size_t i = 0; i < count; ++i) {
     const JsonNode item = demo[i];
-    item.check_keys({"steps", "truth"}, warnings);
+    item.check_keys({"steps", "truth", "ends_in_terminal"}, warnings);
     DemonstratedTrajectory trajectory;
+    trajectory.ends_in_terminal = has_terminal;
+    if (auto e = item.find("ends_in_terminal")) {
+      trajectory.ends_in_terminal = e->as_bool();
+      if (trajectory.ends_in_terminal && !has_terminal) e->fail("is true but the MDP has no terminal states");
+    }
     if (auto steps = item.find("steps")) {
       trajectory.steps = read_steps(*steps, problem.observation_model, warnings);
+      trajectory.steps->ends_in_terminal = trajectory.ends_in_terminal;
     }
-    if (auto truth = item.find("truth")) trajectory.truth = read_truth(*truth, problem.mdp);
+    if (auto truth = item.find("truth")) {
+      trajectory.truth = read_truth(*truth, problem.mdp);
+      if (trajectory.ends_in_terminal) {
+        const StateAction last = trajectory.truth->back();
+        double exit = 0.0;
+        for (SparseRowMatrix::InnerIterator it(problem.mdp.transitions, problem.mdp.pair(last.state, last.action)); it; ++it) {
+          if (problem.mdp.is_terminal(static_cast<int>(it.col()))) exit += it.value();
+        }
+        if (exit <= 0.0) {
+          item.at("truth").fail("ends with (s=" + std::to_string(last.state) + ", a=" + std::to_string(last.action) +
+                                "), which cannot enter a terminal state; set \"ends_in_terminal\": false for a trajectory that was cut off");
+        }
+      }
+    }
     if (!trajectory.steps && !trajectory.truth) item.fail("has neither \"steps\" nor \"truth\"");
     if (trajectory.steps && trajectory.truth &&
         static_cast<size_t>(trajectory.steps->length()) != trajectory.truth->size()) {
@@ -483,8 +504,10 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
     doc["observation_model"] = om;
   }
   J demo = J::array();
+  const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
   for (const auto& trajectory : problem.demonstration) {
     J item;
+    if (has_terminal && !trajectory.ends_in_terminal) item["ends_in_terminal"] = false;
     if (trajectory.steps) {
       const ObservedTrajectory& o = *trajectory.steps;
       J steps = J::array();

@@ -144,8 +144,8 @@ TEST_F(Cli, ValidateSummarises) {
   ASSERT_EQ(r.status, 0) << r.err;
   const json out = json::parse(r.out);
   EXPECT_EQ(out["trajectories"], 6);
-  EXPECT_EQ(out["observations"], 3);
-  EXPECT_EQ(out["occluded_steps"], 1);
+  EXPECT_EQ(out["observations"], 20);
+  EXPECT_EQ(out["occluded_steps"], 4);
 }
 
 TEST_F(Cli, GenerateThenLearn) {
@@ -235,11 +235,64 @@ TEST_F(Cli, UnknownKeysOnlyWarn) {
       << r.err;
 }
 
-TEST_F(Cli, LearningFromObservationsIsNotYetAvailable) {
+TEST_F(Cli, LearnsFromObservations) {
   const Outcome r = run("learn --problem '" + example("corridor.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["from"], "observations");
+  EXPECT_EQ(out["engine"], "exact");
+  EXPECT_EQ(out["policy_agreement"].get<double>(), 1.0);
+  EXPECT_TRUE(out["log_likelihood"].is_number());
+  ASSERT_EQ(out["observation_model"]["confounders"].size(), 1u);
+  ASSERT_EQ(out["observation_model"]["subject"].size(), 8u);
+}
+
+TEST_F(Cli, PosteriorInTheSpecShape) {
+  const Outcome r = run("posterior --weights 1,0 --problem '" + example("corridor.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  ASSERT_EQ(out["trajectories"].size(), 6u);
+  double total = 0.0;
+  for (const auto& t : out["trajectories"]) {
+    total += t["log_likelihood"].get<double>();
+    for (const auto& step : t["steps"]) {
+      double mass = 0.0;
+      for (const auto& m : step["marginals"]) {
+        ASSERT_EQ(m.size(), 3u);
+        EXPECT_GT(m[2].get<double>(), 0.0);
+        mass += m[2].get<double>();
+      }
+      EXPECT_NEAR(mass, 1.0, 1e-12);
+      for (const auto& src : step["sources"]) {
+        ASSERT_EQ(src.size(), 2u);
+        EXPECT_NEAR(src[0].get<double>() + src[1].get<double>(), 1.0, 1e-12);
+      }
+    }
+  }
+  EXPECT_NEAR(out["log_likelihood"].get<double>(), total, 1e-9);
+  EXPECT_TRUE(out["map_accuracy"].is_number());
+  // The exit state is terminal, so no step may sit on it.
+  EXPECT_EQ(r.out.find("[3,0,"), std::string::npos);
+}
+
+TEST_F(Cli, PosteriorRejectsBadWeights) {
+  for (const char* w : {"1", "1,2,3", "1,x", "1,nan"}) {
+    const Outcome r = run(std::string("posterior --weights ") + w + " --problem '" + example("corridor.json") + "'");
+    EXPECT_EQ(r.status, 2) << w;
+    EXPECT_EQ(r.out, "");
+    EXPECT_NE(r.err.find("--weights"), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(Cli, ObservationsNeedStepsEverywhere) {
+  json d = corridor();
+  d["demonstration"][2].erase("steps");
+  const fs::path p = write("partial.json", d.dump());
+  const Outcome r = run("learn --problem '" + p.string() + "'");
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.out, "");
-  EXPECT_NE(r.err.find("use --from truth"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err_lines(), 1);
+  EXPECT_NE(r.err.find("demonstration[2].steps: missing"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -225,7 +225,18 @@ TEST(ProblemFile, DefaultsAndExtensions) {
   d["mdp"]["transitions"] = {{0, 0, 1, 1.0}, {0, 1, 2, 0.7}, {0, 1, 0, 0.3}, {2, 0, 2, 1.0}};
   d["mdp"]["impossible_actions"] = {{2, 1}};
   d["demonstration"][0]["truth"] = {{0, 1}, {2, 0}};
+  // With terminal states a trajectory ends by entering one unless it says it was cut off.
+  try {
+    parse_problem(d.dump());
+    ADD_FAILURE() << "accepted a trajectory that cannot have ended in a terminal state";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "demonstration[0].truth");
+    EXPECT_NE(e.message().find("cannot enter a terminal state"), std::string::npos);
+  }
+  d["demonstration"][0]["ends_in_terminal"] = false;
   const Problem p = parse_problem(d.dump());
+  EXPECT_FALSE(p.demonstration[0].ends_in_terminal);
+  EXPECT_FALSE(p.demonstration[0].steps->ends_in_terminal);
   EXPECT_DOUBLE_EQ(p.mdp.discount, 0.95);
   EXPECT_DOUBLE_EQ(p.mdp.start[0], 0.5);  // uniform over the non-terminal states 0 and 2
   EXPECT_DOUBLE_EQ(p.mdp.start[1], 0.0);
@@ -233,6 +244,10 @@ TEST(ProblemFile, DefaultsAndExtensions) {
   EXPECT_FALSE(p.mdp.available(2, 1));
   expect_error([](json& x) { x["mdp"]["impossible_actions"] = {{0, 0}}; }, "mdp.transitions[0]",
                "which mdp.impossible_actions lists as impossible");
+  expect_error([](json& x) { x["demonstration"][0]["ends_in_terminal"] = true; }, "demonstration[0].ends_in_terminal",
+               "the MDP has no terminal states");
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  EXPECT_FALSE(q.demonstration[0].ends_in_terminal);
 }
 
 TEST(ProblemFile, MissingAndUnreadableFiles) {

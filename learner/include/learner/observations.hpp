@@ -17,6 +17,9 @@ struct ObservedTrajectory {
   // Optional multiplicities: observation n stands for weights[n] identical ones (see
   // merge_identical_observations). Empty means every weight is 1.
   std::vector<double> weights;
+  // The trajectory ended because its last action led into a terminal state (rather than
+  // being cut off): the posterior then conditions on that.
+  bool ends_in_terminal = false;
 
   int length() const { return static_cast<int>(step_begin.size()) - 1; }
   int num_observations() const { return static_cast<int>(symbols.size()); }

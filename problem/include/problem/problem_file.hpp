@@ -17,6 +17,9 @@ namespace hbirl {
 struct DemonstratedTrajectory {
   std::optional<ObservedTrajectory> steps;  // what the sensors saw
   std::optional<Trajectory> truth;          // the true (s, a) pairs, for baselines and metrics
+  // It ended because its last action entered a terminal state (default when the MDP has
+  // terminal states); false for a trajectory that was cut off.
+  bool ends_in_terminal = false;
 };
 
 struct Problem {
