@@ -20,6 +20,7 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 
 }  // namespace hbirl::cli
 
+#include "learner/estep_mcmc.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
 #include "problem/problem_file.hpp"
@@ -31,7 +32,11 @@ Problem load_problem(const std::string& path);
 // An InputError about the content of the file at `path`, with the file name prefixed.
 InputError in_file(const std::string& path, const InputError& e);
 
-// The posterior engines by name ("exact", ...), for --engine.
-std::vector<std::string> engine_names();
-EngineFactory engine_factory(const std::string& name);
+// The posterior engines, chosen with --engine exact|mcmc and the MCMC options.
+struct EngineArgs {
+  std::string name = "exact";
+  McmcOptions mcmc;
+};
+void add_engine_options(CLI::App* cmd, EngineArgs& args);
+EngineFactory engine_factory(const EngineArgs& args);
 }  // namespace hbirl::cli

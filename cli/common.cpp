@@ -44,11 +44,26 @@ InputError in_file(const std::string& path, const InputError& e) {
 
 namespace hbirl::cli {
 
-std::vector<std::string> engine_names() { return {"exact"}; }
+void add_engine_options(CLI::App* cmd, EngineArgs& args) {
+  cmd->add_option("--engine", args.name,
+                  "Posterior engine: 'exact' (forward-backward, Z summed out) or 'mcmc' (the paper's "
+                  "Metropolis-within-Gibbs sampler)")
+      ->check(CLI::IsMember({"exact", "mcmc"}))
+      ->capture_default_str();
+  cmd->add_option("--mcmc-samples", args.mcmc.samples, "MCMC: sweeps kept per chain")
+      ->check(CLI::Range(1, 1000000000))
+      ->capture_default_str();
+  cmd->add_option("--mcmc-burn-in", args.mcmc.burn_in, "MCMC: sweeps discarded per chain")
+      ->check(CLI::Range(0, 1000000000))
+      ->capture_default_str();
+  cmd->add_option("--mcmc-chains", args.mcmc.chains, "MCMC: independent chains")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+}
 
-EngineFactory engine_factory(const std::string& name) {
-  if (name == "exact") return exact_engine_factory();
-  throw InputError("--engine", "unknown engine \"" + name + "\"");
+EngineFactory engine_factory(const EngineArgs& args) {
+  if (args.name == "mcmc") return mcmc_engine_factory(args.mcmc);
+  return exact_engine_factory();
 }
 
 }  // namespace hbirl::cli

@@ -27,7 +27,7 @@ struct LearnArgs {
   double tolerance = 1e-9;
   double eg_radius = 50.0;
   double eg_rate = 0.25;
-  std::string engine = "exact";
+  EngineArgs engine;
   int max_em_iterations = 300;
   double alpha_tolerance = 1e-4;
   int max_alpha_iterations = 10;
@@ -128,7 +128,7 @@ int run_learn(const LearnArgs& args) {
   if (!problem.feature_names.empty()) out["feature_names"] = problem.feature_names;
   out["log_likelihood"] = learned.log_likelihood;
   out["from"] = args.from;
-  if (!from_truth) out["engine"] = args.engine;
+  if (!from_truth) out["engine"] = args.engine.name;
   out["objective"] = "causal_log_likelihood";
   out["optimizer"] = to_string(options.optimizer.kind);
   out["em_iterations"] = best.em_iterations;
@@ -220,10 +220,7 @@ Command add_learn(CLI::App& app) {
   cmd->add_option("--eg-rate", args->eg_rate, "EG only: learning rate eta (<= 0.25 for its regret bound)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--engine", args->engine,
-                  "E-step engine for --from observations: 'exact' (forward-backward) or 'mcmc' (the paper's sampler)")
-      ->check(CLI::IsMember(engine_names()))
-      ->capture_default_str();
+  add_engine_options(cmd, args->engine);
   cmd->add_option("--max-em-iterations", args->max_em_iterations, "HiddenDataEM iteration limit")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();

@@ -12,7 +12,7 @@ namespace {
 
 struct PosteriorArgs {
   std::string problem;
-  std::string engine = "exact";
+  EngineArgs engine;
   std::string weights;
   std::uint64_t seed = 1;
   std::string out;
@@ -97,7 +97,7 @@ int run_posterior(const PosteriorArgs& args) {
     trajectories.push_back(traj);
   }
   nlohmann::ordered_json out;
-  out["engine"] = args.engine;
+  out["engine"] = args.engine.name;
   out["weights"] = std::vector<double>(theta.data(), theta.data() + theta.size());
   if (std::isfinite(total)) {
     out["log_likelihood"] = total;
@@ -123,9 +123,7 @@ Command add_posterior(CLI::App& app) {
       "truth in the file, each step also gets truth_probability and the output map_accuracy\n"
       "(share of steps whose most probable pair is the true one).");
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")->required();
-  cmd->add_option("--engine", args->engine, "Posterior engine: 'exact' (forward-backward) or 'mcmc' (the paper's sampler)")
-      ->check(CLI::IsMember(engine_names()))
-      ->capture_default_str();
+  add_engine_options(cmd, args->engine);
   cmd->add_option("--weights,-w", args->weights, "Reward weights theta as w1,w2,... (default: all zero)");
   cmd->add_option("--seed", args->seed, "Seed of the MCMC engine")->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");

@@ -95,7 +95,7 @@ double ExactEngine::mixture(const ObservationModel& model, const ObservedTraject
 }
 
 double ExactEngine::forward_backward(const SoftSolution& policy, const ObservationModel& model,
-                                     const ObservedTrajectory& trajectory) {
+                                     const ObservedTrajectory& trajectory, bool with_backward) {
   const int T = trajectory.length();
   const int S = mdp_.num_states;
   const int A = mdp_.num_actions;
@@ -139,6 +139,7 @@ double ExactEngine::forward_backward(const SoftSolution& policy, const Observati
   Eigen::VectorXd last = log_alpha_.row(T - 1).transpose() + log_beta_.row(T - 1).transpose();
   const double ll = log_sum_exp(last.data(), P);
   if (ll == kNegInf || std::isnan(ll)) return kNegInf;
+  if (!with_backward) return ll;
   Eigen::VectorXd terms(P);
   for (int t = T - 2; t >= 0; --t) {
     for (int r = 0; r < P; ++r) {

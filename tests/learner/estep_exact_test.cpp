@@ -4,66 +4,10 @@
 
 #include <cmath>
 
-#include "random_mdp.hpp"
+#include "tiny_observed_problem.hpp"
 
 namespace hbirl {
 namespace {
-
-struct TinyProblem {
-  Mdp mdp;
-  SoftSolution policy;
-  ObservationModel model;
-  ObservedTrajectory trajectory;
-};
-
-Eigen::MatrixXd random_distributions(int rows, int cols, Rng& rng) {
-  Eigen::MatrixXd m(rows, cols);
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) m(r, c) = 0.05 + rng.uniform();
-    m.row(r) /= m.row(r).sum();
-  }
-  return m;
-}
-
-TinyProblem tiny_problem(int trial, Rng& rng) {
-  testing::RandomMdpOptions o;
-  o.states = 3;
-  o.actions = 2;
-  o.features = 2;
-  o.successors = 2;
-  o.deterministic = trial % 3 == 0;
-  o.terminal = trial % 4 == 1 ? 1 : 0;
-  o.impossible = trial % 5 == 2;
-  TinyProblem p{testing::random_mdp(o, rng), {}, {}, {}};
-  p.policy = soft_value_iteration(p.mdp, p.mdp.reward(testing::random_vector(2, rng, 2.0)));
-  const int symbols = 2 + trial % 2;
-  const int confounders = trial % 4;  // 0..3
-  p.model.subject = random_distributions(p.mdp.num_pairs(), symbols, rng);
-  p.model.confounders = random_distributions(confounders, symbols, rng);
-  const int length = 1 + trial % 3;
-  p.trajectory.ends_in_terminal = o.terminal > 0 && trial % 8 == 1;
-  // At most 5 observations in all, so (1 + E)^N labelings stay enumerable.
-  int budget = 5;
-  std::vector<std::pair<int, Eigen::VectorXd>> observations;
-  for (int t = 0; t < length; ++t) {
-    const int n = t == 1 && trial % 2 == 0 ? 0 : std::min(budget, rng.uniform_int(3));  // some steps occluded
-    budget -= n;
-    for (int i = 0; i < n; ++i) {
-      Eigen::VectorXd eta(1 + confounders);
-      for (int z = 0; z <= confounders; ++z) eta[z] = rng.uniform() < 0.2 ? 0.0 : rng.uniform();
-      if (eta.sum() == 0.0) eta[0] = 1.0;
-      eta /= eta.sum();
-      observations.emplace_back(rng.uniform_int(symbols), eta);
-    }
-    p.trajectory.step_begin.push_back(static_cast<int>(observations.size()));
-  }
-  p.trajectory.eta.resize(static_cast<Eigen::Index>(observations.size()), 1 + confounders);
-  for (size_t i = 0; i < observations.size(); ++i) {
-    p.trajectory.symbols.push_back(observations[i].first);
-    p.trajectory.eta.row(static_cast<Eigen::Index>(i)) = observations[i].second.transpose();
-  }
-  return p;
-}
 
 // Sums the joint Pr(X, Z, observations) over every trajectory X of pairs and every
 // labelling Z of the observations.
@@ -74,7 +18,7 @@ struct BruteForce {
   EStepStatistics stats;
 };
 
-BruteForce brute_force(const TinyProblem& p) {
+BruteForce brute_force(const testing::TinyProblem& p) {
   const Mdp& mdp = p.mdp;
   const ObservedTrajectory& tr = p.trajectory;
   const int T = tr.length();
@@ -152,7 +96,7 @@ TEST(ExactEngine, EqualsBruteForceEnumeration) {
   Rng rng(2024);
   int ends_tested = 0;
   for (int trial = 0; trial < 60; ++trial) {
-    const TinyProblem p = tiny_problem(trial, rng);
+    const testing::TinyProblem p = testing::tiny_problem(trial, rng);
     const BruteForce truth = brute_force(p);
     if (p.trajectory.ends_in_terminal && truth.likelihood == 0.0) continue;  // no way out: skip
     ASSERT_GT(truth.likelihood, 0.0) << "trial " << trial;
@@ -180,7 +124,7 @@ TEST(ExactEngine, EqualsBruteForceEnumeration) {
 // emissions would underflow; the log-space engine stays finite and normalised.
 TEST(ExactEngine, ThousandsOfObservationsAndLongTrajectoriesDoNotUnderflow) {
   Rng rng(5);
-  TinyProblem p = tiny_problem(0, rng);  // deterministic transitions
+  testing::TinyProblem p = testing::tiny_problem(0, rng);  // deterministic transitions
   const int length = 2000;
   const int per_step = 1000;
   ObservedTrajectory& tr = p.trajectory;
@@ -202,7 +146,7 @@ TEST(ExactEngine, ThousandsOfObservationsAndLongTrajectoriesDoNotUnderflow) {
 
 TEST(ExactEngine, ImpossibleObservationsGiveMinusInfinity) {
   Rng rng(1);
-  TinyProblem p = tiny_problem(1, rng);
+  testing::TinyProblem p = testing::tiny_problem(1, rng);
   p.model.subject.col(0).setZero();
   p.model.subject.col(1).setOnes();  // symbol 0 can only come from... nobody
   p.model.confounders.col(0).setZero();

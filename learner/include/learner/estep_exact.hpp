@@ -41,14 +41,20 @@ class ExactEngine {
 
   TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
                                 const ObservedTrajectory& trajectory);
+  // log Pr(observations | theta, O) by the forward pass alone.
+  double log_likelihood(const SoftSolution& policy, const ObservationModel& model,
+                        const ObservedTrajectory& trajectory) {
+    return forward_backward(policy, model, trajectory, false);
+  }
   // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out`.
   void accumulate(const SoftSolution& policy, const ObservationModel& model,
                   const ObservedTrajectory& trajectory, EStepStatistics& out);
 
  private:
-  // Fills log_emission_, log_alpha_, log_beta_; returns the log-likelihood.
+  // Fills log_emission_, log_alpha_ and (with_backward) log_beta_; returns the
+  // log-likelihood.
   double forward_backward(const SoftSolution& policy, const ObservationModel& model,
-                          const ObservedTrajectory& trajectory);
+                          const ObservedTrajectory& trajectory, bool with_backward = true);
   // gamma_t = exp(log_alpha_t + log_beta_t - ll) into marginal_.
   void marginal(int t, double log_likelihood);
   // Per observation: p(w | r) for every pair and the part sum_e eta(e) O_e(w).
