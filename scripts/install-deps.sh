@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev nlohmann-json3-dev libcli11-dev liblbfgs-dev
+  libboost-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 

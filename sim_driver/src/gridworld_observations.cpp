@@ -34,49 +34,57 @@ Eigen::MatrixXd random_confounder_observation_model(int confounders, Rng& rng) {
 GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
                                         const Eigen::MatrixXd& subject_o, const Eigen::MatrixXd& confounder_o,
                                         const GridworldObservationOptions& options, Rng& rng) {
-  const int E = static_cast<int>(confounder_o.rows());
-  const int sources = 1 + E;
-  const int columns = options.eta == EtaKind::kSubject ? 1 : sources;
+  const int sources = 1 + static_cast<int>(confounder_o.rows());
   GridworldObservations out;
   for (const Trajectory& trajectory : trajectories) {
     ObservedTrajectory observed;
     std::vector<int> truth;
-    const int total = static_cast<int>(trajectory.size()) * options.per_step;
-    observed.eta.resize(total, columns);
-    observed.symbols.reserve(static_cast<size_t>(total));
-    int row = 0;
+    observed.symbols.reserve(trajectory.size() * static_cast<size_t>(options.per_step));
     for (const StateAction& step : trajectory) {
-      for (int i = 0; i < options.per_step; ++i, ++row) {
+      for (int i = 0; i < options.per_step; ++i) {
         const int z = rng.uniform_int(sources);
-        const auto distribution = z == 0 ? Eigen::VectorXd(subject_o.row(mdp.pair(step.state, step.action)).transpose())
-                                         : Eigen::VectorXd(confounder_o.row(z - 1).transpose());
-        observed.symbols.push_back(rng.categorical(distribution));
+        observed.symbols.push_back(z == 0 ? rng.categorical(subject_o.row(mdp.pair(step.state, step.action)).transpose())
+                                          : rng.categorical(confounder_o.row(z - 1).transpose()));
         truth.push_back(z);
-        switch (options.eta) {
-          case EtaKind::kSubject:
-            observed.eta(row, 0) = 1.0;
-            break;
-          case EtaKind::kUniform:
-            observed.eta.row(row).setConstant(1.0 / sources);
-            break;
-          case EtaKind::kPlausible: {
-            if (E == 0) {
-              observed.eta(row, 0) = 1.0;
-              break;
-            }
-            const int favoured = rng.uniform() < 0.8 ? z : rng.uniform_int(sources);
-            observed.eta.row(row).setConstant(0.4 / E);
-            observed.eta(row, favoured) = 0.6;
-            break;
-          }
-        }
       }
-      observed.step_begin.push_back(row);
+      observed.step_begin.push_back(static_cast<int>(observed.symbols.size()));
     }
     out.trajectories.push_back(std::move(observed));
     out.true_sources.push_back(std::move(truth));
   }
+  Rng eta_rng = rng.split(0xE7A);
+  assign_eta(out, sources, options.eta, eta_rng);
   return out;
+}
+
+void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng) {
+  const int E = sources - 1;
+  for (size_t i = 0; i < observations.trajectories.size(); ++i) {
+    ObservedTrajectory& observed = observations.trajectories[i];
+    const std::vector<int>& truth = observations.true_sources[i];
+    const int n = observed.num_observations();
+    observed.eta.resize(n, kind == EtaKind::kSubject ? 1 : sources);
+    for (int row = 0; row < n; ++row) {
+      switch (kind) {
+        case EtaKind::kSubject:
+          observed.eta(row, 0) = 1.0;
+          break;
+        case EtaKind::kUniform:
+          observed.eta.row(row).setConstant(1.0 / sources);
+          break;
+        case EtaKind::kPlausible: {
+          if (E == 0) {
+            observed.eta(row, 0) = 1.0;
+            break;
+          }
+          const int favoured = rng.uniform() < 0.8 ? truth[static_cast<size_t>(row)] : rng.uniform_int(sources);
+          observed.eta.row(row).setConstant(0.4 / E);
+          observed.eta(row, favoured) = 0.6;
+          break;
+        }
+      }
+    }
+  }
 }
 
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,

@@ -235,6 +235,30 @@ TEST_F(Cli, UnknownKeysOnlyWarn) {
       << r.err;
 }
 
+TEST_F(Cli, GridworldExperimentAtSmallScale) {
+  const fs::path out = dir_ / "gw";
+  const Outcome r = run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +
+                        out.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("| |E| | True Trajectories | True Observation Function | Uniform eta | Plausible eta | Ignore CE |"),
+            std::string::npos) << r.out;
+  const std::string csv = slurp(out / "gridworld_runs.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
+  EXPECT_TRUE(fs::exists(out / "gridworld_summary.csv"));
+  EXPECT_TRUE(fs::exists(out / "gridworld_summary.md"));
+  // Same numbers whatever the thread count (timings aside).
+  const fs::path out1 = dir_ / "gw1";
+  ASSERT_EQ(run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 1 --out '" +
+                out1.string() + "'").status, 0);
+  auto without_seconds = [](const std::string& text) {
+    std::string kept;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) kept += line.substr(0, line.rfind(',')) + "\n";
+    return kept;
+  };
+  EXPECT_EQ(without_seconds(csv), without_seconds(slurp(out1 / "gridworld_runs.csv")));
+}
+
 TEST_F(Cli, LearnsFromObservations) {
   const Outcome r = run("learn --problem '" + example("corridor.json") + "'");
   ASSERT_EQ(r.status, 0) << r.err;

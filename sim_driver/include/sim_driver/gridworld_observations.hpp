@@ -42,6 +42,11 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
                                         const Eigen::MatrixXd& subject_o, const Eigen::MatrixXd& confounder_o,
                                         const GridworldObservationOptions& options, Rng& rng);
 
+// Replaces the source distributions of observations whose true sources are known, by
+// `kind` over `sources` = 1 + |E| sources (kSubject: a single column). Draws from `rng`
+// only for kPlausible.
+void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng);
+
 // The informative subject prior of SPEC §3: symbol counts per (s, a) from a controlled run
 // (the subject alone, true states known), plus `pseudo_count` everywhere.
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,

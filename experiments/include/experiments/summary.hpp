@@ -1,0 +1,37 @@
+#pragma once
+// Summaries and figures of experiment runs: mean and 95% confidence interval per
+// (method, x) and a paper-style figure drawn by gnuplot.
+#include <string>
+#include <vector>
+
+namespace hbirl {
+
+struct SummaryRow {
+  std::string method;
+  int x = 0;
+  int n = 0;
+  double mean = 0.0;
+  double sd = 0.0;
+  double ci95 = 0.0;  // half-width: t_{0.975, n-1} * sd / sqrt(n)
+};
+
+// values[i] belongs to (methods[i], xs[i]); rows come out ordered by method (first
+// appearance) then x.
+std::vector<SummaryRow> summarise(const std::vector<std::string>& methods, const std::vector<int>& xs,
+                                  const std::vector<double>& values);
+
+std::string summary_csv(const std::vector<SummaryRow>& rows, const std::string& x_name);
+std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::string& x_name, const std::string& value_name);
+
+struct FigureSpec {
+  std::string title;
+  std::string x_label;
+  std::string y_label;
+  std::string path_stem;  // writes <stem>.gp, <stem>.png and <stem>.svg
+};
+
+// Writes the gnuplot script and runs gnuplot on it. Returns an empty string on success,
+// else why the figure was not drawn (gnuplot missing or failing); the script is kept.
+std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& spec);
+
+}  // namespace hbirl

@@ -1,0 +1,206 @@
+#include "experiments/gridworld_experiment.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <sstream>
+
+#include "learner/estep_observations.hpp"
+#include "learner/hidden_data_em.hpp"
+#include "learner/metrics.hpp"
+#include "learner/parallel.hpp"
+#include "sim_driver/gridworld_observations.hpp"
+
+namespace hbirl {
+
+namespace {
+
+// Everything a run at one |E| shares across methods.
+struct Scenario {
+  GridworldTask task;
+  Eigen::MatrixXd subject_o;
+  Eigen::MatrixXd confounder_o;
+  Eigen::MatrixXd controlled_alpha;
+  GridworldObservations observations;  // true sources known; eta assigned per method
+};
+
+Scenario make_scenario(const GridworldExperimentOptions& o, int run, int confounders) {
+  const Rng root(o.seed);
+  Rng task_rng = root.split(static_cast<std::uint64_t>(run));
+  GridworldOptions grid;
+  grid.size = o.size;
+  Scenario s{make_gridworld_task(grid, o.trajectories, o.length, task_rng), {}, {}, {}, {}};
+  s.subject_o = gridworld_subject_observation_model(o.size, 1.0);
+  const std::vector<Trajectory> controlled =
+      soft_expert_demonstration(s.task.mdp, s.task.true_weights, o.trajectories, o.length, task_rng);
+  s.controlled_alpha = controlled_run_alpha(s.task.mdp, controlled, s.subject_o, o.per_step, 1.0, task_rng);
+  Rng obs_rng = task_rng.split(1000 + static_cast<std::uint64_t>(confounders));
+  s.confounder_o = random_confounder_observation_model(confounders, obs_rng);
+  GridworldObservationOptions observe;
+  observe.confounders = confounders;
+  observe.per_step = o.per_step;
+  observe.eta = EtaKind::kUniform;
+  s.observations = observe_gridworld(s.task.mdp, s.task.trajectories, s.subject_o, s.confounder_o, observe, obs_rng);
+  return s;
+}
+
+double source_accuracy(const Mdp& mdp, const SoftSolution& policy, const ObservationModel& model,
+                       const GridworldObservations& observations) {
+  ExactEngine engine(mdp);
+  long long right = 0;
+  long long total = 0;
+  for (size_t i = 0; i < observations.trajectories.size(); ++i) {
+    const TrajectoryPosterior post = engine.posterior(policy, model, observations.trajectories[i]);
+    for (int n = 0; n < post.sources.rows(); ++n) {
+      Eigen::Index best = 0;
+      post.sources.row(n).maxCoeff(&best);
+      right += best == observations.true_sources[i][static_cast<size_t>(n)];
+      ++total;
+    }
+  }
+  return total == 0 ? -1.0 : static_cast<double>(right) / static_cast<double>(total);
+}
+
+GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, int run, int confounders,
+                        GridworldMethod method) {
+  const auto start = std::chrono::steady_clock::now();
+  GridworldRun result;
+  result.run = run;
+  result.confounders = confounders;
+  result.method = method;
+  result.goal = s.task.goal;
+  const Mdp& mdp = s.task.mdp;
+  LearnOptions learn;
+  learn.restarts = o.restarts;
+  learn.seed = o.seed ^ (static_cast<std::uint64_t>(run) << 20) ^ static_cast<std::uint64_t>(confounders);
+  learn.threads = 1;
+  LearnResult learned;
+  if (method == GridworldMethod::kTrueTrajectories) {
+    learned = learn_reward(mdp, TruthEStep(mdp, s.task.trajectories), learn);
+  } else {
+    GridworldObservations observations = s.observations;
+    ObservationPrior prior;
+    prior.num_symbols = 4;
+    prior.learn = true;
+    prior.c = o.c;
+    prior.subject_alpha = s.controlled_alpha;
+    Rng eta_rng = Rng(o.seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
+    switch (method) {
+      case GridworldMethod::kTrueObservationFunction:
+        prior.num_confounders = confounders;
+        prior.subject_alpha = s.subject_o;  // its Dirichlet mean is the true O
+        prior.confounder_alpha = s.confounder_o;
+        prior.learn = false;
+        assign_eta(observations, 1 + confounders, EtaKind::kUniform, eta_rng);
+        break;
+      case GridworldMethod::kUniformEta:
+      case GridworldMethod::kPlausibleEta:
+        prior.num_confounders = confounders;
+        prior.confounder_alpha = Eigen::MatrixXd::Ones(confounders, 4);
+        assign_eta(observations, 1 + confounders,
+                   method == GridworldMethod::kUniformEta ? EtaKind::kUniform : EtaKind::kPlausible, eta_rng);
+        break;
+      default:  // Ignore CE: a model without confounding elements
+        prior.num_confounders = 0;
+        prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 4);
+        assign_eta(observations, 1, EtaKind::kSubject, eta_rng);
+        break;
+    }
+    const ObservationEStep estep(mdp, observations.trajectories, prior);
+    learned = learn_reward(mdp, estep, learn);
+    const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
+    if (method != GridworldMethod::kIgnoreCE && confounders > 0) {
+      const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
+      result.source_accuracy = source_accuracy(mdp, policy, dirichlet_mean(best.alpha ? *best.alpha : prior), observations);
+    }
+  }
+  const InverseLearningError ile = inverse_learning_error(mdp, s.task.true_weights, learned.theta);
+  result.ile = ile.ile;
+  result.ile_relative = ile.relative();
+  Eigen::Index best_feature = 0;
+  learned.theta.maxCoeff(&best_feature);
+  result.goal_recovered = best_feature == s.task.goal;
+  result.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_iterations;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace
+
+const std::vector<GridworldMethod>& all_gridworld_methods() {
+  static const std::vector<GridworldMethod> methods = {
+      GridworldMethod::kTrueTrajectories, GridworldMethod::kTrueObservationFunction, GridworldMethod::kUniformEta,
+      GridworldMethod::kPlausibleEta, GridworldMethod::kIgnoreCE};
+  return methods;
+}
+
+std::string method_label(GridworldMethod method) {
+  switch (method) {
+    case GridworldMethod::kTrueTrajectories: return "True Trajectories";
+    case GridworldMethod::kTrueObservationFunction: return "True Observation Function";
+    case GridworldMethod::kUniformEta: return "Uniform eta";
+    case GridworldMethod::kPlausibleEta: return "Plausible eta";
+    case GridworldMethod::kIgnoreCE: return "Ignore CE";
+  }
+  return "?";
+}
+
+std::string method_key(GridworldMethod method) {
+  switch (method) {
+    case GridworldMethod::kTrueTrajectories: return "true_trajectories";
+    case GridworldMethod::kTrueObservationFunction: return "true_observation_function";
+    case GridworldMethod::kUniformEta: return "uniform_eta";
+    case GridworldMethod::kPlausibleEta: return "plausible_eta";
+    case GridworldMethod::kIgnoreCE: return "ignore_ce";
+  }
+  return "?";
+}
+
+bool parse_method(const std::string& key, GridworldMethod& method) {
+  for (GridworldMethod m : all_gridworld_methods()) {
+    if (method_key(m) == key) {
+      method = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOptions& o) {
+  struct Item {
+    int run;
+    int confounders;
+  };
+  std::vector<Item> items;
+  for (int run = 0; run < o.runs; ++run) {
+    for (int e : o.confounders) items.push_back({run, e});
+  }
+  const size_t per_item = o.methods.size();
+  std::vector<GridworldRun> results(items.size() * per_item);
+  std::atomic<int> done{0};
+  const int total = static_cast<int>(results.size());
+  parallel_for(static_cast<int>(items.size()), o.threads, [&](int i) {
+    const Item& item = items[static_cast<size_t>(i)];
+    const Scenario scenario = make_scenario(o, item.run, item.confounders);
+    for (size_t m = 0; m < per_item; ++m) {
+      results[static_cast<size_t>(i) * per_item + m] = run_method(o, scenario, item.run, item.confounders, o.methods[m]);
+      const int finished = ++done;
+      if (o.progress) o.progress(finished, total);
+    }
+  });
+  return results;
+}
+
+std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,source_accuracy,seconds\n";
+  for (const auto& r : runs) {
+    out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
+        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << ",";
+    if (r.source_accuracy >= 0.0) out << r.source_accuracy;
+    out << "," << r.seconds << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace hbirl
