@@ -78,4 +78,3 @@ BENCHMARK(BM_MaxCausalEntSolve)->Args({1, 0})->Args({4, 0})->Args({1, 1})->Unit(
 }  // namespace
 }  // namespace hbirl
 
-BENCHMARK_MAIN();

@@ -168,6 +168,19 @@ Command add_experiment(CLI::App& app) {
   grid->add_option("--c", g->options.c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
+  grid->add_option("--max-alpha-iterations", g->options.max_alpha_iterations, "Observation-model refinements per E-step")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  grid->add_option("--alpha-tolerance", g->options.alpha_tolerance, "The observation model has converged below this change")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  grid->add_option("--theta-tolerance", g->options.theta_tolerance, "EM stops when theta moves less than this (relative)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  grid->add_option("--likelihood-tolerance", g->options.likelihood_tolerance,
+                   "EM stops when the log-likelihood moves less than this (relative)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   grid->add_option("--restarts", g->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
   grid->add_option("--seed", g->options.seed, "Seed of every random choice")->capture_default_str();
   grid->add_option("--threads", g->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();

@@ -73,6 +73,8 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   learn.restarts = o.restarts;
   learn.seed = o.seed ^ (static_cast<std::uint64_t>(run) << 20) ^ static_cast<std::uint64_t>(confounders);
   learn.threads = 1;
+  learn.theta_tolerance = o.theta_tolerance;
+  learn.likelihood_tolerance = o.likelihood_tolerance;
   LearnResult learned;
   if (method == GridworldMethod::kTrueTrajectories) {
     learned = learn_reward(mdp, TruthEStep(mdp, s.task.trajectories), learn);
@@ -105,7 +107,10 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
         assign_eta(observations, 1, EtaKind::kSubject, eta_rng);
         break;
     }
-    const ObservationEStep estep(mdp, observations.trajectories, prior);
+    ObservationEStepOptions estep_options;
+    estep_options.max_alpha_iterations = o.max_alpha_iterations;
+    estep_options.alpha_tolerance = o.alpha_tolerance;
+    const ObservationEStep estep(mdp, observations.trajectories, prior, estep_options);
     learned = learn_reward(mdp, estep, learn);
     const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
     if (method != GridworldMethod::kIgnoreCE && confounders > 0) {

@@ -114,7 +114,7 @@ std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& s
          << data.str()
          << "set title '" << spec.title << "'\n"
          << "set xlabel '" << spec.x_label << "'\nset ylabel '" << spec.y_label << "'\n"
-         << "set key top left box opaque\nset grid\nset yrange [0:*]\n"
+         << "set key right center box opaque\nset grid\nset yrange [0:*]\n"
          << "set xrange [" << x_min - 0.5 << ":" << x_max + 0.5 << "]\n"
          << "set style line 1 lc rgb '#1b9e77' lw 2 pt 7 ps 1.0\n"
          << "set style line 2 lc rgb '#d95f02' lw 2 pt 5 ps 1.0\n"
