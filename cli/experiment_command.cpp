@@ -181,6 +181,7 @@ Command add_experiment(CLI::App& app) {
                    "EM stops when the log-likelihood moves less than this (relative)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  grid->add_flag("!--plain-em", g->options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
   grid->add_option("--restarts", g->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
   grid->add_option("--seed", g->options.seed, "Seed of every random choice")->capture_default_str();
   grid->add_option("--threads", g->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();

@@ -101,6 +101,7 @@ int run_learn(const LearnArgs& args) {
   options.seed = args.seed;
   options.threads = args.threads;
   options.max_em_iterations = args.max_em_iterations;
+  options.accelerate = args.engine.name != "mcmc";  // SQUAREM needs a deterministic E-step
   if (args.verbose) {
     options.on_iteration = [](int restart, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e) {
       std::ostringstream line;

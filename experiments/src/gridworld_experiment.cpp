@@ -75,6 +75,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   learn.threads = 1;
   learn.theta_tolerance = o.theta_tolerance;
   learn.likelihood_tolerance = o.likelihood_tolerance;
+  learn.accelerate = o.accelerate;
   LearnResult learned;
   if (method == GridworldMethod::kTrueTrajectories) {
     learned = learn_reward(mdp, TruthEStep(mdp, s.task.trajectories), learn);
@@ -125,6 +126,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   learned.theta.maxCoeff(&best_feature);
   result.goal_recovered = best_feature == s.task.goal;
   result.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_iterations;
+  result.log_likelihood = learned.log_likelihood;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
@@ -198,10 +200,10 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,source_accuracy,seconds\n";
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,seconds\n";
   for (const auto& r : runs) {
     out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
-        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << ",";
+        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << "," << r.log_likelihood << ",";
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
     out << "," << r.seconds << "\n";
   }

@@ -1,6 +1,8 @@
 #include "learner/hidden_data_em.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "learner/input_error.hpp"
 #include "learner/maxcausalent.hpp"
@@ -10,45 +12,174 @@ namespace hbirl {
 
 namespace {
 
+// The EM map of HiddenDataEM: from (theta, alpha), an E-step (which also refines alpha
+// once or more) and an M-step warm-started at theta.
+class EmMap {
+ public:
+  struct Point {
+    Eigen::VectorXd theta;
+    std::optional<ObservationPrior> alpha;
+  };
+  struct Step {
+    Point next;
+    double log_likelihood = 0.0;  // at the input point
+    EStepResult e;
+    OptimizeResult m;
+  };
+
+  EmMap(const Mdp& mdp, const EStep& estep, const LearnOptions& options, std::uint64_t seed)
+      : mdp_(mdp), estep_(estep), options_(options), solver_(mdp, options.soft_vi), state_(estep.initial_state(seed)) {}
+
+  Point start(const Eigen::VectorXd& theta) const { return {theta, state_.alpha}; }
+
+  // The E-step alone: log-likelihood and counts at x (alpha refined into `refined`).
+  EStepResult expect(const Point& x, std::optional<ObservationPrior>& refined) {
+    state_.alpha = x.alpha;
+    EStepResult e = estep_.expect(solver_.solve(mdp_.reward(x.theta)), state_);
+    refined = state_.alpha;
+    return e;
+  }
+
+  Step operator()(const Point& x) {
+    Step step;
+    step.e = expect(x, step.next.alpha);
+    step.log_likelihood = step.e.log_likelihood;
+    CausalLikelihood objective(mdp_, step.e.counts, options_.l2, options_.soft_vi);
+    const Objective f = [&objective](const Eigen::VectorXd& t, Eigen::VectorXd& g) { return objective.evaluate(t, &g); };
+    step.m = maximize(f, x.theta, options_.optimizer);
+    step.next.theta = step.m.x;
+    ++evaluations_;
+    optimizer_iterations_ += step.m.iterations;
+    return step;
+  }
+
+  int evaluations() const { return evaluations_; }
+  int optimizer_iterations() const { return optimizer_iterations_; }
+
+ private:
+  const Mdp& mdp_;
+  const EStep& estep_;
+  const LearnOptions& options_;
+  SoftBellmanSolver solver_;
+  EStepState state_;
+  int evaluations_ = 0;
+  int optimizer_iterations_ = 0;
+};
+
+// (theta, log alpha) as one vector, for extrapolation; alpha stays positive.
+Eigen::VectorXd pack(const EmMap::Point& x) {
+  const Eigen::Index k = x.theta.size();
+  if (!x.alpha) return x.theta;
+  const Eigen::Index a = x.alpha->subject_alpha.size();
+  const Eigen::Index b = x.alpha->confounder_alpha.size();
+  Eigen::VectorXd v(k + a + b);
+  v.head(k) = x.theta;
+  v.segment(k, a) = x.alpha->subject_alpha.reshaped().array().max(1e-300).log();
+  v.tail(b) = x.alpha->confounder_alpha.reshaped().array().max(1e-300).log();
+  return v;
+}
+
+EmMap::Point unpack(const Eigen::VectorXd& v, const EmMap::Point& like) {
+  EmMap::Point x{v.head(like.theta.size()), like.alpha};
+  if (x.alpha) {
+    const Eigen::Index k = like.theta.size();
+    const Eigen::Index a = x.alpha->subject_alpha.size();
+    x.alpha->subject_alpha.reshaped() = v.segment(k, a).array().exp();
+    x.alpha->confounder_alpha.reshaped() = v.tail(x.alpha->confounder_alpha.size()).array().exp();
+  }
+  return x;
+}
+
+bool converged(const LearnOptions& o, const EmMap::Step& step, const EmMap::Point& from, double previous_ll) {
+  const double theta_change = (step.next.theta - from.theta).lpNorm<Eigen::Infinity>();
+  return step.e.alpha_converged &&
+         theta_change <= o.theta_tolerance * std::max(1.0, step.next.theta.lpNorm<Eigen::Infinity>()) &&
+         std::abs(step.log_likelihood - previous_ll) <= o.likelihood_tolerance * std::max(1.0, std::abs(step.log_likelihood));
+}
+
 RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
                           Eigen::VectorXd theta, std::uint64_t seed, int index) {
   RestartResult result;
   result.initial_theta = theta;
-  SoftBellmanSolver solver(mdp, options.soft_vi);
-  EStepState state = estep.initial_state(seed);
-  EStepResult expected = estep.expect(solver.solve(mdp.reward(theta)), state);
-  double total = expected.counts.sum();
-  for (int it = 1; it <= options.max_em_iterations; ++it) {
-    CausalLikelihood objective(mdp, expected.counts, options.l2, options.soft_vi);
-    const Objective f = [&objective](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
-      return objective.evaluate(x, &g);
-    };
-    const OptimizeResult m_step = maximize(f, theta, options.optimizer);
-    result.optimizer_iterations += m_step.iterations;
-    result.optimizer_status = m_step.status;
-    result.em_iterations = it;
-    const double theta_change = (m_step.x - theta).lpNorm<Eigen::Infinity>();
-    theta = m_step.x;
-    const double previous_ll = expected.log_likelihood;
-    expected = estep.expect(solver.solve(mdp.reward(theta)), state);
-    total = expected.counts.sum();
-    if (options.on_iteration) options.on_iteration(index, it, expected.log_likelihood, theta, expected);
-    if (!estep.depends_on_policy()) {
-      result.converged = m_step.converged;
-      break;
+  EmMap map(mdp, estep, options, seed);
+  EmMap::Point x = map.start(theta);
+  auto report = [&](const EmMap::Step& step) {
+    if (options.on_iteration) options.on_iteration(index, map.evaluations(), step.log_likelihood, step.next.theta, step.e);
+    result.optimizer_status = step.m.status;
+  };
+  if (!estep.depends_on_policy()) {
+    // Known trajectories: one M-step is all of MaxCausalEnt.
+    const EmMap::Step step = map(x);
+    report(step);
+    x = step.next;
+    result.converged = step.m.converged;
+  } else if (!options.accelerate) {
+    double previous_ll = -std::numeric_limits<double>::infinity();
+    while (map.evaluations() < options.max_em_iterations) {
+      const EmMap::Step step = map(x);
+      report(step);
+      const bool done = converged(options, step, x, previous_ll);
+      previous_ll = step.log_likelihood;
+      x = step.next;
+      if (done) {
+        result.converged = true;
+        break;
+      }
     }
-    if (expected.alpha_converged &&
-        theta_change <= options.theta_tolerance * std::max(1.0, theta.lpNorm<Eigen::Infinity>()) &&
-        std::abs(expected.log_likelihood - previous_ll) <=
-            options.likelihood_tolerance * std::max(1.0, std::abs(expected.log_likelihood))) {
-      result.converged = true;
-      break;
+  } else {
+    // SQUAREM (Varadhan & Roland 2008, scheme S3) with its monotone safeguard: two EM
+    // steps x1 = F(x0), x2 = F(x1) give r = x1 - x0 and v = x2 - 2 x1 + x0; the point
+    // x0 - 2a r + a^2 v with a = -|r|/|v| (clamped to [-step_max, -1]) is stabilised by
+    // one more EM step and kept only if its likelihood is no worse than x1's.
+    double step_max = 4.0;
+    double previous_ll = -std::numeric_limits<double>::infinity();
+    while (map.evaluations() < options.max_em_iterations) {
+      const EmMap::Step s1 = map(x);
+      report(s1);
+      if (converged(options, s1, x, previous_ll)) {
+        x = s1.next;
+        result.converged = true;
+        break;
+      }
+      const EmMap::Step s2 = map(s1.next);
+      report(s2);
+      if (converged(options, s2, s1.next, s1.log_likelihood)) {
+        x = s2.next;
+        result.converged = true;
+        break;
+      }
+      const Eigen::VectorXd p0 = pack(x);
+      const Eigen::VectorXd r = pack(s1.next) - p0;
+      const Eigen::VectorXd v = pack(s2.next) - 2.0 * pack(s1.next) + p0;
+      previous_ll = s2.log_likelihood;
+      if (v.norm() == 0.0 || !r.allFinite() || !v.allFinite() || map.evaluations() + 1 >= options.max_em_iterations) {
+        x = s2.next;
+        continue;
+      }
+      const double a = std::clamp(-r.norm() / v.norm(), -step_max, -1.0);
+      const EmMap::Point jump = unpack(p0 - 2.0 * a * r + a * a * v, x);
+      const EmMap::Step s3 = map(jump);
+      report(s3);
+      if (std::isfinite(s3.log_likelihood) &&
+          s3.log_likelihood >= s2.log_likelihood - 1e-9 * std::max(1.0, std::abs(s2.log_likelihood))) {
+        x = s3.next;
+        previous_ll = s3.log_likelihood;
+        if (a == -step_max) step_max *= 4.0;
+      } else {
+        x = s2.next;  // the extrapolation overshot: keep the plain EM step
+        step_max = std::max(1.0, step_max / 4.0);
+      }
     }
   }
-  result.theta = theta;
-  result.log_likelihood = expected.log_likelihood;
-  result.alpha = state.alpha;
-  result.score = expected.log_likelihood - 0.5 * options.l2 * total * theta.squaredNorm();
+  // The likelihood at the returned point (on a copy of the state: alpha stays as learned).
+  std::optional<ObservationPrior> refined;
+  const EStepResult final_e = map.expect(x, refined);
+  result.theta = x.theta;
+  result.alpha = x.alpha;
+  result.log_likelihood = final_e.log_likelihood;
+  result.score = final_e.log_likelihood - 0.5 * options.l2 * final_e.counts.sum() * x.theta.squaredNorm();
+  result.em_iterations = map.evaluations();
+  result.optimizer_iterations = map.optimizer_iterations();
   return result;
 }
 

@@ -49,6 +49,24 @@ TEST(HiddenDataEm, GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal) 
   }
 }
 
+// SQUAREM keeps EM's fixed points but gets there in fewer EM steps; its safeguard never
+// lets the likelihood end below plain EM's.
+TEST(HiddenDataEm, AccelerationConvergesFasterToNoWorseLikelihood) {
+  const ObservedGridworld g = observed_gridworld(3, 5, 20, EtaKind::kUniform);
+  const ObservationEStep estep(g.task.mdp, g.observations.trajectories, g.prior);
+  LearnOptions options;
+  options.theta_tolerance = 1e-3;
+  options.likelihood_tolerance = 1e-6;
+  options.accelerate = false;
+  const LearnResult plain = learn_reward(g.task.mdp, estep, options);
+  options.accelerate = true;
+  const LearnResult fast = learn_reward(g.task.mdp, estep, options);
+  ASSERT_TRUE(plain.restarts[0].converged);
+  ASSERT_TRUE(fast.restarts[0].converged);
+  EXPECT_LT(fast.restarts[0].em_iterations, plain.restarts[0].em_iterations);
+  EXPECT_GE(fast.log_likelihood, plain.log_likelihood - 1e-6 * std::abs(plain.log_likelihood));
+}
+
 TEST(ObservationEStep, SameBitsWhateverTheThreadCount) {
   const ObservedGridworld g = observed_gridworld(3, 2, 10, EtaKind::kUniform);
   const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d(0.3, 0, 0, 0.2)));

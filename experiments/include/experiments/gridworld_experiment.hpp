@@ -44,6 +44,7 @@ struct GridworldExperimentOptions {
   double alpha_tolerance = 1e-3;
   double theta_tolerance = 1e-3;   // EM stopping rule, see LearnOptions
   double likelihood_tolerance = 1e-6;
+  bool accelerate = true;          // SQUAREM-accelerated EM (see LearnOptions; converges properly)
   int restarts = 1;
   int threads = 0;       // over (run, |E|, method) items; results do not depend on it
   std::function<void(int done, int total)> progress;  // called from worker threads
@@ -58,6 +59,7 @@ struct GridworldRun {
   double ile_relative = 0.0;
   bool goal_recovered = false;
   int em_iterations = 0;
+  double log_likelihood = 0.0;    // of the data at the learned weights (observations or true steps)
   double source_accuracy = -1.0;  // share of observations whose most probable source is the true one; -1 if n/a
   double seconds = 0.0;
 };

@@ -34,6 +34,9 @@ struct LearnOptions {
   // E-step reports its observation model converged.
   double theta_tolerance = 1e-4;
   double likelihood_tolerance = 1e-7;
+  // Accelerate EM with SQUAREM (same fixed points, far fewer E-steps). Needs a
+  // deterministic E-step: turn it off for sampling engines.
+  bool accelerate = true;
   SoftViOptions soft_vi;
   // Called after every EM iteration (from the restart's thread): restart index,
   // iteration, log-likelihood, theta, and the E-step's report.
@@ -45,7 +48,7 @@ struct RestartResult {
   Eigen::VectorXd theta;
   double log_likelihood = 0.0;  // log Pr(data | theta)
   double score = 0.0;           // log_likelihood - (l2 / 2) M ||theta||^2: the selection score
-  int em_iterations = 0;
+  int em_iterations = 0;          // EM map evaluations (E-step + M-step)
   int optimizer_iterations = 0;  // summed over M-steps
   bool converged = false;
   std::string optimizer_status;
