@@ -115,7 +115,12 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   std::vector<std::string> methods;
   std::vector<int> xs;
   std::vector<double> ile;
+  int failed = 0;
   for (const auto& r : runs) {
+    if (!r.error.empty()) {
+      if (++failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << method_key(r.method) << ", |E| = " << r.confounders << ") failed: " << r.error << "\n";
+      continue;
+    }
     methods.push_back(method_label(r.method));
     xs.push_back(r.confounders);
     ile.push_back(r.ile);
@@ -128,7 +133,7 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
      << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
      << " observations per step, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
      << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
-     << " threads.\n";
+     << " threads" << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".\n";
   write_file(dir / "gridworld_summary.md", md.str());
   FigureSpec figure;
   figure.title = "Gridworld: ILE vs confounding elements (" + std::to_string(o.runs) + " runs per point, 95% CI)";

@@ -1,5 +1,6 @@
 #include "experiments/gridworld_experiment.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <sstream>
@@ -189,7 +190,16 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
     const Item& item = items[static_cast<size_t>(i)];
     const Scenario scenario = make_scenario(o, item.run, item.confounders);
     for (size_t m = 0; m < per_item; ++m) {
-      results[static_cast<size_t>(i) * per_item + m] = run_method(o, scenario, item.run, item.confounders, o.methods[m]);
+      GridworldRun& slot = results[static_cast<size_t>(i) * per_item + m];
+      try {
+        slot = run_method(o, scenario, item.run, item.confounders, o.methods[m]);
+      } catch (const std::exception& e) {
+        // One failed run must not lose the others: record it and go on.
+        slot.run = item.run;
+        slot.confounders = item.confounders;
+        slot.method = o.methods[m];
+        slot.error = e.what();
+      }
       const int finished = ++done;
       if (o.progress) o.progress(finished, total);
     }
@@ -200,12 +210,15 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,seconds\n";
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
         << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << "," << r.log_likelihood << ",";
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
-    out << "," << r.seconds << "\n";
+    std::string error = r.error;
+    std::replace(error.begin(), error.end(), ',', ';');
+    std::replace(error.begin(), error.end(), '\n', ' ');
+    out << "," << r.seconds << "," << error << "\n";
   }
   return out.str();
 }

@@ -12,6 +12,9 @@ namespace hbirl {
 
 namespace {
 
+// Largest SQUAREM step length (it grows 4x while the longest step keeps being accepted).
+constexpr double kMaxStep = 1024.0;
+
 // The EM map of HiddenDataEM: from (theta, alpha), an E-step (which also refines alpha
 // once or more) and an M-step warm-started at theta.
 class EmMap {
@@ -44,11 +47,20 @@ class EmMap {
     Step step;
     step.e = expect(x, step.next.alpha);
     step.log_likelihood = step.e.log_likelihood;
+    ++evaluations_;
+    if (!std::isfinite(step.log_likelihood) || !(step.e.counts.sum() > 0.0)) {
+      // Nowhere to go from a point where the data are impossible (an extrapolation that
+      // overshot): report it and stay put; callers reject it.
+      step.log_likelihood = -std::numeric_limits<double>::infinity();
+      step.next = x;
+      step.m.x = x.theta;
+      step.m.status = "E-step found the data impossible at this point";
+      return step;
+    }
     CausalLikelihood objective(mdp_, step.e.counts, options_.l2, options_.soft_vi);
     const Objective f = [&objective](const Eigen::VectorXd& t, Eigen::VectorXd& g) { return objective.evaluate(t, &g); };
     step.m = maximize(f, x.theta, options_.optimizer);
     step.next.theta = step.m.x;
-    ++evaluations_;
     optimizer_iterations_ += step.m.iterations;
     return step;
   }
@@ -164,7 +176,7 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
           s3.log_likelihood >= s2.log_likelihood - 1e-9 * std::max(1.0, std::abs(s2.log_likelihood))) {
         x = s3.next;
         previous_ll = s3.log_likelihood;
-        if (a == -step_max) step_max *= 4.0;
+        if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
       } else {
         x = s2.next;  // the extrapolation overshot: keep the plain EM step
         step_max = std::max(1.0, step_max / 4.0);

@@ -62,6 +62,7 @@ struct GridworldRun {
   double log_likelihood = 0.0;    // of the data at the learned weights (observations or true steps)
   double source_accuracy = -1.0;  // share of observations whose most probable source is the true one; -1 if n/a
   double seconds = 0.0;
+  std::string error;  // non-empty if the run failed (then the numbers above are meaningless)
 };
 
 std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOptions& options);
