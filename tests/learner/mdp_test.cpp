@@ -52,7 +52,7 @@ TEST(Mdp, RejectsOutOfRangeIndices) {
 
 TEST(Mdp, RejectsBadStartDiscountAndDeadEnds) {
   Mdp mdp = two_state();
-  mdp.start = Eigen::Vector2d(0.5, 0.4);
+  mdp.start << 0.5, 0.4;
   EXPECT_NE(validation_error(mdp).find("mdp.start"), std::string::npos);
   mdp = two_state();
   mdp.discount = 1.0;
