@@ -8,6 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "learner/brute_force_posterior.hpp"
+#include "problem/problem_file.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -307,6 +310,55 @@ TEST_F(Cli, PosteriorInTheSpecShape) {
   EXPECT_TRUE(out["map_accuracy"].is_number());
   // The exit state is terminal, so no step may sit on it.
   EXPECT_EQ(r.out.find("[3,0,"), std::string::npos);
+}
+
+// `hbirl posterior` against brute-force enumeration of every trajectory and labelling,
+// on a small file with a terminal state, an occluded step and two confounders.
+TEST_F(Cli, PosteriorMatchesBruteForce) {
+  const std::string text = R"({
+    "mdp": {"num_states": 3, "num_actions": 2, "num_features": 2,
+            "transitions": [[0,0,0,0.3],[0,0,1,0.7],[0,1,1,0.5],[0,1,2,0.5],
+                            [1,0,0,1.0],[1,1,2,0.6],[1,1,1,0.4]],
+            "terminal": [2], "start": [[0,0.6],[1,0.4]],
+            "features": [[0,1,0,1.0],[1,1,1,1.0]], "discount": 0.9},
+    "observation_model": {"num_symbols": 3, "num_confounders": 2,
+            "subject_alpha": [[0,0,0,4.0],[0,1,1,3.0],[1,0,2,5.0],[1,1,0,2.0]],
+            "confounder_alpha": [[0,1,6.0],[1,2,2.0]], "learn": false},
+    "demonstration": [
+      {"steps": [{"observations": [[0,[0.5,0.3,0.2]],[1,[0.2,0.2,0.6]]]},
+                 {"observations": []},
+                 {"observations": [[2,[0.7,0.1,0.2]]]}]},
+      {"steps": [{"observations": [[1,[1.0,0.0,0.0]]]},
+                 {"observations": [[2,[0.4,0.4,0.2]],[0,[0.1,0.6,0.3]]]}],
+       "ends_in_terminal": false}
+    ]})";
+  const fs::path p = write("tiny.json", text);
+  const Outcome r = run("posterior --weights 0.7,-1.2 --problem '" + p.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  const hbirl::Problem problem = hbirl::parse_problem(text);
+  const hbirl::SoftSolution policy =
+      hbirl::soft_value_iteration(problem.mdp, problem.mdp.reward(Eigen::Vector2d(0.7, -1.2)));
+  const hbirl::ObservationModel model = hbirl::dirichlet_mean(*problem.observation_model);
+  ASSERT_EQ(out["trajectories"].size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const hbirl::ObservedTrajectory& tr = *problem.demonstration[i].steps;
+    const hbirl::testing::BruteForce truth = hbirl::testing::brute_force(problem.mdp, policy, model, tr);
+    const json& t = out["trajectories"][i];
+    EXPECT_NEAR(t["log_likelihood"].get<double>(), std::log(truth.likelihood), 1e-9) << i;
+    for (int step = 0; step < tr.length(); ++step) {
+      Eigen::VectorXd reported = Eigen::VectorXd::Zero(problem.mdp.num_pairs());
+      for (const auto& m : t["steps"][static_cast<size_t>(step)]["marginals"]) {
+        reported[problem.mdp.pair(m[0].get<int>(), m[1].get<int>())] = m[2].get<double>();
+      }
+      EXPECT_LT((reported - truth.marginals.row(step).transpose()).cwiseAbs().maxCoeff(), 1e-9) << i << " " << step;
+      int n = tr.step_begin[static_cast<size_t>(step)];
+      for (const auto& sources : t["steps"][static_cast<size_t>(step)]["sources"]) {
+        for (int z = 0; z < 3; ++z) EXPECT_NEAR(sources[static_cast<size_t>(z)].get<double>(), truth.sources(n, z), 1e-9);
+        ++n;
+      }
+    }
+  }
 }
 
 TEST_F(Cli, PosteriorRejectsBadWeights) {

@@ -148,6 +148,14 @@ TEST(ProblemFile, NonFiniteNumbers) {
   std::string nan_text = text;
   nan_text.replace(nan_text.find(needle), needle.size(), "NaN");
   EXPECT_THROW(parse_problem(nan_text), InputError);
+  // An eta entry that is not a number (a string "NaN") names the field.
+  expect_error([](json& x) { x["demonstration"][0]["steps"][0]["observations"][0][1] = {"NaN", 0.2, 0.2}; },
+               "demonstration[0].steps[0].observations[0][1][0]", "expected a number");
+  std::string eta_text = text;
+  const std::string eta = "[0.6,0.2,0.2]";
+  ASSERT_NE(eta_text.find(eta), std::string::npos);
+  eta_text.replace(eta_text.find(eta), eta.size(), "[NaN,0.2,0.2]");
+  EXPECT_THROW(parse_problem(eta_text), InputError);
   std::string inf_text = text;
   inf_text.replace(inf_text.find(needle), needle.size(), "1e999");
   try {
