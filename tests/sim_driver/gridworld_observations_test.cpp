@@ -46,7 +46,7 @@ TEST(GridworldObservations, EtaKinds) {
   }
   // The true source is favoured with probability 0.8 + 0.2 / 5 = 0.84; 6000 draws put
   // 4 standard errors at +-0.019.
-  EXPECT_NEAR(static_cast<double>(favoured_true) / total, 0.84, 0.019);
+  EXPECT_NEAR(static_cast<double>(favoured_true) / static_cast<double>(total), 0.84, 0.019);
   assign_eta(obs, 5, EtaKind::kUniform, rng);
   EXPECT_DOUBLE_EQ(obs.trajectories[0].eta(7, 3), 0.2);
   assign_eta(obs, 5, EtaKind::kSubject, rng);
