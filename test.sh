@@ -11,8 +11,10 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DHBIRL_WERROR=ON >/dev/null
 cmake --build build -j"$jobs"
 ctest --test-dir build --output-on-failure -j"$jobs"
 
-cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHBIRL_WERROR=ON \
-      -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
+# -O1 with line tables only: half the compile time of -O2 -g, and still file:line in
+# the sanitizers' reports.
+cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+      -DHBIRL_WERROR=ON -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
 cmake --build build-sanitize -j"$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs"

@@ -9,6 +9,18 @@ namespace {
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
+// v <- exp(v) elementwise, vectorised. Eigen's vectorised exp clamps its argument and maps
+// -inf to the smallest normal double rather than 0: results below 1e-300 are set to
+// exactly 0. Every caller has shifted v so that what matters is at least ~1e-16 (a
+// maximum of 0, or a normalised probability), so nothing is lost.
+template <typename Derived>
+void exp_in_place(Eigen::DenseBase<Derived>& v) {
+  v.derived().array() = v.derived().array().exp();
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (v.derived()[i] < 1e-300) v.derived()[i] = 0.0;
+  }
+}
+
 // log sum_j exp(x_j) over a contiguous range; -inf for an empty or all -inf range.
 double log_sum_exp(const double* x, Eigen::Index n) {
   double m = kNegInf;
@@ -37,7 +49,7 @@ double log_sum_exp_row(const SparseRowMatrix& log_w, int row, const double* v) {
 // product -> log + max: vectorised, and exact as long as no finite entry of x lies more
 // than ~700 below the maximum (exp would underflow). Returns false, touching nothing,
 // when that is not so; the caller then takes the per-row log-sum-exp.
-bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::VectorXd& out) {
+bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::VectorXd& out, Eigen::VectorXd& scaled) {
   double hi = kNegInf;
   double lo = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -50,8 +62,10 @@ bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::
     return true;
   }
   if (hi - lo > 700.0) return false;
-  const Eigen::VectorXd scaled = (x.array() == kNegInf).select(0.0, (x.array() - hi).exp());
-  out = (m * scaled).array().log() + hi;
+  scaled = x.array() - hi;
+  exp_in_place(scaled);
+  out.noalias() = m * scaled;
+  out = out.array().log() + hi;
   return true;
 }
 
@@ -81,39 +95,58 @@ ExactEngine::ExactEngine(const Mdp& mdp) : mdp_(mdp) {
   log_incoming_ = log_transitions_.transpose();
   log_start_ = mdp.start.array().log();
   marginal_.resize(mdp.num_pairs());
-  p_.resize(mdp.num_pairs());
+  ratio_.resize(mdp.num_pairs());
   scratch_.resize(mdp.num_states);
+  shift_.resize(mdp.num_pairs());
 }
 
-double ExactEngine::mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n) {
+void ExactEngine::mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n) {
   const int w = trajectory.symbols[static_cast<size_t>(n)];
   const double eta0 = trajectory.eta(n, 0);
   double confounded = 0.0;
   for (int e = 0; e < model.num_confounders(); ++e) confounded += trajectory.eta(n, e + 1) * model.confounders(e, w);
-  p_ = eta0 * model.subject.col(w).array() + confounded;
-  return confounded;
+  p_.row(n) = (eta0 * model.subject.col(w).array() + confounded).transpose();
+}
+
+void ExactEngine::emissions(const ObservationModel& model, const ObservedTrajectory& trajectory) {
+  log_emission_.setZero(trajectory.length(), mdp_.num_pairs());
+  p_.resize(trajectory.num_observations(), mdp_.num_pairs());
+  for (int t = 0; t < trajectory.length(); ++t) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+      mixture(model, trajectory, n);
+      log_emission_.row(t).array() += trajectory.weight(n) * p_.row(n).array().log();
+    }
+  }
+}
+
+void ExactEngine::emissions(const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
+                            const KindEmissions& table) {
+  log_emission_.setZero(trajectory.length(), mdp_.num_pairs());
+  for (int t = 0; t < trajectory.length(); ++t) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+      log_emission_.row(t) += trajectory.weight(n) * table.log_p.row(kinds_of[static_cast<size_t>(n)]);
+    }
+  }
 }
 
 double ExactEngine::forward_backward(const SoftSolution& policy, const ObservationModel& model,
                                      const ObservedTrajectory& trajectory, bool with_backward) {
+  emissions(model, trajectory);
+  return passes(policy, trajectory, with_backward);
+}
+
+double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {
   const int T = trajectory.length();
   const int S = mdp_.num_states;
   const int A = mdp_.num_actions;
   const int P = mdp_.num_pairs();
-  log_emission_.setZero(T, P);
-  for (int t = 0; t < T; ++t) {
-    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-      mixture(model, trajectory, n);
-      log_emission_.row(t).array() += trajectory.weight(n) * p_.log().transpose();
-    }
-  }
   // Forward: log alpha_t(s,a) = log d_t(s) + log pi(a|s) + log e_t(s,a), where
   // log d_t(s) = logsumexp over the pairs r leading into s of log alpha_{t-1}(r) + log T(s|r).
   log_alpha_.resize(T, P);
   for (int t = 0; t < T; ++t) {
     if (t == 0) {
       scratch_ = log_start_;
-    } else if (!shifted_product(incoming_, log_alpha_.row(t - 1).transpose(), scratch_)) {
+    } else if (!shifted_product(incoming_, log_alpha_.row(t - 1).transpose(), scratch_, shifted_)) {
       for (int s = 0; s < S; ++s) scratch_[s] = log_sum_exp_row(log_incoming_, s, log_alpha_.row(t - 1).data());
     }
     for (int s = 0; s < S; ++s) {
@@ -146,11 +179,26 @@ double ExactEngine::forward_backward(const SoftSolution& policy, const Observati
       const double lp = policy.log_policy[r];
       terms[r] = lp == kNegInf ? kNegInf : lp + log_emission_(t + 1, r) + log_beta_(t + 1, r);
     }
+    // log g(s') = logsumexp over the A actions of s': the maxima per state first, then
+    // one vectorised exp over all pairs (exp(-inf) = 0 for impossible pairs).
     for (int s = 0; s < S; ++s) {
-      scratch_[s] = mdp_.is_terminal(s) ? kNegInf : log_sum_exp(terms.data() + static_cast<Eigen::Index>(s) * A, A);
+      const double* x = terms.data() + static_cast<Eigen::Index>(s) * A;
+      double m = kNegInf;
+      if (!mdp_.is_terminal(s)) {
+        for (int a = 0; a < A; ++a) m = std::max(m, x[a]);
+      }
+      scratch_[s] = m;
+      for (int a = 0; a < A; ++a) shift_[s * A + a] = m == kNegInf ? kNegInf : x[a] - m;
+    }
+    exp_in_place(shift_);
+    for (int s = 0; s < S; ++s) {
+      if (scratch_[s] == kNegInf) continue;
+      double sum = 0.0;
+      for (int a = 0; a < A; ++a) sum += shift_[s * A + a];
+      scratch_[s] += std::log(sum);
     }
     Eigen::VectorXd row(P);
-    if (!shifted_product(mdp_.transitions, scratch_, row)) {
+    if (!shifted_product(mdp_.transitions, scratch_, row, shifted_)) {
       for (int r = 0; r < P; ++r) row[r] = log_sum_exp_row(log_transitions_, r, scratch_.data());
     }
     log_beta_.row(t) = row.transpose();
@@ -159,10 +207,9 @@ double ExactEngine::forward_backward(const SoftSolution& policy, const Observati
 }
 
 void ExactEngine::marginal(int t, double log_likelihood) {
-  for (int r = 0; r < mdp_.num_pairs(); ++r) {
-    const double x = log_alpha_(t, r);
-    marginal_[r] = x == kNegInf ? 0.0 : std::exp(x + log_beta_(t, r) - log_likelihood);
-  }
+  // -inf (alpha or beta) gives exactly 0; beta is never +inf.
+  marginal_ = (log_alpha_.row(t).array() + log_beta_.row(t).array() - log_likelihood).transpose();
+  exp_in_place(marginal_);
 }
 
 TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const ObservationModel& model,
@@ -181,12 +228,11 @@ TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const Obs
     marginal(t, out.log_likelihood);
     out.marginals.row(t) = marginal_.transpose();
     for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-      mixture(model, trajectory, n);
       const int w = trajectory.symbols[static_cast<size_t>(n)];
       // gamma / p, with 0 where gamma = 0 (p may be 0 there).
-      const Eigen::ArrayXd ratio = (marginal_.array() > 0.0).select(marginal_.array() / p_, 0.0);
-      out.sources(n, 0) = trajectory.eta(n, 0) * (ratio * model.subject.col(w).array()).sum();
-      const double total = ratio.sum();
+      ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / p_.row(n).transpose().array(), 0.0);
+      out.sources(n, 0) = trajectory.eta(n, 0) * (ratio_ * model.subject.col(w).array()).sum();
+      const double total = ratio_.sum();
       for (int e = 0; e < model.num_confounders(); ++e) {
         out.sources(n, e + 1) = trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
       }
@@ -195,9 +241,9 @@ TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const Obs
   return out;
 }
 
-void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel& model,
-                             const ObservedTrajectory& trajectory, EStepStatistics& out) {
-  const double ll = forward_backward(policy, model, trajectory);
+template <typename PerObservation>
+void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out,
+                                PerObservation&& per_observation) {
   if (ll == kNegInf) {
     ++out.impossible;
     return;
@@ -207,15 +253,67 @@ void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel&
     marginal(t, ll);
     out.counts += marginal_;
     for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-      mixture(model, trajectory, n);
-      const int w = trajectory.symbols[static_cast<size_t>(n)];
-      const Eigen::ArrayXd ratio = (marginal_.array() > 0.0).select(marginal_.array() / p_, 0.0);
-      const double weight = trajectory.weight(n);
-      out.alpha_dot.subject.col(w).array() += (weight * trajectory.eta(n, 0)) * ratio * model.subject.col(w).array();
-      const double total = weight * ratio.sum();
-      for (int e = 0; e < model.num_confounders(); ++e) {
-        out.alpha_dot.confounders(e, w) += trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
-      }
+      per_observation(n);
+    }
+  }
+}
+
+void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel& model,
+                             const ObservedTrajectory& trajectory, EStepStatistics& out) {
+  const double ll = forward_backward(policy, model, trajectory);
+  add_marginals(trajectory, ll, out, [&](int n) {
+    const int w = trajectory.symbols[static_cast<size_t>(n)];
+    ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / p_.row(n).transpose().array(), 0.0);
+    const double weight = trajectory.weight(n);
+    out.alpha_dot.subject.col(w).array() += (weight * trajectory.eta(n, 0)) * ratio_ * model.subject.col(w).array();
+    const double total = weight * ratio_.sum();
+    for (int e = 0; e < model.num_confounders(); ++e) {
+      out.alpha_dot.confounders(e, w) += trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
+    }
+  });
+}
+
+void ExactEngine::accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory,
+                             const std::vector<int>& kinds_of, const KindEmissions& emissions_table,
+                             EStepStatistics& out, RowMatrix& kind_gamma, std::vector<char>& seen,
+                             std::vector<int>& touched) {
+  emissions(trajectory, kinds_of, emissions_table);
+  const double ll = passes(policy, trajectory, true);
+  add_marginals(trajectory, ll, out, [&](int n) {
+    const int k = kinds_of[static_cast<size_t>(n)];
+    if (!seen[static_cast<size_t>(k)]) {
+      seen[static_cast<size_t>(k)] = 1;
+      touched.push_back(k);
+    }
+    kind_gamma.row(k) += trajectory.weight(n) * marginal_.transpose();
+  });
+}
+
+KindEmissions kind_emissions(const ObservationModel& model, const ObservationKinds& kinds) {
+  KindEmissions out;
+  const Eigen::Index pairs = model.subject.rows();
+  out.p.resize(kinds.num_kinds(), pairs);
+  for (int k = 0; k < kinds.num_kinds(); ++k) {
+    const int w = kinds.symbols[static_cast<size_t>(k)];
+    double confounded = 0.0;
+    for (int e = 0; e < model.num_confounders(); ++e) confounded += kinds.eta(k, e + 1) * model.confounders(e, w);
+    out.p.row(k) = (kinds.eta(k, 0) * model.subject.col(w).array() + confounded).transpose();
+  }
+  out.log_p = out.p.array().log();
+  return out;
+}
+
+void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& kinds, const KindEmissions& emissions,
+                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out) {
+  for (int k : touched) {
+    const int w = kinds.symbols[static_cast<size_t>(k)];
+    // G / p, with 0 where G = 0 (p may be 0 there).
+    const Eigen::ArrayXd ratio =
+        (kind_gamma.row(k).array() > 0.0).select(kind_gamma.row(k).array() / emissions.p.row(k).array(), 0.0).transpose();
+    out.subject.col(w).array() += kinds.eta(k, 0) * ratio * model.subject.col(w).array();
+    const double total = ratio.sum();
+    for (int e = 0; e < model.num_confounders(); ++e) {
+      out.confounders(e, w) += kinds.eta(k, e + 1) * model.confounders(e, w) * total;
     }
   }
 }

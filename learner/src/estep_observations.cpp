@@ -30,6 +30,12 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
     }
   }
+  long long rows = 0;
+  for (const auto& t : trajectories_) rows += t.num_observations();
+  if (options_.max_kinds > 0) {
+    kinds_ = observation_kinds(trajectories_, options_.max_kinds);
+    if (kinds_ && 4LL * kinds_->num_kinds() > rows) kinds_.reset();
+  }
 }
 
 EStepState ObservationEStep::initial_state(std::uint64_t seed) const {
@@ -54,10 +60,24 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
   const int W = model.num_symbols();
   std::vector<EStepStatistics> partial(static_cast<size_t>(blocks));
   const Rng root(seed);
+  std::optional<KindEmissions> table;
+  if (kinds_) table = kind_emissions(model, *kinds_);
   parallel_for(blocks, options_.threads, [&](int b) {
     std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
     EStepStatistics& out = partial[static_cast<size_t>(b)];
     out = EStepStatistics::zero(P, E, W);
+    ExactEngine* exact = table ? engine->exact() : nullptr;
+    if (exact) {
+      RowMatrix kind_gamma = RowMatrix::Zero(kinds_->num_kinds(), P);
+      std::vector<char> seen(static_cast<size_t>(kinds_->num_kinds()), 0);
+      std::vector<int> touched;
+      for (int i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+        exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds_->of[static_cast<size_t>(i)], *table, out,
+                          kind_gamma, seen, touched);
+      }
+      add_kind_alpha_dot(model, *kinds_, *table, kind_gamma, touched, out.alpha_dot);
+      return;
+    }
     for (int i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectories_[static_cast<size_t>(i)], rng, out);

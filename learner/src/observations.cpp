@@ -1,6 +1,7 @@
 #include "learner/observations.hpp"
 
 #include <algorithm>
+#include <map>
 #include <numeric>
 
 namespace hbirl {
@@ -41,6 +42,35 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
   }
   out.weights = std::move(weights);
   return out;
+}
+
+std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTrajectory>& trajectories, int max_kinds) {
+  ObservationKinds kinds;
+  // Key: the symbol, then eta's entries bit for bit (set up once per data set, not in a loop
+  // of the E-step).
+  std::map<std::vector<double>, int> index;
+  std::vector<std::vector<double>> rows;
+  for (const auto& t : trajectories) {
+    std::vector<int>& of = kinds.of.emplace_back(static_cast<size_t>(t.num_observations()));
+    for (int n = 0; n < t.num_observations(); ++n) {
+      std::vector<double> key(static_cast<size_t>(t.eta.cols()) + 1);
+      key[0] = t.symbols[static_cast<size_t>(n)];
+      for (Eigen::Index z = 0; z < t.eta.cols(); ++z) key[static_cast<size_t>(z) + 1] = t.eta(n, z);
+      const auto [it, inserted] = index.emplace(std::move(key), static_cast<int>(rows.size()));
+      if (inserted) {
+        if (static_cast<int>(rows.size()) >= max_kinds) return std::nullopt;
+        rows.push_back(it->first);
+      }
+      of[static_cast<size_t>(n)] = it->second;
+    }
+  }
+  const Eigen::Index sources = rows.empty() ? 0 : static_cast<Eigen::Index>(rows[0].size()) - 1;
+  kinds.eta.resize(static_cast<Eigen::Index>(rows.size()), sources);
+  for (size_t k = 0; k < rows.size(); ++k) {
+    kinds.symbols.push_back(static_cast<int>(rows[k][0]));
+    for (Eigen::Index z = 0; z < sources; ++z) kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 1];
+  }
+  return kinds;
 }
 
 }  // namespace hbirl

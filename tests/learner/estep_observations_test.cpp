@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "learner/hidden_data_em.hpp"
+#include "tiny_observed_problem.hpp"
 #include "sim_driver/gridworld_observations.hpp"
 
 namespace hbirl {
@@ -99,6 +100,64 @@ TEST(ObservationEStep, MergingIdenticalObservationsChangesNothing) {
   EXPECT_LT((a.counts - b.counts).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT((a.alpha_dot.subject - b.alpha_dot.subject).cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT((a.alpha_dot.confounders - b.alpha_dot.confounders).cwiseAbs().maxCoeff(), 1e-10);
+}
+
+void expect_same_statistics(const EStepStatistics& a, const EStepStatistics& b, const std::string& what) {
+  const double scale = std::max(1.0, std::abs(a.log_likelihood));
+  EXPECT_NEAR(a.log_likelihood, b.log_likelihood, 1e-11 * scale) << what;
+  EXPECT_EQ(a.impossible, b.impossible) << what;
+  EXPECT_LT((a.counts - b.counts).cwiseAbs().maxCoeff(), 1e-10) << what;
+  EXPECT_LT((a.alpha_dot.subject - b.alpha_dot.subject).cwiseAbs().maxCoeff(), 1e-10) << what;
+  if (a.alpha_dot.confounders.size() > 0) {
+    EXPECT_LT((a.alpha_dot.confounders - b.alpha_dot.confounders).cwiseAbs().maxCoeff(), 1e-10) << what;
+  }
+}
+
+// The emission table per observation kind (each distinct (symbol, eta) once per pass) is
+// the per-observation computation regrouped: same statistics to rounding, on the
+// Gridworld (uniform and plausible eta).
+TEST(ObservationEStep, KindTableGivesThePerObservationStatistics) {
+  for (EtaKind eta : {EtaKind::kUniform, EtaKind::kPlausible}) {
+    const ObservedGridworld g = observed_gridworld(6, 3, 20, eta);
+    const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d(0.2, -0.3, 0, 0.6)));
+    ObservationEStepOptions per_observation;
+    per_observation.max_kinds = 0;
+    const ObservationEStep table(g.task.mdp, g.observations.trajectories, g.prior);
+    const ObservationEStep plain(g.task.mdp, g.observations.trajectories, g.prior, per_observation);
+    ASSERT_TRUE(table.uses_kind_table());
+    ASSERT_FALSE(plain.uses_kind_table());
+    const ObservationModel model = dirichlet_mean(g.prior);
+    expect_same_statistics(table.statistics(policy, model, 1), plain.statistics(policy, model, 1),
+                           eta == EtaKind::kUniform ? "uniform eta" : "plausible eta");
+  }
+}
+
+// The same on the tiny problems of the brute-force tests (terminal states, impossible
+// actions, deterministic transitions, occluded steps, eta with zeros), each trajectory
+// repeated so that the data have few kinds.
+TEST(ObservationEStep, KindTableAgreesOnTinyProblems) {
+  Rng rng(77);
+  int used = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const testing::TinyProblem p = testing::tiny_problem(trial, rng);
+    if (p.trajectory.num_observations() == 0) continue;
+    ObservationPrior prior;
+    prior.num_symbols = p.model.num_symbols();
+    prior.num_confounders = p.model.num_confounders();
+    prior.subject_alpha = p.model.subject;  // normalised rows: the Dirichlet mean is the model
+    prior.confounder_alpha = p.model.confounders;
+    prior.learn = false;
+    const std::vector<ObservedTrajectory> data(8, p.trajectory);
+    ObservationEStepOptions per_observation;
+    per_observation.max_kinds = 0;
+    const ObservationEStep table(p.mdp, data, prior);
+    const ObservationEStep plain(p.mdp, data, prior, per_observation);
+    if (!table.uses_kind_table()) continue;
+    ++used;
+    expect_same_statistics(table.statistics(p.policy, p.model, 1), plain.statistics(p.policy, p.model, 1),
+                           "trial " + std::to_string(trial));
+  }
+  EXPECT_GT(used, 20);
 }
 
 // With learn = false the observation model stays the prior's mean and the E-step makes no

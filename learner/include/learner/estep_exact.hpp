@@ -34,6 +34,20 @@ struct EStepStatistics {
   EStepStatistics& operator+=(const EStepStatistics& other);
 };
 
+// The emission of every observation kind (observations.hpp) under one observation
+// model: computed once per E-step pass and shared by all trajectories.
+struct KindEmissions {
+  RowMatrix p;      // kinds x (S*A): p(w | s,a) = eta(0) O_{s,a}(w) + sum_e eta(e) O_e(w)
+  RowMatrix log_p;  // its log
+};
+KindEmissions kind_emissions(const ObservationModel& model, const ObservationKinds& kinds);
+
+// alpha_dot from each kind's posterior weight G(k, r) = sum over the observations n of kind k
+// of weight_n gamma_{t(n)}(r) (ExactEngine::accumulate with kinds): the closed forms above,
+// summed per kind. Only the kinds listed in `touched` are read.
+void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& kinds, const KindEmissions& emissions,
+                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out);
+
 // Forward-backward workspace bound to one MDP (which must outlive it).
 class ExactEngine {
  public:
@@ -49,16 +63,36 @@ class ExactEngine {
   // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out`.
   void accumulate(const SoftSolution& policy, const ObservationModel& model,
                   const ObservedTrajectory& trajectory, EStepStatistics& out);
+  // The same with the emissions of the trajectory's observation kinds (`kinds_of`, one per
+  // observation row) precomputed: adds the expected visits and the log-likelihood to
+  // `out`, and weight_n * gamma_t to row kinds_of[n] of kind_gamma (kinds x pairs), from
+  // which add_kind_alpha_dot gives alpha_dot. Kinds seen for the first time (a zero entry
+  // in `seen`) are appended to `touched`.
+  void accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
+                  const KindEmissions& emissions, EStepStatistics& out, RowMatrix& kind_gamma,
+                  std::vector<char>& seen, std::vector<int>& touched);
 
  private:
   // Fills log_emission_, log_alpha_ and (with_backward) log_beta_; returns the
   // log-likelihood.
   double forward_backward(const SoftSolution& policy, const ObservationModel& model,
                           const ObservedTrajectory& trajectory, bool with_backward = true);
+  // The log emissions of each step into log_emission_, per observation (filling p_) or
+  // from the kinds' table.
+  void emissions(const ObservationModel& model, const ObservedTrajectory& trajectory);
+  void emissions(const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of, const KindEmissions& table);
+  // Forward and backward passes over log_emission_; returns the log-likelihood.
+  double passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
+  // For a trajectory of log-likelihood ll (counted impossible if -inf): adds ll and the
+  // marginals to `out`, calling per_observation(n) for each observation with marginal_
+  // holding its step's marginals.
+  template <typename PerObservation>
+  void add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out,
+                     PerObservation&& per_observation);
   // gamma_t = exp(log_alpha_t + log_beta_t - ll) into marginal_.
   void marginal(int t, double log_likelihood);
-  // Per observation: p(w | r) for every pair and the part sum_e eta(e) O_e(w).
-  double mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n);
+  // p(w | r) of observation n for every pair, into row n of p_.
+  void mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n);
 
   const Mdp& mdp_;
   SparseRowMatrix incoming_;         // S x (S*A), T transposed
@@ -69,8 +103,11 @@ class ExactEngine {
   RowMatrix log_alpha_;
   RowMatrix log_beta_;
   Eigen::VectorXd marginal_;
-  Eigen::ArrayXd p_;                 // p(w | r) of one observation
+  RowMatrix p_;                      // one row per observation: p(w | r) per pair (kept for the posteriors)
+  Eigen::ArrayXd ratio_;             // gamma / p of one observation
   Eigen::VectorXd scratch_;
+  Eigen::ArrayXd shift_;             // per pair, backward pass
+  Eigen::VectorXd shifted_;          // per state, shifted_product
 };
 
 }  // namespace hbirl

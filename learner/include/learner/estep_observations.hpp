@@ -27,6 +27,8 @@ class PosteriorEngine {
                                         const ObservedTrajectory& trajectory, Rng& rng) = 0;
   virtual void accumulate(const SoftSolution& policy, const ObservationModel& model,
                           const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) = 0;
+  // The exact engine, when this is one (it can share emissions across observation kinds).
+  virtual ExactEngine* exact() { return nullptr; }
 };
 
 class ExactPosteriorEngine final : public PosteriorEngine {
@@ -40,6 +42,7 @@ class ExactPosteriorEngine final : public PosteriorEngine {
                   const ObservedTrajectory& trajectory, Rng&, EStepStatistics& out) override {
     engine_.accumulate(policy, model, trajectory, out);
   }
+  ExactEngine* exact() override { return &engine_; }
 
  private:
   ExactEngine engine_;
@@ -56,6 +59,10 @@ struct ObservationEStepOptions {
   double alpha_tolerance = 1e-4;
   int max_alpha_iterations = 10;  // per E-step call
   int threads = 1;                // over blocks of trajectories; the result does not depend on it
+  // The exact engine computes the emission of each distinct (symbol, eta) observation once
+  // per pass when the data have at most this many kinds, and at most a quarter as many
+  // kinds as observations (0: never). Same result to rounding.
+  int max_kinds = 1024;
 };
 
 class ObservationEStep final : public EStep {
@@ -73,11 +80,14 @@ class ObservationEStep final : public EStep {
   EStepStatistics statistics(const SoftSolution& policy, const ObservationModel& model, std::uint64_t seed) const;
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
+  // Whether the exact engine's passes use one emission per observation kind (see max_kinds).
+  bool uses_kind_table() const { return kinds_.has_value(); }
   const ObservationPrior& prior() const { return prior_; }
 
  private:
   const Mdp& mdp_;
   std::vector<ObservedTrajectory> trajectories_;
+  std::optional<ObservationKinds> kinds_;
   ObservationPrior prior_;
   ObservationEStepOptions options_;
 };

@@ -4,6 +4,7 @@
 // 1 + |E| sources (index 0 the subject, 1..|E| the confounding elements). N_t = 0 is
 // occlusion. Stored flat, one row per observation, so an E-step streams through memory.
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 namespace hbirl {
@@ -33,6 +34,20 @@ struct ObservedTrajectory {
 // one with a multiplicity: an exact rewrite of the emission product that makes the
 // E-step's cost grow with the number of distinct observations, not all of them.
 ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory);
+
+// The distinct (symbol, eta) observations of a data set ("kinds"), and the kind of every
+// observation row. When eta takes few values (a labeller's rules, uniform eta) a data set
+// of millions of observations has a few dozen kinds, and the E-step computes each kind's
+// emission p(w | s,a) once per pass instead of once per observation.
+struct ObservationKinds {
+  std::vector<int> symbols;             // per kind
+  RowMatrix eta;                        // per kind
+  std::vector<std::vector<int>> of;     // per trajectory, per observation row: its kind
+  int num_kinds() const { return static_cast<int>(symbols.size()); }
+};
+
+// The kinds of `trajectories`, or nothing when there are more than `max_kinds`.
+std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTrajectory>& trajectories, int max_kinds);
 
 // Dirichlet priors of the observation model (SPEC §1): alpha for the subject's
 // O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e.
