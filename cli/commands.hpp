@@ -13,6 +13,7 @@ Command add_posterior(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_generate(CLI::App& app);
 Command add_experiment(CLI::App& app);
+Command add_render(CLI::App& app);
 
 // Print a JSON result to stdout, or to `path` when it is not empty.
 void emit(const std::string& text, const std::string& path);

@@ -243,6 +243,26 @@ TEST_F(Cli, UnknownKeysOnlyWarn) {
       << r.err;
 }
 
+// hbirl render writes the frames it lists, with the expert's true steps; a bad scene
+// name is one line naming the option, exit 2, nothing on stdout.
+TEST_F(Cli, RenderWritesTheFramesItLists) {
+  const fs::path out = dir_ / "frames";
+  const Outcome r = run("render --config all --sorts 1 --every 15 --out '" + out.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json listing = nlohmann::json::parse(r.out);
+  ASSERT_GE(listing["frames"].get<int>(), 10);  // 5-6 steps x 2 frames
+  for (const auto& f : listing["files"]) {
+    EXPECT_TRUE(fs::exists(f["file"].get<std::string>())) << f.dump();
+    EXPECT_FALSE(f["symbols"].empty()) << f.dump();
+  }
+  EXPECT_EQ(listing["files"].back()["action"], "release");
+  const Outcome bad = run("render --config all,unicorn --out '" + out.string() + "'");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_TRUE(bad.out.empty());
+  EXPECT_NE(bad.err.find("--config: unknown element 'unicorn'"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+}
+
 TEST_F(Cli, GridworldExperimentAtSmallScale) {
   const fs::path out = dir_ / "gw";
   const Outcome r = run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +

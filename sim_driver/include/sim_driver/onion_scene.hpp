@@ -1,0 +1,98 @@
+#pragma once
+// The simulated camera of the onion-sorting experiment (SPEC §3, paper Fig. 2): an RGB
+// view of the expert's blue gripper sorting onions at a conveyor, an inspection spot and
+// a bin, with the confounding elements of the paper, each switchable:
+//   - a person in a blue shirt (the gripper's colour) walking behind the expert,
+//   - other onions passing on the conveyor,
+//   - a foreground person in an onion-coloured shirt who occludes the expert for stretches,
+//   - a mirror on the back wall showing a smaller, reflected view of gripper and onion
+//     (the far side of the onion: the expert can still be seen while occluded).
+// Blemished onions carry a dark spot on one side: it shows only from some angles, most
+// of all while the onion is turned during inspection.
+//
+// Everything is a function of (config, seed, episode, time): the same arguments give the
+// same pixels. Coordinates below are fractions of the frame's width and height.
+#include <opencv2/core.hpp>
+#include <cstdint>
+#include <vector>
+
+#include "learner/trajectory.hpp"
+
+namespace hbirl::onion {
+
+struct SceneConfig {
+  int width = 320;  // height = 3/4 of the width
+  int fps = 15;
+  double step_seconds = 2.0;  // one MDP step
+  bool blue_shirt_person = true;
+  bool other_onions = true;
+  bool foreground_person = true;
+  bool mirror = true;
+
+  static SceneConfig controlled();  // no confounding elements, no mirror
+  int height() const { return width * 3 / 4; }
+  int frames_per_step() const;
+  // Throws InputError naming the first bad field.
+  void validate() const;
+};
+
+// One demonstrated sort: the expert's (s, a) steps, the onion's true quality and how it
+// lies, and when the sort began (sim seconds; the confounders move on a global clock).
+struct Episode {
+  Trajectory steps;
+  bool blemished = false;
+  double onion_angle = 0.0;  // how the onion lies on the belt (radians)
+  double spot_angle = 0.0;   // where its blemish is
+  double start_time = 0.0;
+};
+
+// The gripper's appearance at this resolution (the labeller's reference size).
+struct GripperSize {
+  int width = 0;
+  int height = 0;
+};
+GripperSize gripper_size(const SceneConfig& config);
+// An onion's area in pixels at this resolution.
+double onion_area(const SceneConfig& config);
+
+class OnionScene {
+ public:
+  OnionScene(const SceneConfig& config, std::uint64_t seed);
+
+  // Frame `frame` (0 .. frames_per_step - 1) of step t of the episode, BGR 8-bit.
+  void render(const Episode& episode, int t, int frame, cv::Mat& out) const;
+  // The sim time of that frame.
+  double time_of(const Episode& episode, int t, int frame) const;
+
+  const SceneConfig& config() const { return config_; }
+
+ private:
+  struct Pose {
+    double gx, gy;          // gripper centre
+    double ox, oy;          // onion centre
+    double onion_angle;     // onion rotation
+    bool onion_visible;
+    bool onion_in_bin;      // drawn behind the bin's front
+  };
+  Pose pose(const Episode& episode, int t, double u) const;
+  void draw_background(cv::Mat& img) const;
+  void draw_mirror(cv::Mat& img, const Pose& p, const Episode& e) const;
+  void draw_blue_person(cv::Mat& img, double time) const;
+  void draw_other_onions(cv::Mat& img, double time) const;
+  void draw_expert(cv::Mat& img, const Pose& p, const Episode& e) const;
+  void draw_foreground_person(cv::Mat& img, double time) const;
+  void draw_onion(cv::Mat& img, double x, double y, double radius, double angle, double spot, bool blemished) const;
+
+  SceneConfig config_;
+  std::uint64_t seed_;
+  double walk_phase_;        // blue-shirt person
+  double walk_period_;
+  double occlusion_phase_;   // foreground person
+  double occlusion_period_;
+  cv::Mat background_;
+};
+
+// A sort's episode for the scene: the expert's trajectory and a random onion pose.
+Episode make_episode(const Trajectory& steps, bool blemished, double start_time, std::uint64_t seed);
+
+}  // namespace hbirl::onion
