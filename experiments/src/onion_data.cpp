@@ -1,0 +1,78 @@
+#include "experiments/onion_data.hpp"
+
+#include "learner/rng.hpp"
+#include "sim_driver/onion.hpp"
+
+namespace hbirl::onion {
+
+perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta) {
+  perception::LabellerOptions o;
+  o.width = config.width;
+  o.height = config.height();
+  const GripperSize g = gripper_size(config);
+  o.gripper_area = static_cast<double>(g.width) * g.height;
+  o.onion_area = onion_area(config);
+  o.uniform_eta = uniform_eta;
+  return o;
+}
+
+OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                               std::uint64_t seed) {
+  const OnionScene scene(config, seed);
+  const Eigen::VectorXd weights = expert_weights();
+  perception::BlobDetector detector;
+  const perception::LabellerOptions labels = labeller_options(config, options.uniform_eta);
+  Rng rng(seed, 11);
+  OnionDemonstration out;
+  double time = options.start_time;
+  cv::Mat frame;
+  std::vector<double> eta;
+  for (int i = 0; i < options.sorts; ++i) {
+    const bool blemished = rng.uniform() < options.blemished;
+    const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
+    const Episode episode = make_episode(steps, blemished, time, rng.next_u64());
+    ObservedTrajectory observed;
+    observed.ends_in_terminal = true;  // every sort ends with a release into a terminal state
+    eta.clear();
+    for (int t = 0; t < static_cast<int>(steps.size()); ++t) {
+      for (int k = 0; k < config.frames_per_step(); ++k) {
+        scene.render(episode, t, k, frame);
+        ++out.frames;
+        for (const perception::Observation& o : perception::label(detector.detect(frame), labels)) {
+          observed.symbols.push_back(o.symbol);
+          eta.insert(eta.end(), o.eta.begin(), o.eta.end());
+        }
+      }
+      observed.step_begin.push_back(static_cast<int>(observed.symbols.size()));
+    }
+    observed.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(observed.symbols.size()),
+                                               perception::kNumSources);
+    out.truth.push_back(steps);
+    out.blemished.push_back(blemished);
+    out.observed.push_back(std::move(observed));
+    time += static_cast<double>(steps.size()) * config.step_seconds;
+  }
+  return out;
+}
+
+Eigen::MatrixXd controlled_prior(const Mdp& mdp, const OnionDemonstration& controlled, double pseudo_count) {
+  Eigen::MatrixXd counts = Eigen::MatrixXd::Zero(mdp.num_pairs(), perception::kNumSymbols);
+  Eigen::VectorXd visits = Eigen::VectorXd::Zero(mdp.num_pairs());
+  for (size_t i = 0; i < controlled.truth.size(); ++i) {
+    const ObservedTrajectory& o = controlled.observed[i];
+    for (int t = 0; t < o.length(); ++t) {
+      const StateAction& x = controlled.truth[i][static_cast<size_t>(t)];
+      const int r = mdp.pair(x.state, x.action);
+      visits[r] += 1.0;
+      for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        counts(r, o.symbols[static_cast<size_t>(n)]) += o.weight(n);
+      }
+    }
+  }
+  for (int r = 0; r < mdp.num_pairs(); ++r) {
+    if (visits[r] > 0.0) counts.row(r) /= visits[r];
+  }
+  return counts.array() + pseudo_count;
+}
+
+}  // namespace hbirl::onion
