@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "experiments/gridworld_experiment.hpp"
+#include "experiments/onion_experiment.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
 #include "learner/parallel.hpp"
@@ -97,21 +98,52 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
   if (!out) throw InputError("--out", "cannot write " + path.string());
 }
 
+// What every experiment writes: <stem>_runs.csv, <stem>_summary.csv and .md (mean and 95%
+// CI of `values` per method and x), <stem>.png/.svg; the summary goes to stdout.
+struct ExperimentOutput {
+  std::string stem;
+  std::string heading;   // of the markdown summary
+  std::string x_name;    // CSV column
+  std::string x_header;  // markdown column
+  std::string footer;    // the settings, after the table
+  FigureSpec figure;
+};
+
+void write_experiment(const std::string& out, const ExperimentOutput& spec, const std::string& runs_csv,
+                      const std::vector<std::string>& methods, const std::vector<int>& xs, const std::vector<double>& values) {
+  const std::filesystem::path dir(out);
+  write_file(dir / (spec.stem + "_runs.csv"), runs_csv);
+  const std::vector<SummaryRow> rows = summarise(methods, xs, values);
+  write_file(dir / (spec.stem + "_summary.csv"), summary_csv(rows, spec.x_name));
+  std::ostringstream md;
+  md << "# " << spec.heading << "\n\n" << summary_markdown(rows, spec.x_header, "ILE") << "\n" << spec.footer << "\n";
+  write_file(dir / (spec.stem + "_summary.md"), md.str());
+  FigureSpec figure = spec.figure;
+  figure.path_stem = (dir / spec.stem).string();
+  const std::string problem = draw_figure(rows, figure);
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << md.str();
+  std::cerr << "hbirl: wrote " << (dir / (spec.stem + "_runs.csv")).string() << ", " << spec.stem << "_summary.csv, " << spec.stem
+            << "_summary.md" << (problem.empty() ? ", " + spec.stem + ".png, " + spec.stem + ".svg" : "") << " in " << out << "\n";
+}
+
+void make_folder(const std::string& out) {
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw InputError("--out", "cannot create " + out + ": " + ec.message());
+}
+
 int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   GridworldExperimentOptions& o = args.options;
   o.confounders = parse_int_list(args.confounders, "--confounders");
   o.methods = parse_methods(args.methods);
-  std::error_code ec;
-  std::filesystem::create_directories(args.out, ec);
-  if (ec) throw InputError("--out", "cannot create " + args.out + ": " + ec.message());
+  make_folder(args.out);
   ProgressBar bar("runs");
   o.progress = [&bar](int done, int total) { bar.update(done, total); };
   const auto start = std::chrono::steady_clock::now();
   const std::vector<GridworldRun> runs = run_gridworld_experiment(o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  const std::filesystem::path dir(args.out);
-  write_file(dir / "gridworld_runs.csv", gridworld_runs_csv(runs));
   std::vector<std::string> methods;
   std::vector<int> xs;
   std::vector<double> ile;
@@ -125,26 +157,86 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
     xs.push_back(r.confounders);
     ile.push_back(r.ile);
   }
-  const std::vector<SummaryRow> rows = summarise(methods, xs, ile);
-  write_file(dir / "gridworld_summary.csv", summary_csv(rows, "confounders"));
-  std::ostringstream md;
-  md << "# Gridworld: ILE vs number of confounding elements\n\n"
-     << summary_markdown(rows, "|E|", "ILE") << "\n"
-     << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
-     << " observations per step, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
-     << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
-     << " threads" << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".\n";
-  write_file(dir / "gridworld_summary.md", md.str());
-  FigureSpec figure;
-  figure.title = "Gridworld: ILE vs confounding elements (" + std::to_string(o.runs) + " runs per point, 95% CI)";
-  figure.x_label = "Number of confounding elements |E|";
-  figure.y_label = "ILE";
-  figure.path_stem = (dir / "gridworld").string();
-  const std::string problem = draw_figure(rows, figure);
-  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
-  std::cout << md.str();
-  std::cerr << "hbirl: wrote " << (dir / "gridworld_runs.csv").string() << ", gridworld_summary.csv, gridworld_summary.md"
-            << (problem.empty() ? ", gridworld.png, gridworld.svg" : "") << " in " << args.out << "\n";
+  ExperimentOutput spec;
+  spec.stem = "gridworld";
+  spec.heading = "Gridworld: ILE vs number of confounding elements";
+  spec.x_name = "confounders";
+  spec.x_header = "|E|";
+  std::ostringstream footer;
+  footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
+         << " observations per step, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
+         << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
+         << " threads" << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".";
+  spec.footer = footer.str();
+  spec.figure.title = "Gridworld: ILE vs confounding elements (" + std::to_string(o.runs) + " runs per point, 95% CI)";
+  spec.figure.x_label = "Number of confounding elements |E|";
+  spec.figure.y_label = "ILE";
+  write_experiment(args.out, spec, gridworld_runs_csv(runs), methods, xs, ile);
+  return 0;
+}
+
+struct OnionExperimentArgs {
+  std::string out = "results";
+  std::string trajectories = "1,2,3,4,5,6,7,8,9,10";
+  std::string methods = "all";
+  onion::OnionExperimentOptions options;
+};
+
+int run_onion_experiment_command(OnionExperimentArgs& args) {
+  onion::OnionExperimentOptions& o = args.options;
+  o.trajectories = parse_int_list(args.trajectories, "--trajectories");
+  for (int n : o.trajectories) {
+    if (n < 1) throw InputError("--trajectories", "needs at least 1 trajectory per point");
+  }
+  o.methods.clear();
+  if (args.methods == "all") {
+    o.methods = onion::all_onion_methods();
+  } else {
+    std::stringstream in(args.methods);
+    for (std::string item; std::getline(in, item, ',');) {
+      onion::OnionMethod m;
+      if (!onion::parse_method(item, m)) {
+        throw InputError("--methods", "unknown method \"" + item +
+                                          "\" (true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta)");
+      }
+      o.methods.push_back(m);
+    }
+  }
+  make_folder(args.out);
+  ProgressBar bar("learning runs");
+  o.progress = [&bar](int done, int total) { bar.update(done, total); };
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<onion::OnionRun> runs = onion::run_onion_experiment(o);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::vector<std::string> methods;
+  std::vector<int> xs;
+  std::vector<double> ile;
+  int failed = 0;
+  for (const auto& r : runs) {
+    if (!r.error.empty()) {
+      if (++failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << onion::method_key(r.method) << ", " << r.trajectories << " trajectories) failed: " << r.error << "\n";
+      continue;
+    }
+    methods.push_back(onion::method_label(r.method));
+    xs.push_back(r.trajectories);
+    ile.push_back(r.ile);
+  }
+  ExperimentOutput spec;
+  spec.stem = "onion";
+  spec.heading = "Onion sorting: ILE vs number of trajectories";
+  spec.x_name = "trajectories";
+  spec.x_header = "trajectories";
+  std::ostringstream footer;
+  footer << o.runs << " runs per point, from frames rendered at " << o.width << " px, " << o.fps
+         << " fps; subject prior from a controlled run of " << o.controlled_sorts << " sorts; c = " << o.c << ", seed " << o.seed
+         << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+         << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
+         << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".";
+  spec.footer = footer.str();
+  spec.figure.title = "Onion sorting: ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
+  spec.figure.x_label = "Number of trajectories";
+  spec.figure.y_label = "ILE";
+  write_experiment(args.out, spec, onion::onion_runs_csv(runs), methods, xs, ile);
   return 0;
 }
 
@@ -190,8 +282,34 @@ Command add_experiment(CLI::App& app) {
   grid->add_option("--restarts", g->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
   grid->add_option("--seed", g->options.seed, "Seed of every random choice")->capture_default_str();
   grid->add_option("--threads", g->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
-  return [g, grid] {
+  auto n = std::make_shared<OnionExperimentArgs>();
+  CLI::App* onion_cmd = cmd->add_subcommand(
+      "onion",
+      "The paper's onion-sorting figure, from rendered frames: ILE of five methods (True\n"
+      "Trajectories, ML Trajectories, ML Observations, Plausible eta, Uniform eta) vs the\n"
+      "number of demonstrated sorts, in a scene with three confounding elements and a\n"
+      "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
+      "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
+  onion_cmd->add_option("--out,-o", n->out, "Output folder")->capture_default_str();
+  onion_cmd->add_option("--runs", n->options.runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
+  onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")->capture_default_str();
+  onion_cmd->add_option("--methods", n->methods,
+                        "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
+      ->capture_default_str();
+  onion_cmd->add_option("--controlled-sorts", n->options.controlled_sorts, "Sorts in the controlled run that gives the subject prior")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  onion_cmd->add_option("--width", n->options.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
+  onion_cmd->add_option("--fps", n->options.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  onion_cmd->add_option("--c", n->options.c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
+  onion_cmd->add_option("--restarts", n->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
+  onion_cmd->add_option("--seed", n->options.seed, "Seed of every random choice")->capture_default_str();
+  onion_cmd->add_option("--threads", n->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  return [g, grid, n, onion_cmd] {
     if (grid->parsed()) return run_gridworld_experiment_command(*g);
+    if (onion_cmd->parsed()) return run_onion_experiment_command(*n);
     return 2;
   };
 }

@@ -263,6 +263,22 @@ TEST_F(Cli, RenderWritesTheFramesItLists) {
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
 }
 
+TEST_F(Cli, OnionExperimentAtSmallScale) {
+  const fs::path out = dir_ / "onion";
+  const Outcome r = run("experiment onion --runs 2 --trajectories 1,3 --controlled-sorts 4 --threads 2 --out '" + out.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("| trajectories | True Trajectories | ML Trajectories | ML Observations | Plausible eta | Uniform eta |"),
+            std::string::npos) << r.out;
+  const std::string csv = slurp(out / "onion_runs.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,log_likelihood,seconds,error");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
+  EXPECT_TRUE(fs::exists(out / "onion_summary.md"));
+  const Outcome bad = run("experiment onion --trajectories 0,2 --out '" + out.string() + "'");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--trajectories"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, GridworldExperimentAtSmallScale) {
   const fs::path out = dir_ / "gw";
   const Outcome r = run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +

@@ -1,0 +1,225 @@
+#include "experiments/onion_experiment.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "experiments/onion_data.hpp"
+#include "learner/estep_observations.hpp"
+#include "learner/hidden_data_em.hpp"
+#include "learner/metrics.hpp"
+#include "learner/parallel.hpp"
+#include "sim_driver/onion.hpp"
+
+namespace hbirl::onion {
+
+namespace {
+
+std::vector<ObservedTrajectory> first(const std::vector<ObservedTrajectory>& all, int n) {
+  return {all.begin(), all.begin() + n};
+}
+
+// Per step, the (s, a) whose subject O best explains all of its observations.
+std::vector<Trajectory> ml_trajectories(const Mdp& mdp, const Eigen::MatrixXd& subject_o,
+                                        const std::vector<ObservedTrajectory>& observed) {
+  const Eigen::MatrixXd log_o = subject_o.array().log();
+  std::vector<Trajectory> out;
+  for (const auto& o : observed) {
+    Trajectory t;
+    for (int step = 0; step < o.length(); ++step) {
+      if (o.observations_at(step) == 0) continue;  // occluded: nothing to go by
+      double best = -std::numeric_limits<double>::infinity();
+      StateAction pick{-1, -1};
+      for (int s = 0; s < mdp.num_states; ++s) {
+        if (mdp.is_terminal(s)) continue;
+        for (int a = 0; a < mdp.num_actions; ++a) {
+          if (!mdp.available(s, a)) continue;
+          double ll = 0.0;
+          for (int n = o.step_begin[static_cast<size_t>(step)]; n < o.step_begin[static_cast<size_t>(step) + 1]; ++n) {
+            ll += o.weight(n) * log_o(mdp.pair(s, a), o.symbols[static_cast<size_t>(n)]);
+          }
+          if (ll > best) {
+            best = ll;
+            pick = {s, a};
+          }
+        }
+      }
+      t.push_back(pick);
+    }
+    if (!t.empty()) out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// Only the observations whose eta makes the subject strictly most likely, as the subject's.
+std::vector<ObservedTrajectory> ml_observations(const std::vector<ObservedTrajectory>& observed) {
+  std::vector<ObservedTrajectory> out;
+  for (const auto& o : observed) {
+    ObservedTrajectory kept;
+    kept.ends_in_terminal = o.ends_in_terminal;
+    for (int t = 0; t < o.length(); ++t) {
+      for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        const double subject = o.eta(n, 0);
+        if (subject > o.eta.row(n).tail(o.eta.cols() - 1).maxCoeff()) kept.symbols.push_back(o.symbols[static_cast<size_t>(n)]);
+      }
+      kept.step_begin.push_back(static_cast<int>(kept.symbols.size()));
+    }
+    kept.eta = RowMatrix::Ones(static_cast<Eigen::Index>(kept.symbols.size()), 1);
+    out.push_back(std::move(kept));
+  }
+  return out;
+}
+
+std::vector<ObservedTrajectory> with_uniform_eta(std::vector<ObservedTrajectory> observed) {
+  for (auto& o : observed) o.eta.setConstant(1.0 / static_cast<double>(o.eta.cols()));
+  return observed;
+}
+
+}  // namespace
+
+const std::vector<OnionMethod>& all_onion_methods() {
+  static const std::vector<OnionMethod> methods = {OnionMethod::kTrueTrajectories, OnionMethod::kMlTrajectories,
+                                                   OnionMethod::kMlObservations, OnionMethod::kPlausibleEta,
+                                                   OnionMethod::kUniformEta};
+  return methods;
+}
+
+std::string method_label(OnionMethod m) {
+  switch (m) {
+    case OnionMethod::kTrueTrajectories: return "True Trajectories";
+    case OnionMethod::kMlTrajectories: return "ML Trajectories";
+    case OnionMethod::kMlObservations: return "ML Observations";
+    case OnionMethod::kPlausibleEta: return "Plausible eta";
+    case OnionMethod::kUniformEta: return "Uniform eta";
+  }
+  return "?";
+}
+
+std::string method_key(OnionMethod m) {
+  switch (m) {
+    case OnionMethod::kTrueTrajectories: return "true_trajectories";
+    case OnionMethod::kMlTrajectories: return "ml_trajectories";
+    case OnionMethod::kMlObservations: return "ml_observations";
+    case OnionMethod::kPlausibleEta: return "plausible_eta";
+    case OnionMethod::kUniformEta: return "uniform_eta";
+  }
+  return "?";
+}
+
+bool parse_method(const std::string& key, OnionMethod& method) {
+  for (OnionMethod m : all_onion_methods()) {
+    if (method_key(m) == key) {
+      method = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
+  const Mdp mdp = make_onion_mdp();
+  SceneConfig scene;
+  scene.width = o.width;
+  scene.fps = o.fps;
+  SceneConfig controlled_scene = SceneConfig::controlled();
+  controlled_scene.width = o.width;
+  controlled_scene.fps = o.fps;
+  DemonstrationOptions controlled_options;
+  controlled_options.sorts = o.controlled_sorts;
+  const Eigen::MatrixXd subject_alpha =
+      controlled_prior(mdp, demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64()));
+  const Eigen::MatrixXd subject_o = dirichlet_mean(subject_alpha);
+  const int most = *std::max_element(o.trajectories.begin(), o.trajectories.end());
+  const size_t per_run = o.trajectories.size() * o.methods.size();
+  std::vector<OnionRun> results(static_cast<size_t>(o.runs) * per_run);
+  std::atomic<int> done{0};
+  const int total = static_cast<int>(results.size());
+  parallel_for(o.runs, o.threads, [&](int run) {
+    DemonstrationOptions options;
+    options.sorts = most;
+    options.start_time = 1000.0 * run;  // the confounders' clock: each run sees other moments
+    const OnionDemonstration demo = demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
+    for (size_t i = 0; i < o.trajectories.size(); ++i) {
+      const int n = o.trajectories[i];
+      for (size_t m = 0; m < o.methods.size(); ++m) {
+        OnionRun& r = results[static_cast<size_t>(run) * per_run + i * o.methods.size() + m];
+        r.run = run;
+        r.trajectories = n;
+        r.method = o.methods[m];
+        const auto start = std::chrono::steady_clock::now();
+        try {
+          LearnOptions learn;
+          learn.restarts = o.restarts;
+          learn.seed = o.seed ^ (static_cast<std::uint64_t>(run) << 20) ^ static_cast<std::uint64_t>(n);
+          learn.threads = 1;
+          learn.theta_tolerance = o.theta_tolerance;
+          learn.likelihood_tolerance = o.likelihood_tolerance;
+          ObservationPrior prior;
+          prior.num_symbols = perception::kNumSymbols;
+          prior.subject_alpha = subject_alpha;
+          prior.c = o.c;
+          ObservationEStepOptions estep_options;
+          estep_options.max_alpha_iterations = o.max_alpha_iterations;
+          estep_options.alpha_tolerance = o.alpha_tolerance;
+          const std::vector<ObservedTrajectory> observed = first(demo.observed, n);
+          LearnResult learned;
+          switch (r.method) {
+            case OnionMethod::kTrueTrajectories: {
+              const std::vector<Trajectory> truth(demo.truth.begin(), demo.truth.begin() + n);
+              learned = learn_reward(mdp, TruthEStep(mdp, truth), learn);
+              break;
+            }
+            case OnionMethod::kMlTrajectories:
+              learned = learn_reward(mdp, TruthEStep(mdp, ml_trajectories(mdp, subject_o, observed)), learn);
+              break;
+            case OnionMethod::kMlObservations:
+              prior.num_confounders = 0;
+              prior.confounder_alpha = Eigen::MatrixXd::Zero(0, prior.num_symbols);
+              learned = learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
+              break;
+            case OnionMethod::kPlausibleEta:
+            case OnionMethod::kUniformEta:
+              prior.num_confounders = perception::kNumSources - 1;
+              prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
+              learned = learn_reward(
+                  mdp,
+                  ObservationEStep(mdp, r.method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed, prior, estep_options),
+                  learn);
+              break;
+          }
+          const InverseLearningError ile = inverse_learning_error(mdp, expert_weights(), learned.theta);
+          r.ile = ile.ile;
+          r.ile_relative = ile.relative();
+          r.policy_agreement = policy_agreement(mdp, expert_weights(), learned.theta);
+          r.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_iterations;
+          r.log_likelihood = learned.log_likelihood;
+        } catch (const std::exception& e) {
+          r.error = e.what();  // one failed run must not lose the others
+        }
+        r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const int finished = ++done;
+        if (o.progress) o.progress(finished, total);
+      }
+    }
+  });
+  return results;
+}
+
+std::string onion_runs_csv(const std::vector<OnionRun>& runs) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,log_likelihood,seconds,error\n";
+  for (const auto& r : runs) {
+    std::string error = r.error;
+    std::replace(error.begin(), error.end(), ',', ';');
+    std::replace(error.begin(), error.end(), '\n', ' ');
+    out << r.run << "," << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << ","
+        << r.policy_agreement << "," << r.em_iterations << "," << r.log_likelihood << "," << r.seconds << "," << error << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace hbirl::onion
