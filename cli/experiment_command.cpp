@@ -133,6 +133,46 @@ void make_folder(const std::string& out) {
   if (ec) throw InputError("--out", "cannot create " + out + ": " + ec.message());
 }
 
+// The ILE of every successful run, by method label and x; failed runs are counted and
+// the first few reported on stderr (`where` describes a run).
+struct Collected {
+  std::vector<std::string> methods;
+  std::vector<int> xs;
+  std::vector<double> ile;
+  int failed = 0;
+};
+
+template <typename Run, typename Label, typename X, typename Where>
+Collected collect(const std::vector<Run>& runs, Label label, X x, Where where) {
+  Collected c;
+  for (const auto& r : runs) {
+    if (!r.error.empty()) {
+      if (++c.failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << where(r) << ") failed: " << r.error << "\n";
+      continue;
+    }
+    c.methods.push_back(label(r));
+    c.xs.push_back(x(r));
+    c.ile.push_back(r.ile);
+  }
+  return c;
+}
+
+std::string failed_note(int failed) {
+  return failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "";
+}
+
+// Options every experiment has.
+void add_shared_options(CLI::App* cmd, std::string& out, int& runs, double& c, int& restarts, std::uint64_t& seed, int& threads) {
+  cmd->add_option("--out,-o", out, "Output folder")->capture_default_str();
+  cmd->add_option("--runs", runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cmd->add_option("--c", c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--restarts", restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--seed", seed, "Seed of every random choice")->capture_default_str();
+  cmd->add_option("--threads", threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+}
+
 int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   GridworldExperimentOptions& o = args.options;
   o.confounders = parse_int_list(args.confounders, "--confounders");
@@ -144,19 +184,9 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   const std::vector<GridworldRun> runs = run_gridworld_experiment(o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::vector<std::string> methods;
-  std::vector<int> xs;
-  std::vector<double> ile;
-  int failed = 0;
-  for (const auto& r : runs) {
-    if (!r.error.empty()) {
-      if (++failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << method_key(r.method) << ", |E| = " << r.confounders << ") failed: " << r.error << "\n";
-      continue;
-    }
-    methods.push_back(method_label(r.method));
-    xs.push_back(r.confounders);
-    ile.push_back(r.ile);
-  }
+  const Collected c = collect(
+      runs, [](const GridworldRun& r) { return method_label(r.method); }, [](const GridworldRun& r) { return r.confounders; },
+      [](const GridworldRun& r) { return method_key(r.method) + ", |E| = " + std::to_string(r.confounders); });
   ExperimentOutput spec;
   spec.stem = "gridworld";
   spec.heading = "Gridworld: ILE vs number of confounding elements";
@@ -166,12 +196,12 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
          << " observations per step, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
          << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
-         << " threads" << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".";
+         << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
   spec.figure.title = "Gridworld: ILE vs confounding elements (" + std::to_string(o.runs) + " runs per point, 95% CI)";
   spec.figure.x_label = "Number of confounding elements |E|";
   spec.figure.y_label = "ILE";
-  write_experiment(args.out, spec, gridworld_runs_csv(runs), methods, xs, ile);
+  write_experiment(args.out, spec, gridworld_runs_csv(runs), c.methods, c.xs, c.ile);
   return 0;
 }
 
@@ -208,19 +238,10 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<onion::OnionRun> runs = onion::run_onion_experiment(o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::vector<std::string> methods;
-  std::vector<int> xs;
-  std::vector<double> ile;
-  int failed = 0;
-  for (const auto& r : runs) {
-    if (!r.error.empty()) {
-      if (++failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << onion::method_key(r.method) << ", " << r.trajectories << " trajectories) failed: " << r.error << "\n";
-      continue;
-    }
-    methods.push_back(onion::method_label(r.method));
-    xs.push_back(r.trajectories);
-    ile.push_back(r.ile);
-  }
+  const Collected c = collect(
+      runs, [](const onion::OnionRun& r) { return onion::method_label(r.method); },
+      [](const onion::OnionRun& r) { return r.trajectories; },
+      [](const onion::OnionRun& r) { return onion::method_key(r.method) + ", " + std::to_string(r.trajectories) + " trajectories"; });
   ExperimentOutput spec;
   spec.stem = "onion";
   spec.heading = "Onion sorting: ILE vs number of trajectories";
@@ -231,12 +252,12 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
          << " fps; subject prior from a controlled run of " << o.controlled_sorts << " sorts; c = " << o.c << ", seed " << o.seed
          << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
-         << (failed > 0 ? "; " + std::to_string(failed) + " runs failed and are left out (see the error column)" : "") << ".";
+         << failed_note(c.failed) << ".";
   spec.footer = footer.str();
   spec.figure.title = "Onion sorting: ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
   spec.figure.x_label = "Number of trajectories";
   spec.figure.y_label = "ILE";
-  write_experiment(args.out, spec, onion::onion_runs_csv(runs), methods, xs, ile);
+  write_experiment(args.out, spec, onion::onion_runs_csv(runs), c.methods, c.xs, c.ile);
   return 0;
 }
 
@@ -253,8 +274,7 @@ Command add_experiment(CLI::App& app) {
       "elements. Writes gridworld_runs.csv (one row per run), gridworld_summary.csv and .md\n"
       "(mean and 95% CI) and gridworld.png/.svg (needs gnuplot) to --out, and prints the\n"
       "summary. Runs in parallel; the numbers do not depend on --threads.");
-  grid->add_option("--out,-o", g->out, "Output folder")->capture_default_str();
-  grid->add_option("--runs", g->options.runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
+  add_shared_options(grid, g->out, g->options.runs, g->options.c, g->options.restarts, g->options.seed, g->options.threads);
   grid->add_option("--confounders", g->confounders, "Numbers of confounding elements, comma-separated")->capture_default_str();
   grid->add_option("--methods", g->methods,
                    "Comma-separated: true_trajectories, true_observation_function, uniform_eta, plausible_eta, ignore_ce; or all")
@@ -262,9 +282,6 @@ Command add_experiment(CLI::App& app) {
   grid->add_option("--trajectories", g->options.trajectories, "Trajectories per run")->check(CLI::Range(1, 100000))->capture_default_str();
   grid->add_option("--length", g->options.length, "Steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
   grid->add_option("--per-step", g->options.per_step, "Observations per step")->check(CLI::Range(0, 1000000))->capture_default_str();
-  grid->add_option("--c", g->options.c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
-      ->check(CLI::Range(1e-6, 1.0))
-      ->capture_default_str();
   grid->add_option("--max-alpha-iterations", g->options.max_alpha_iterations, "Observation-model refinements per E-step")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
@@ -279,9 +296,6 @@ Command add_experiment(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   grid->add_flag("!--plain-em", g->options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
-  grid->add_option("--restarts", g->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
-  grid->add_option("--seed", g->options.seed, "Seed of every random choice")->capture_default_str();
-  grid->add_option("--threads", g->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
   auto n = std::make_shared<OnionExperimentArgs>();
   CLI::App* onion_cmd = cmd->add_subcommand(
       "onion",
@@ -290,8 +304,7 @@ Command add_experiment(CLI::App& app) {
       "number of demonstrated sorts, in a scene with three confounding elements and a\n"
       "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
       "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
-  onion_cmd->add_option("--out,-o", n->out, "Output folder")->capture_default_str();
-  onion_cmd->add_option("--runs", n->options.runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
+  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.c, n->options.restarts, n->options.seed, n->options.threads);
   onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")->capture_default_str();
   onion_cmd->add_option("--methods", n->methods,
                         "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
@@ -301,12 +314,6 @@ Command add_experiment(CLI::App& app) {
       ->capture_default_str();
   onion_cmd->add_option("--width", n->options.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
   onion_cmd->add_option("--fps", n->options.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
-  onion_cmd->add_option("--c", n->options.c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
-      ->check(CLI::Range(1e-6, 1.0))
-      ->capture_default_str();
-  onion_cmd->add_option("--restarts", n->options.restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
-  onion_cmd->add_option("--seed", n->options.seed, "Seed of every random choice")->capture_default_str();
-  onion_cmd->add_option("--threads", n->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
   return [g, grid, n, onion_cmd] {
     if (grid->parsed()) return run_gridworld_experiment_command(*g);
     if (onion_cmd->parsed()) return run_onion_experiment_command(*n);
