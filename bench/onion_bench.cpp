@@ -16,6 +16,7 @@ Episode episode() {
 }
 
 void BM_RenderFrame(benchmark::State& state) {
+  cv::setNumThreads(1);
   SceneConfig config;
   config.width = static_cast<int>(state.range(0));
   const OnionScene scene(config, 1);
@@ -34,6 +35,7 @@ BENCHMARK(BM_RenderFrame)->Arg(320)->Arg(640);
 
 // Blob detection and labelling of pre-rendered frames (a step's 30 frames in turn).
 void BM_PerceiveFrame(benchmark::State& state) {
+  cv::setNumThreads(1);  // one core: OpenCV's own thread pool would use the other one too
   SceneConfig config;
   config.width = static_cast<int>(state.range(0));
   const OnionScene scene(config, 1);

@@ -41,6 +41,90 @@ TEST(BlobDetector, FindsKnownBlobs) {
   EXPECT_EQ(onions, 2);
 }
 
+// The colour table gives exactly what OpenCV's cvtColor and inRange give, pixel for pixel,
+// on frames of random colours (every class and boundary reachable) and with non-default
+// thresholds; the extents are the masks' bounding rectangles.
+TEST(ColourTable, SameClassesAsCvtColorAndInRange) {
+  BlobOptions options;
+  options.onion_low = cv::Scalar(10, 100, 80);  // not the defaults: a second table
+  cv::RNG rng(7);
+  for (int trial = 0; trial < 3; ++trial) {
+    cv::Mat frame(120, 160, CV_8UC3);
+    rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+    if (trial == 2) {  // sparse classes: a few blobs on grey, so the extents are tight
+      frame.setTo(kGrey);
+      cv::rectangle(frame, cv::Rect(30, 20, 12, 9), kBlue, cv::FILLED);
+      cv::rectangle(frame, cv::Rect(100, 70, 7, 30), kOnion, cv::FILLED);
+      cv::rectangle(frame, cv::Rect(150, 110, 10, 10), kSpot, cv::FILLED);
+    }
+    ColourClasses classes;
+    ColourTable::for_options(options)->classify(frame, classes);
+    cv::Mat hsv, blue, onion, dark;
+    cv::cvtColor(frame, hsv, cv::COLOR_BGR2HSV);
+    cv::inRange(hsv, options.blue_low, options.blue_high, blue);
+    cv::inRange(hsv, options.onion_low, options.onion_high, onion);
+    cv::inRange(hsv, options.dark_low, options.dark_high, dark);
+    cv::bitwise_or(onion, dark, onion);
+    const auto bit = [&](unsigned char b) {
+      cv::Mat m;
+      cv::compare(classes.bits & b, 0, m, cv::CMP_NE);
+      return m;
+    };
+    EXPECT_EQ(cv::countNonZero(bit(ColourTable::kBlue) != blue), 0) << "trial " << trial;
+    EXPECT_EQ(cv::countNonZero(bit(ColourTable::kOnion) != onion), 0) << "trial " << trial;
+    EXPECT_EQ(cv::countNonZero(bit(ColourTable::kDark) != dark), 0) << "trial " << trial;
+    EXPECT_GT(cv::countNonZero(blue), 0);
+    EXPECT_GT(cv::countNonZero(dark), 0);
+    EXPECT_EQ(classes.blue_extent, cv::boundingRect(blue)) << "trial " << trial;
+    EXPECT_EQ(classes.onion_extent, cv::boundingRect(onion)) << "trial " << trial;
+  }
+  EXPECT_EQ(ColourTable::for_options(options), ColourTable::for_options(options));  // built once
+}
+
+// Blobs' statistics against OpenCV's connectedComponentsWithStats on a busy frame: many
+// blobs of both classes, touching each other and the frame's edges.
+TEST(BlobDetector, StatisticsMatchConnectedComponentsWithStats) {
+  cv::Mat frame = blank();
+  cv::RNG rng(11);
+  for (int i = 0; i < 40; ++i) {
+    const cv::Point centre(rng.uniform(-5, 325), rng.uniform(-5, 245));
+    const cv::Scalar colour = i % 3 == 0 ? kBlue : i % 3 == 1 ? kOnion : kSpot;
+    cv::ellipse(frame, centre, cv::Size(rng.uniform(2, 25), rng.uniform(2, 25)), rng.uniform(0, 180), 0, 360, colour, cv::FILLED);
+  }
+  BlobOptions options;
+  BlobDetector detector(options);
+  const std::vector<Detection> found = detector.detect(frame);
+  cv::Mat hsv, masks[2], dark, labels, stats, centroids;
+  cv::cvtColor(frame, hsv, cv::COLOR_BGR2HSV);
+  cv::inRange(hsv, options.blue_low, options.blue_high, masks[0]);
+  cv::inRange(hsv, options.onion_low, options.onion_high, masks[1]);
+  cv::inRange(hsv, options.dark_low, options.dark_high, dark);
+  cv::bitwise_or(masks[1], dark, masks[1]);
+  const int min_area = static_cast<int>(options.min_area_share * 320 * 240);
+  size_t expected = 0;
+  for (int m = 0; m < 2; ++m) {
+    const BlobClass cls = m == 0 ? BlobClass::kGripper : BlobClass::kOnion;
+    const int n = cv::connectedComponentsWithStats(masks[m], labels, stats, centroids, 8, CV_32S);
+    for (int i = 1; i < n; ++i) {
+      const int area = stats.at<int>(i, cv::CC_STAT_AREA);
+      if (area < min_area) continue;
+      ++expected;
+      const cv::Rect box(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
+                         stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
+      const auto same = [&](const Detection& d) { return d.cls == cls && d.box == box && d.area == area; };
+      const auto it = std::find_if(found.begin(), found.end(), same);
+      ASSERT_NE(it, found.end()) << "blob " << i << " of class " << m << " at " << box;
+      EXPECT_NEAR(it->x, centroids.at<double>(i, 0), 1e-9);
+      EXPECT_NEAR(it->y, centroids.at<double>(i, 1), 1e-9);
+      if (cls == BlobClass::kOnion) {
+        EXPECT_NEAR(it->dark_share, static_cast<double>(cv::countNonZero((labels == i) & dark)) / area, 1e-12);
+      }
+    }
+  }
+  EXPECT_EQ(found.size(), expected);
+  EXPECT_GT(expected, 10u);
+}
+
 // Nothing of the gripper's or an onion's colour: no detections (an occluded step).
 TEST(BlobDetector, NoBlobsNoDetections) {
   cv::Mat frame = blank();
