@@ -209,11 +209,17 @@ struct OnionExperimentArgs {
   std::string out = "results";
   std::string trajectories = "1,2,3,4,5,6,7,8,9,10";
   std::string methods = "all";
+  std::string scene = "all";
   onion::OnionExperimentOptions options;
 };
 
 int run_onion_experiment_command(OnionExperimentArgs& args) {
   onion::OnionExperimentOptions& o = args.options;
+  const onion::SceneConfig elements = onion::SceneConfig::parse(args.scene, "--config");
+  o.scene.blue_shirt_person = elements.blue_shirt_person;
+  o.scene.other_onions = elements.other_onions;
+  o.scene.foreground_person = elements.foreground_person;
+  o.scene.mirror = elements.mirror;
   o.trajectories = parse_int_list(args.trajectories, "--trajectories");
   for (int n : o.trajectories) {
     if (n < 1) throw InputError("--trajectories", "needs at least 1 trajectory per point");
@@ -244,17 +250,18 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
       [](const onion::OnionRun& r) { return onion::method_key(r.method) + ", " + std::to_string(r.trajectories) + " trajectories"; });
   ExperimentOutput spec;
   spec.stem = "onion";
-  spec.heading = "Onion sorting: ILE vs number of trajectories";
+  const std::string scene_note = o.scene.elements() == "all" ? "" : " (scene: " + o.scene.elements() + ")";
+  spec.heading = "Onion sorting: ILE vs number of trajectories" + scene_note;
   spec.x_name = "trajectories";
   spec.x_header = "trajectories";
   std::ostringstream footer;
-  footer << o.runs << " runs per point, from frames rendered at " << o.width << " px, " << o.fps
-         << " fps; subject prior from a controlled run of " << o.controlled_sorts << " sorts; c = " << o.c << ", seed " << o.seed
+  footer << o.runs << " runs per point, from frames rendered at " << o.scene.width << " px, " << o.scene.fps
+         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; c = " << o.c << ", seed " << o.seed
          << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
          << failed_note(c.failed) << ".";
   spec.footer = footer.str();
-  spec.figure.title = "Onion sorting: ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
+  spec.figure.title = "Onion sorting" + scene_note + ": ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
   spec.figure.x_label = "Number of trajectories";
   spec.figure.y_label = "ILE";
   write_experiment(args.out, spec, onion::onion_runs_csv(runs), c.methods, c.xs, c.ile);
@@ -312,8 +319,12 @@ Command add_experiment(CLI::App& app) {
   onion_cmd->add_option("--controlled-sorts", n->options.controlled_sorts, "Sorts in the controlled run that gives the subject prior")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  onion_cmd->add_option("--width", n->options.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
-  onion_cmd->add_option("--fps", n->options.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  onion_cmd->add_option("--config,-c", n->scene,
+                        "Demonstrations' scene: all (three confounding elements and the mirror), controlled, or a "
+                        "comma-separated list of blue-shirt, other-onions, foreground, mirror")
+      ->capture_default_str();
+  onion_cmd->add_option("--width", n->options.scene.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
+  onion_cmd->add_option("--fps", n->options.scene.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
   return [g, grid, n, onion_cmd] {
     if (grid->parsed()) return run_gridworld_experiment_command(*g);
     if (onion_cmd->parsed()) return run_onion_experiment_command(*n);

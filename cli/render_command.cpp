@@ -28,32 +28,8 @@ struct RenderArgs {
   double start = 0.0;
 };
 
-onion::SceneConfig parse_config(const std::string& text) {
-  onion::SceneConfig c = onion::SceneConfig::controlled();
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item == "controlled") continue;
-    if (item == "all") {
-      c.blue_shirt_person = c.other_onions = c.foreground_person = c.mirror = true;
-    } else if (item == "blue-shirt") {
-      c.blue_shirt_person = true;
-    } else if (item == "other-onions") {
-      c.other_onions = true;
-    } else if (item == "foreground") {
-      c.foreground_person = true;
-    } else if (item == "mirror") {
-      c.mirror = true;
-    } else {
-      throw InputError("--config", "unknown element '" + item +
-                                       "' (expected controlled, all, or a list of blue-shirt, other-onions, foreground, mirror)");
-    }
-  }
-  return c;
-}
-
 int run_render(const RenderArgs& args) {
-  onion::SceneConfig config = parse_config(args.config);
+  onion::SceneConfig config = onion::SceneConfig::parse(args.config, "--config");
   config.width = args.width;
   config.fps = args.fps;
   const onion::OnionScene scene(config, args.seed);

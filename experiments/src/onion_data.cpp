@@ -27,8 +27,9 @@ OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const 
   double time = options.start_time;
   cv::Mat frame;
   std::vector<double> eta;
+  const bool first_blemished = rng.uniform() < 0.5;
   for (int i = 0; i < options.sorts; ++i) {
-    const bool blemished = rng.uniform() < options.blemished;
+    const bool blemished = options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
     const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
     const Episode episode = make_episode(steps, blemished, time, rng.next_u64());
     ObservedTrajectory observed;

@@ -63,7 +63,8 @@ std::vector<ObservedTrajectory> ml_observations(const std::vector<ObservedTrajec
     for (int t = 0; t < o.length(); ++t) {
       for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
         const double subject = o.eta(n, 0);
-        if (subject > o.eta.row(n).tail(o.eta.cols() - 1).maxCoeff()) kept.symbols.push_back(o.symbols[static_cast<size_t>(n)]);
+        const bool most_likely = o.eta.cols() == 1 || subject > o.eta.row(n).tail(o.eta.cols() - 1).maxCoeff();
+        if (most_likely) kept.symbols.push_back(o.symbols[static_cast<size_t>(n)]);
       }
       kept.step_begin.push_back(static_cast<int>(kept.symbols.size()));
     }
@@ -121,12 +122,11 @@ bool parse_method(const std::string& key, OnionMethod& method) {
 
 std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   const Mdp mdp = make_onion_mdp();
-  SceneConfig scene;
-  scene.width = o.width;
-  scene.fps = o.fps;
+  const SceneConfig& scene = o.scene;
   SceneConfig controlled_scene = SceneConfig::controlled();
-  controlled_scene.width = o.width;
-  controlled_scene.fps = o.fps;
+  controlled_scene.width = scene.width;
+  controlled_scene.fps = scene.fps;
+  controlled_scene.step_seconds = scene.step_seconds;
   DemonstrationOptions controlled_options;
   controlled_options.sorts = o.controlled_sorts;
   const Eigen::MatrixXd subject_alpha =

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
@@ -42,7 +43,7 @@ constexpr double kMirrorLeft = 0.32, kMirrorRight = 0.68, kMirrorTop = 0.03, kMi
 constexpr double kMirrorScale = 0.42;
 constexpr double kOnionRadius = 0.024;  // of the width
 constexpr double kGripperW = 0.07, kGripperH = 0.065;
-constexpr double kOtherOnionGap = 4.0;  // seconds between other onions on the belt
+constexpr double kOtherOnionGap = 2.5;  // seconds between other onions on the belt
 constexpr double kBeltSpeed = 0.05;     // width per second
 
 double smoothstep(double u) { return u * u * (3.0 - 2.0 * u); }
@@ -59,6 +60,43 @@ SceneConfig SceneConfig::controlled() {
   SceneConfig c;
   c.blue_shirt_person = c.other_onions = c.foreground_person = c.mirror = false;
   return c;
+}
+
+SceneConfig SceneConfig::parse(const std::string& elements, const std::string& field) {
+  SceneConfig c = controlled();
+  std::stringstream in(elements);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item == "controlled") continue;
+    if (item == "all") {
+      c.blue_shirt_person = c.other_onions = c.foreground_person = c.mirror = true;
+    } else if (item == "blue-shirt") {
+      c.blue_shirt_person = true;
+    } else if (item == "other-onions") {
+      c.other_onions = true;
+    } else if (item == "foreground") {
+      c.foreground_person = true;
+    } else if (item == "mirror") {
+      c.mirror = true;
+    } else {
+      throw InputError(field, "unknown element '" + item +
+                                  "' (expected controlled, all, or a list of blue-shirt, other-onions, foreground, mirror)");
+    }
+  }
+  return c;
+}
+
+std::string SceneConfig::elements() const {
+  if (blue_shirt_person && other_onions && foreground_person && mirror) return "all";
+  std::string out;
+  const auto add = [&out](bool on, const char* name) {
+    if (on) out += (out.empty() ? "" : ",") + std::string(name);
+  };
+  add(blue_shirt_person, "blue-shirt");
+  add(other_onions, "other-onions");
+  add(foreground_person, "foreground");
+  add(mirror, "mirror");
+  return out.empty() ? "controlled" : out;
 }
 
 int SceneConfig::frames_per_step() const { return std::max(1, static_cast<int>(std::lround(fps * step_seconds))); }
@@ -211,6 +249,13 @@ void OnionScene::draw_blue_person(cv::Mat& img, double time) const {
   cv::line(img, P(x - 0.02, 0.52), P(x - 0.03 + 0.02 * step, 0.76), kTrousers, std::max(2, W / 50));
   cv::line(img, P(x + 0.02, 0.52), P(x + 0.03 - 0.02 * step, 0.76), kTrousers, std::max(2, W / 50));
   cv::rectangle(img, P(x - 0.055, 0.27), P(x + 0.055, 0.53), kShirtBlue, cv::FILLED);
+  // The tote they carry at their side: the gripper's blue and about its size, at the
+  // height of the gripper's working positions -- a false gripper the labeller's size
+  // rule cannot tell apart.
+  const double side = phase < 0.5 ? 1.0 : -1.0;  // in the hand towards which they walk
+  cv::line(img, P(x + side * 0.05, 0.36), P(x + side * 0.1, 0.55), kSkin, std::max(2, W / 90));
+  cv::rectangle(img, P(x + side * 0.1 - kGripperW / 2, 0.55), P(x + side * 0.1 + kGripperW / 2, 0.55 + kGripperH), kShirtBlue,
+                cv::FILLED);
   cv::circle(img, P(x, 0.22), static_cast<int>(0.033 * W), kSkin, cv::FILLED, cv::LINE_AA);
   cv::ellipse(img, P(x, 0.20), cv::Size(static_cast<int>(0.034 * W), static_cast<int>(0.02 * W)), 0, 180, 360, kHair, cv::FILLED);
 }

@@ -31,6 +31,26 @@ TEST(OnionData, ControlledRunGivesTheSubjectPrior) {
   EXPECT_EQ(alpha.minCoeff(), 1.0);
 }
 
+// Onion qualities alternate from a random first one, so any two consecutive sorts show
+// both; with alternate_quality off they are drawn independently.
+TEST(OnionData, QualitiesAlternate) {
+  const Mdp mdp = make_onion_mdp();
+  DemonstrationOptions options;
+  options.sorts = 5;
+  int first_blemished = 0;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const OnionDemonstration d = demonstrate(mdp, SceneConfig::controlled(), options, seed);
+    for (size_t i = 1; i < d.blemished.size(); ++i) EXPECT_NE(d.blemished[i], d.blemished[i - 1]) << "seed " << seed;
+    first_blemished += d.blemished[0];
+  }
+  EXPECT_GT(first_blemished, 0);  // the first one is random
+  EXPECT_LT(first_blemished, 8);
+  options.alternate_quality = false;
+  options.blemished = 1.0;
+  const OnionDemonstration all = demonstrate(mdp, SceneConfig::controlled(), options, 1);
+  EXPECT_EQ(std::count(all.blemished.begin(), all.blemished.end(), true), 5);
+}
+
 // End to end from frames (SPEC §3, the test): 6 sorts in the full scene with the
 // labeller's plausible eta; HiddenDataEM learns to keep good onions and bin blemished ones.
 TEST(OnionData, LearnsTheSortingRuleFromFramesWithPlausibleEta) {

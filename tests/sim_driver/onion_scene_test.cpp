@@ -92,6 +92,22 @@ TEST(OnionScene, BlemishesShowFromSomeAnglesOnly) {
   }
 }
 
+TEST(SceneConfig, ParsesElementLists) {
+  EXPECT_EQ(SceneConfig::parse("controlled").elements(), "controlled");
+  EXPECT_EQ(SceneConfig::parse("all").elements(), "all");
+  const SceneConfig c = SceneConfig::parse("mirror,blue-shirt");
+  EXPECT_TRUE(c.mirror && c.blue_shirt_person && !c.other_onions && !c.foreground_person);
+  EXPECT_EQ(c.elements(), "blue-shirt,mirror");
+  EXPECT_EQ(SceneConfig::parse("blue-shirt,other-onions,foreground,mirror").elements(), "all");
+  try {
+    SceneConfig::parse("mirror,dog", "--config");
+    FAIL() << "accepted an unknown element";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--config"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'dog'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(OnionScene, RejectsBadConfigs) {
   SceneConfig c;
   c.width = 10;

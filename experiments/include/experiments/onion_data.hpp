@@ -22,7 +22,12 @@ struct OnionDemonstration {
 
 struct DemonstrationOptions {
   int sorts = 10;
-  double blemished = 0.5;      // share of blemished onions
+  // Onion qualities: alternate good and blemished from a random first one, so any two
+  // consecutive sorts show both (the paper: "two trajectories are needed ... to see at
+  // least one good and one blemished onion"); false: each sort's onion is blemished
+  // with probability `blemished`.
+  bool alternate_quality = true;
+  double blemished = 0.5;
   bool uniform_eta = false;    // the labeller's Uniform-eta variant
   double start_time = 0.0;     // sim time of the first sort
 };

@@ -4,7 +4,8 @@
 //
 // One controlled run (no confounding elements, no mirror, true states known) gives the
 // subject prior for every run (onion_data.hpp). A run r renders, perceives and labels
-// max(trajectories) sorts in the full scene (three confounding elements and the mirror);
+// max(trajectories) sorts in the scene of `scene` (by default all three confounding
+// elements and the mirror);
 // the point at n trajectories learns from its first n sorts.
 //   True Trajectories   MaxCausalEnt on the true (s, a).
 //   ML trajectories     per step the (s, a) whose subject O (the controlled prior's mean)
@@ -18,6 +19,8 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::onion {
 
@@ -34,8 +37,7 @@ struct OnionExperimentOptions {
   int runs = 100;
   std::uint64_t seed = 1;
   int controlled_sorts = 20;
-  int width = 320;
-  int fps = 15;
+  SceneConfig scene;  // the demonstrations' scene (width, fps, which elements)
   double c = 0.5;
   int max_alpha_iterations = 1;
   double alpha_tolerance = 1e-3;

@@ -2,7 +2,8 @@
 // The simulated camera of the onion-sorting experiment (SPEC §3, paper Fig. 2): an RGB
 // view of the expert's blue gripper sorting onions at a conveyor, an inspection spot and
 // a bin, with the confounding elements of the paper, each switchable:
-//   - a person in a blue shirt (the gripper's colour) walking behind the expert,
+//   - a person in a blue shirt (the gripper's colour) walking behind the expert, carrying
+//     a tote of the same blue and about the gripper's size,
 //   - other onions passing on the conveyor,
 //   - a foreground person in an onion-coloured shirt who occludes the expert for stretches,
 //   - a mirror on the back wall showing a smaller, reflected view of gripper and onion
@@ -14,6 +15,7 @@
 // same pixels. Coordinates below are fractions of the frame's width and height.
 #include <opencv2/core.hpp>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "learner/trajectory.hpp"
@@ -30,6 +32,11 @@ struct SceneConfig {
   bool mirror = true;
 
   static SceneConfig controlled();  // no confounding elements, no mirror
+  // "controlled", "all", or a comma-separated list of blue-shirt, other-onions,
+  // foreground, mirror (the rest of the fields at their defaults). Throws
+  // InputError(field, ...) naming an unknown element.
+  static SceneConfig parse(const std::string& elements, const std::string& field = "config");
+  std::string elements() const;  // the inverse: "controlled", "all" or the list
   int height() const { return width * 3 / 4; }
   int frames_per_step() const;
   // Throws InputError naming the first bad field.
