@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The main job: install what is missing, build, and learn a reward from the example
-# problem (MaxCausalEnt IRL on the true trajectories of the paper's 5x5 Gridworld).
+# The main job: install what is missing, build, and run the onion-sorting demo as LCM
+# services -- simulator and camera, perception, labeller, two sampler workers, optimiser
+# (services/launch.sh; pass its options, e.g. --workers 4 or --config controlled) -- then
+# print the learned reward, its ILE, and where the logs and the recorded run are.
 set -euo pipefail
 cd "$(dirname "$0")"
 scripts/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build --target hbirl -j"$(nproc)" >/dev/null
-echo "Learning the reward of examples/gridworld_5x5.json from its true trajectories:" >&2
-build/hbirl learn --problem examples/gridworld_5x5.json --from truth
+cmake --build build --target hbirl hbirl-services -j"$(nproc)" >/dev/null
+exec services/launch.sh --record "$@"

@@ -10,6 +10,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "problem/json_format.hpp"
+#include "services/pipeline.hpp"
 
 namespace hbirl::cli {
 
@@ -17,6 +18,7 @@ namespace {
 
 struct LearnArgs {
   std::string problem;
+  std::string log;
   std::string from = "observations";
   std::string optimizer = "lbfgs";
   double l2 = 0.0;
@@ -70,7 +72,32 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
   return {{"subject", subject}, {"confounders", confounders}};
 }
 
+// Offline from a recorded run of the service set: the same data set and the same learning
+// as hbirl-optimiser, so the same theta (services/pipeline.hpp).
+int run_learn_from_log(const LearnArgs& args) {
+  services::LearningOptions options;
+  options.seed = args.seed;
+  services::Counters counters;
+  counters.service = "hbirl learn";
+  const services::OptimiserResult r = services::learn_from_log(args.log, options, counters);
+  nlohmann::ordered_json out;
+  out["log"] = args.log;
+  out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
+  if (r.learned.ile) out["ile"] = *r.learned.ile;
+  out["log_likelihood"] = r.learned.log_likelihood;
+  out["em_iterations"] = r.learned.em_iterations;
+  out["demonstrations"] = r.learned.trajectories;
+  out["controlled_episodes"] = r.data.controlled_observed.size();
+  out["dataset_digest"] = r.learned.digest;
+  out["missing_frames"] = r.missing_frames;
+  out["bad_messages"] = counters.bad_messages;
+  emit(out.dump(2) + "\n", args.out);
+  return 0;
+}
+
 int run_learn(const LearnArgs& args) {
+  if (!args.log.empty()) return run_learn_from_log(args);
+  if (args.problem.empty()) throw InputError("--problem", "give a problem file (or --log with a recorded run)");
   const Problem problem = load_problem(args.problem);
   const Mdp& mdp = problem.mdp;
   const bool from_truth = args.from == "truth";
@@ -184,8 +211,11 @@ Command add_learn(CLI::App& app) {
       "weights, log_likelihood, feature_count_error, and with true_weights in the file also\n"
       "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
       "policy_agreement; then one entry per restart.");
-  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")
-      ->required();
+  CLI::Option* problem = cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)");
+  cmd->add_option("--log", args->log,
+                  "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "
+                  "the same data and learning as hbirl-optimiser, so the same theta")
+      ->excludes(problem);
   cmd->add_option("--from", args->from,
                   "What to learn from: 'observations' (HiddenDataEM on the observations) or "
                   "'truth' (MaxCausalEnt on the truth trajectories)")

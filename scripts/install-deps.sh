@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev liblbfgs-dev
   libboost-dev gnuplot-nox
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  liblcm-dev liblcm-bin iproute2 util-linux
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 

@@ -16,22 +16,32 @@ perception::LabellerOptions labeller_options(const SceneConfig& config, bool uni
   return o;
 }
 
-OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
-                               std::uint64_t seed) {
-  const OnionScene scene(config, seed);
+std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                                std::uint64_t seed) {
   const Eigen::VectorXd weights = expert_weights();
-  perception::BlobDetector detector;
-  const perception::LabellerOptions labels = labeller_options(config, options.uniform_eta);
   Rng rng(seed, 11);
-  OnionDemonstration out;
+  std::vector<Episode> sorts;
   double time = options.start_time;
-  cv::Mat frame;
-  std::vector<double> eta;
   const bool first_blemished = rng.uniform() < 0.5;
   for (int i = 0; i < options.sorts; ++i) {
     const bool blemished = options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
     const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
-    const Episode episode = make_episode(steps, blemished, time, rng.next_u64());
+    sorts.push_back(make_episode(steps, blemished, time, rng.next_u64()));
+    time += static_cast<double>(steps.size()) * config.step_seconds;
+  }
+  return sorts;
+}
+
+OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                               std::uint64_t seed) {
+  const OnionScene scene(config, seed);
+  perception::BlobDetector detector;
+  const perception::LabellerOptions labels = labeller_options(config, options.uniform_eta);
+  OnionDemonstration out;
+  cv::Mat frame;
+  std::vector<double> eta;
+  for (const Episode& episode : plan_sorts(mdp, config, options, seed)) {
+    const Trajectory& steps = episode.steps;
     ObservedTrajectory observed;
     observed.ends_in_terminal = true;  // every sort ends with a release into a terminal state
     eta.clear();
@@ -49,9 +59,8 @@ OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const 
     observed.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(observed.symbols.size()),
                                                perception::kNumSources);
     out.truth.push_back(steps);
-    out.blemished.push_back(blemished);
+    out.blemished.push_back(episode.blemished);
     out.observed.push_back(std::move(observed));
-    time += static_cast<double>(steps.size()) * config.step_seconds;
   }
   return out;
 }

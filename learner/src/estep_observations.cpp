@@ -1,14 +1,11 @@
 #include "learner/estep_observations.hpp"
 
+#include <stdexcept>
+
 #include "learner/input_error.hpp"
 #include "learner/parallel.hpp"
 
 namespace hbirl {
-
-namespace {
-// Trajectories per block: the unit of parallel work and of summation order.
-constexpr int kBlock = 16;
-}  // namespace
 
 EngineFactory exact_engine_factory() {
   return [](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<ExactPosteriorEngine>(mdp); };
@@ -51,39 +48,64 @@ std::vector<int> ObservationEStep::trajectory_lengths() const {
   return lengths;
 }
 
-EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const ObservationModel& model,
-                                             std::uint64_t seed) const {
+int ObservationEStep::num_blocks() const {
+  return (static_cast<int>(trajectories_.size()) + kBlockSize - 1) / kBlockSize;
+}
+
+std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSolution& policy, const ObservationModel& model,
+                                                                std::uint64_t seed, const std::vector<int>& blocks,
+                                                                int threads) const {
   const int n = static_cast<int>(trajectories_.size());
-  const int blocks = (n + kBlock - 1) / kBlock;
   const int P = mdp_.num_pairs();
   const int E = model.num_confounders();
   const int W = model.num_symbols();
-  std::vector<EStepStatistics> partial(static_cast<size_t>(blocks));
+  for (int b : blocks) {
+    if (b < 0 || b >= num_blocks()) throw InputError("block", std::to_string(b) + " is not a block of this data");
+  }
+  std::vector<EStepStatistics> partial(blocks.size());
   const Rng root(seed);
   std::optional<KindEmissions> table;
   if (kinds_) table = kind_emissions(model, *kinds_);
-  parallel_for(blocks, options_.threads, [&](int b) {
+  parallel_for(static_cast<int>(blocks.size()), threads, [&](int k) {
+    const int b = blocks[static_cast<size_t>(k)];
     std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
-    EStepStatistics& out = partial[static_cast<size_t>(b)];
+    EStepStatistics& out = partial[static_cast<size_t>(k)];
     out = EStepStatistics::zero(P, E, W);
     ExactEngine* exact = table ? engine->exact() : nullptr;
     if (exact) {
       RowMatrix kind_gamma = RowMatrix::Zero(kinds_->num_kinds(), P);
       std::vector<char> seen(static_cast<size_t>(kinds_->num_kinds()), 0);
       std::vector<int> touched;
-      for (int i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
         exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds_->of[static_cast<size_t>(i)], *table, out,
                           kind_gamma, seen, touched);
       }
       add_kind_alpha_dot(model, *kinds_, *table, kind_gamma, touched, out.alpha_dot);
       return;
     }
-    for (int i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+    for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectories_[static_cast<size_t>(i)], rng, out);
     }
   });
-  EStepStatistics total = EStepStatistics::zero(P, E, W);
+  return partial;
+}
+
+EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const ObservationModel& model,
+                                             std::uint64_t seed) const {
+  std::vector<EStepStatistics> partial;
+  if (options_.executor) {
+    partial = options_.executor->run(*this, policy, model, seed);
+    if (static_cast<int>(partial.size()) != num_blocks()) {
+      throw std::runtime_error("E-step executor returned " + std::to_string(partial.size()) + " blocks, expected " +
+                               std::to_string(num_blocks()));
+    }
+  } else {
+    std::vector<int> all(static_cast<size_t>(num_blocks()));
+    for (int b = 0; b < num_blocks(); ++b) all[static_cast<size_t>(b)] = b;
+    partial = block_statistics(policy, model, seed, all, options_.threads);
+  }
+  EStepStatistics total = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
   for (const auto& part : partial) total += part;
   return total;
 }

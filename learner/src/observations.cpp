@@ -6,6 +6,42 @@
 
 namespace hbirl {
 
+namespace {
+class Fnv1a {
+ public:
+  void add(const void* data, size_t size) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < size; ++i) hash_ = (hash_ ^ p[i]) * 0x100000001b3ULL;
+  }
+  template <class T>
+  void add(const T& value) {
+    add(&value, sizeof value);
+  }
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 0xcbf29ce484222325ULL;
+};
+}  // namespace
+
+std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories) {
+  Fnv1a h;
+  h.add(static_cast<std::uint64_t>(trajectories.size()));
+  for (const auto& t : trajectories) {
+    h.add(static_cast<std::uint64_t>(t.step_begin.size()));
+    h.add(t.step_begin.data(), t.step_begin.size() * sizeof(int));
+    h.add(static_cast<std::uint64_t>(t.symbols.size()));
+    h.add(t.symbols.data(), t.symbols.size() * sizeof(int));
+    h.add(static_cast<std::int64_t>(t.eta.rows()));
+    h.add(static_cast<std::int64_t>(t.eta.cols()));
+    h.add(t.eta.data(), static_cast<size_t>(t.eta.size()) * sizeof(double));
+    h.add(static_cast<std::uint64_t>(t.weights.size()));
+    h.add(t.weights.data(), t.weights.size() * sizeof(double));
+    h.add(static_cast<unsigned char>(t.ends_in_terminal));
+  }
+  return h.value();
+}
+
 ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory) {
   ObservedTrajectory out;
   out.ends_in_terminal = trajectory.ends_in_terminal;

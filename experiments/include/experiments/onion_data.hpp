@@ -35,6 +35,11 @@ struct DemonstrationOptions {
 // The labeller's reference sizes for a scene (the gripper's box, an onion's area).
 perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta = false);
 
+// The sorts `demonstrate` renders: the expert's steps and each onion's quality and pose,
+// one after another from options.start_time. Same arguments, same sorts.
+std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                                std::uint64_t seed);
+
 // Sorts `options.sorts` onions in a scene of `config` and observes them. Same arguments,
 // same result.
 OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,

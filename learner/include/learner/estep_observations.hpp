@@ -52,6 +52,19 @@ class ExactPosteriorEngine final : public PosteriorEngine {
 using EngineFactory = std::function<std::unique_ptr<PosteriorEngine>(const Mdp&)>;
 EngineFactory exact_engine_factory();
 
+class ObservationEStep;
+
+// Computes an E-step pass's blocks somewhere else -- e.g. on sampler workers over a bus
+// (services/). run() must return, for every block b in [0, estep.num_blocks()), exactly
+// what estep.block_statistics(policy, model, seed, {b}) returns, in block order; the
+// pass then sums them in that order, so the result is bit-identical to a local pass.
+class BlockExecutor {
+ public:
+  virtual ~BlockExecutor() = default;
+  virtual std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy,
+                                           const ObservationModel& model, std::uint64_t seed) const = 0;
+};
+
 struct ObservationEStepOptions {
   EngineFactory engine = exact_engine_factory();
   // O has converged when max_r min(1, N_hat(r)) * max_w |O_new(r, w) - O(r, w)| and the
@@ -63,6 +76,8 @@ struct ObservationEStepOptions {
   // per pass when the data have at most this many kinds, and at most a quarter as many
   // kinds as observations (0: never). Same result to rounding.
   int max_kinds = 1024;
+  // Where the blocks of a pass are computed: null = here, on `threads` threads.
+  std::shared_ptr<const BlockExecutor> executor;
 };
 
 class ObservationEStep final : public EStep {
@@ -76,13 +91,24 @@ class ObservationEStep final : public EStep {
   std::vector<int> trajectory_lengths() const override;
 
   // The posterior statistics for one observation model, summed over trajectories in a
-  // fixed order of fixed-size blocks (bit-identical for any thread count).
+  // fixed order of fixed-size blocks (bit-identical for any thread count, and for any
+  // executor that honours its contract).
   EStepStatistics statistics(const SoftSolution& policy, const ObservationModel& model, std::uint64_t seed) const;
+
+  // The blocks: trajectories [b * kBlockSize, (b + 1) * kBlockSize) form block b.
+  static constexpr int kBlockSize = 16;
+  int num_blocks() const;
+  // The statistics of the listed blocks, in the order listed, computed here on `threads`
+  // threads (the values do not depend on it).
+  std::vector<EStepStatistics> block_statistics(const SoftSolution& policy, const ObservationModel& model,
+                                                std::uint64_t seed, const std::vector<int>& blocks, int threads = 1) const;
+  const Mdp& mdp() const { return mdp_; }
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
   // Whether the exact engine's passes use one emission per observation kind (see max_kinds).
   bool uses_kind_table() const { return kinds_.has_value(); }
   const ObservationPrior& prior() const { return prior_; }
+  const ObservationEStepOptions& options() const { return options_; }
 
  private:
   const Mdp& mdp_;

@@ -5,6 +5,7 @@
 // occlusion. Stored flat, one row per observation, so an E-step streams through memory.
 #include <Eigen/Core>
 #include <optional>
+#include <cstdint>
 #include <vector>
 
 namespace hbirl {
@@ -29,6 +30,10 @@ struct ObservedTrajectory {
   }
   double weight(int n) const { return weights.empty() ? 1.0 : weights[static_cast<size_t>(n)]; }
 };
+
+// A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta and weight, bit for
+// bit. Two processes with the same digest hold the same data (services/ compares them).
+std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories);
 
 // The same trajectory with identical (symbol, eta) observations of a step merged into
 // one with a multiplicity: an exact rewrite of the emission product that makes the

@@ -1,0 +1,85 @@
+#pragma once
+// The learner's data, assembled from the stream (SPEC §4): episodes and their steps
+// (EPISODE), the observations of every frame (OBSERVATIONS) and, for controlled-run
+// episodes, the expert's true (s, a) at every step (GROUND_TRUTH). Channels arrive out
+// of step with each other (observations come two services later than the markers), so
+// everything is placed by its (episode, step, frame) fields, never by arrival order, and
+// a replayed log gives the same data as the live run.
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "hbirl/episode_marker_t.hpp"
+#include "hbirl/ground_truth_t.hpp"
+#include "hbirl/observations_t.hpp"
+#include "learner/observations.hpp"
+#include "learner/trajectory.hpp"
+#include "services/bus.hpp"
+#include "services/typed.hpp"
+
+namespace hbirl::services {
+
+namespace channels {
+inline const std::string kEpisode = "EPISODE";
+inline const std::string kObservations = "OBSERVATIONS";
+inline const std::string kGroundTruth = "GROUND_TRUTH";
+}  // namespace channels
+
+struct Dataset {
+  std::string domain;
+  int num_symbols = 0;
+  int num_sources = 0;                          // 1 + confounding elements
+  std::vector<int> episodes;                    // the demonstrations' episode numbers
+  std::vector<ObservedTrajectory> observed;     // the demonstrations
+  std::vector<Trajectory> truth;                // their true steps, when ground truth came
+  std::vector<ObservedTrajectory> controlled_observed;  // the controlled run
+  std::vector<Trajectory> controlled_truth;
+  std::int64_t last_utime = 0;                  // sim time of the newest message used
+};
+
+class DatasetBuilder {
+ public:
+  // Subscribes to the three channels; bad messages are counted in `counters`.
+  void subscribe(Bus& bus, Counters& counters);
+  // Each throws InputError naming the field of a message that does not fit.
+  void on_marker(const hbirl::episode_marker_t& m);
+  void on_observations(const hbirl::observations_t& m);
+  void on_truth(const hbirl::ground_truth_t& m);
+
+  bool run_ended() const { return run_ended_; }
+  // The run has ended and every episode has every frame's observations.
+  bool complete() const;
+  std::int64_t missing_frames() const;   // of episodes that ended
+  std::int64_t frames() const { return frames_; }
+  int episodes() const { return static_cast<int>(episodes_.size()); }
+  // The data of the episodes that ended, in episode order. Throws InputError when a
+  // controlled episode lacks ground truth for a step.
+  Dataset build() const;
+
+ private:
+  struct Frame {
+    std::vector<int> symbols;
+    std::vector<double> eta;  // rows of num_sources
+  };
+  struct Episode {
+    bool controlled = false;
+    bool ended = false;
+    bool ends_in_terminal = false;
+    int num_steps = 0;
+    int frames_per_step = 0;
+    std::map<std::pair<int, int>, Frame> frames;  // (step, frame)
+    std::map<int, StateAction> truth;             // step -> (s, a)
+  };
+  Episode& episode(int id);
+
+  std::string domain_;
+  std::map<int, Episode> episodes_;
+  int num_symbols_ = 0, num_sources_ = 0;
+  bool run_ended_ = false;
+  std::int64_t frames_ = 0;
+  std::int64_t last_utime_ = 0;
+  SequenceTracker marker_seq_, observation_seq_, truth_seq_;
+  Counters* counters_ = nullptr;
+};
+
+}  // namespace hbirl::services

@@ -1,0 +1,143 @@
+#pragma once
+// The E-step as a service (SPEC §4 "sampler"; issue 5): the optimiser's HiddenDataEM asks
+// sampler workers, over the bus, for the statistics of the blocks of trajectories each
+// is assigned, and sums them in block order -- so the learned theta is bit-identical to
+// a run without workers, with 1, 2 or 4 of them, and when one dies mid-run.
+//
+// Protocol (channels in the README's table):
+//   TRAJECTORY     optimiser -> workers: its data set, one trajectory_t each, with the
+//                  data set's digest. Re-sent when a worker reports another digest.
+//   STATUS         every service, about once a second: service_status_t; a sampler's
+//                  carries its data set's digest and size.
+//   ESTEP_REQUEST  optimiser -> workers: request id, attempt, the policy and the
+//                  observation model, and which worker computes which block.
+//   ESTEP_RESULT   worker -> optimiser: one block's statistics, echoing the request id.
+// The optimiser waits for a block's answer up to a timeout, then re-asks it of a worker
+// that has answered (a new attempt of the same request), and after max_attempts
+// computes what is still missing itself: learning never stalls. Answers to other
+// requests, for blocks it already has, or from workers with another data set are
+// counted and ignored. Workers answer only when their digest equals the request's.
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hbirl/estep_request_t.hpp"
+#include "hbirl/estep_result_t.hpp"
+#include "hbirl/service_status_t.hpp"
+#include "hbirl/trajectory_t.hpp"
+#include "learner/estep_observations.hpp"
+#include "services/bus.hpp"
+#include "services/typed.hpp"
+
+namespace hbirl::services {
+
+namespace channels {
+inline const std::string kTrajectory = "TRAJECTORY";
+inline const std::string kStatus = "STATUS";
+inline const std::string kEStepRequest = "ESTEP_REQUEST";
+inline const std::string kEStepResult = "ESTEP_RESULT";
+}  // namespace channels
+
+// Trajectories on the bus. from_message throws InputError naming the bad field.
+hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest);
+ObservedTrajectory from_message(const hbirl::trajectory_t& m);
+
+std::int64_t wall_utime();  // for heartbeats and display only, never for results
+
+// A sampler worker: holds the optimiser's data set and answers E-step requests for the
+// blocks assigned to it. Call handle() from one thread; it also sends the heartbeat.
+class SamplerWorker {
+ public:
+  SamplerWorker(Bus& bus, const Mdp& mdp, std::string id, Counters& counters);
+  // Handles what the bus has (waiting up to timeout_ms) and publishes the heartbeat when
+  // one is due. Returns the bus's answer (-1: the bus has ended).
+  int handle(int timeout_ms);
+  void publish_status();
+  const std::string& id() const { return id_; }
+  std::uint64_t digest() const { return digest_; }
+  int trajectories() const { return static_cast<int>(trajectories_.size()); }
+  std::int64_t blocks_computed() const { return blocks_computed_; }
+
+ private:
+  void on_trajectory(const hbirl::trajectory_t& m);
+  void on_request(const hbirl::estep_request_t& m);
+
+  Bus& bus_;
+  const Mdp& mdp_;
+  std::string id_;
+  Counters& counters_;
+  // The data set being received (by index) and the complete one.
+  std::uint64_t incoming_digest_ = 0;
+  std::vector<std::optional<ObservedTrajectory>> incoming_;
+  std::vector<ObservedTrajectory> trajectories_;
+  std::uint64_t digest_ = 0;
+  std::optional<ObservationEStep> estep_;
+  int estep_symbols_ = -1, estep_confounders_ = -1;
+  std::set<std::pair<std::int64_t, int>> answered_;  // (request id, attempt): idempotent
+  std::int64_t blocks_computed_ = 0;
+  std::int64_t status_seq_ = 0;
+  std::chrono::steady_clock::time_point next_status_{};
+};
+
+struct BusExecutorOptions {
+  int timeout_ms = 2000;       // wait this long for a block's answer before re-asking
+  int max_attempts = 3;        // attempts over the bus; then the optimiser computes the rest
+  double worker_silence_s = 3.0;  // workers not heard from for this long get no work
+  int local_threads = 1;       // for blocks the optimiser computes itself
+};
+
+// The optimiser's side: a BlockExecutor that farms blocks out to the workers it hears
+// from. Thread-safe (one pass at a time); handles the bus while it waits, so the
+// optimiser's process must not handle the same bus elsewhere at the same time.
+class BusBlockExecutor final : public BlockExecutor {
+ public:
+  BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dataset, Counters& counters, BusExecutorOptions options = {});
+  std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
+                                   std::uint64_t seed) const override;
+
+  // Publishes the data set (all trajectories) now.
+  void publish_dataset() const;
+  // Handles the bus until `count` workers with this data set are live, or timeout_ms
+  // passes; returns how many are.
+  int wait_for_workers(int count, int timeout_ms) const;
+  std::uint64_t digest() const { return digest_; }
+
+  struct Stats {
+    std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
+    std::int64_t stale = 0, duplicates = 0, foreign = 0;  // ignored answers
+    double round_trip_s = 0.0;                            // summed over requests
+  };
+  Stats stats() const;
+
+ private:
+  struct Worker {
+    std::uint64_t digest = 0;
+    int trajectories = 0;
+    std::chrono::steady_clock::time_point last_seen;
+    bool suspect = false;  // left blocks unanswered; gets work again once heard from
+  };
+  void on_status(const hbirl::service_status_t& m) const;
+  void on_result(const hbirl::estep_result_t& m) const;
+  std::vector<std::string> live_workers() const;
+
+  Bus& bus_;
+  std::vector<ObservedTrajectory> dataset_;
+  std::uint64_t digest_;
+  Counters& counters_;
+  BusExecutorOptions options_;
+  mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held
+  mutable std::map<std::string, Worker> workers_;
+  mutable std::chrono::steady_clock::time_point last_dataset_sent_{};
+  // The pass in flight.
+  mutable std::int64_t request_id_ = 0;
+  mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0;
+  mutable std::vector<std::optional<EStepStatistics>> received_;
+  mutable std::set<std::string> answered_;  // workers that answered this request
+  mutable Stats stats_;
+};
+
+}  // namespace hbirl::services

@@ -1,0 +1,38 @@
+#pragma once
+// Bus on an lcm-logger file: handle() delivers the recorded events one by one, in order,
+// as fast as they are handled, so a replay is deterministic. See bus.hpp.
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <vector>
+
+#include "services/bus.hpp"
+
+namespace hbirl::services {
+
+class LogBus final : public Bus {
+ public:
+  // Throws InputError("bus", ...) if the log cannot be read (or `out_path` written).
+  explicit LogBus(const std::string& path, const std::string& out_path = "");
+  // Writes to the output log when there is one; otherwise drops the message.
+  bool publish(const std::string& channel, const void* data, int size) override;
+  void subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
+  // Delivers the next recorded event to its subscribers (events nobody subscribes to are
+  // skipped); -1 at the end of the log.
+  int handle(int timeout_ms) override;
+  std::string url() const override { return "log:" + path_; }
+  std::int64_t events_read() const { return events_; }
+
+ private:
+  struct Subscription {
+    std::unique_ptr<ChannelPattern> channel;
+    RawHandler handler;
+  };
+  std::string path_;
+  lcm::LogFile in_;
+  std::unique_ptr<lcm::LogFile> out_;
+  std::vector<Subscription> subscriptions_;
+  std::int64_t events_ = 0;
+  std::int64_t last_utime_ = 0;
+};
+
+}  // namespace hbirl::services

@@ -1,0 +1,160 @@
+#!/usr/bin/env bash
+# Starts hbirl's onion service set -- simulator, perception, labeller, sampler workers,
+# optimiser -- waits for the optimiser to learn, prints the learned reward and shuts
+# everything down (also on Ctrl-C). Exits non-zero if any service failed.
+#
+# LCM talks UDP multicast. Where multicast to loopback is not routed (the usual case in
+# containers), the set runs in a private network namespace of its own (unshare -rn, lo
+# up, 224.0.0.0/4 routed to lo): nothing leaves the machine and other runs do not see
+# it. See --help.
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+repo="$(dirname "$here")"
+build="$repo/build"
+workers=2
+config=all
+sorts=6
+controlled_sorts=20
+seed=1
+record=0
+out=""
+url=""
+fps=15
+max_fps=400
+kill_worker_after_blocks=""
+
+usage() {
+  cat <<USAGE
+usage: services/launch.sh [options]
+
+Runs the onion-sorting demo as separate processes over LCM and prints the learned reward.
+  --workers N            sampler workers (default $workers)
+  --config C             demonstrations' scene: all, controlled, or a list of
+                         blue-shirt, other-onions, foreground, mirror (default $config)
+  --sorts N              demonstrated sorts (default $sorts)
+  --controlled-sorts N   sorts in the controlled run that gives the subject prior ($controlled_sorts)
+  --seed S               seed of the sorts and the scene (default $seed)
+  --fps F                camera frames per simulated second (default $fps)
+  --max-fps F            pacing of the camera, frames per wall-clock second (default $max_fps)
+  --record               record every message with lcm-logger to OUT/run.lcmlog
+                         (replay: build/hbirl learn --log OUT/run.lcmlog)
+  --out DIR              where logs and results go (default runs/<date-time>)
+  --build DIR            the build folder with hbirl-services (default build/)
+  --url URL              an LCM URL to use instead of a private network namespace, e.g.
+                         udpm://239.255.76.67:7667?ttl=1 to include workers on other
+                         machines (they run: hbirl-sampler --url URL)
+  --kill-worker-after-blocks N
+                         (testing) the first worker SIGKILLs itself after computing N blocks
+USAGE
+}
+
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --workers) workers="$2"; shift 2 ;;
+    --config) config="$2"; shift 2 ;;
+    --sorts) sorts="$2"; shift 2 ;;
+    --controlled-sorts) controlled_sorts="$2"; shift 2 ;;
+    --seed) seed="$2"; shift 2 ;;
+    --fps) fps="$2"; shift 2 ;;
+    --max-fps) max_fps="$2"; shift 2 ;;
+    --record) record=1; shift ;;
+    --out) out="$2"; shift 2 ;;
+    --build) build="$2"; shift 2 ;;
+    --url) url="$2"; shift 2 ;;
+    --kill-worker-after-blocks) kill_worker_after_blocks="$2"; shift 2 ;;
+    -h|--help) usage; exit 0 ;;
+    *) echo "launch.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+
+bin="$build/hbirl-services"
+if [ ! -x "$bin" ]; then
+  echo "launch.sh: $bin not found: build first (cmake -S . -B build && cmake --build build -j)" >&2
+  exit 2
+fi
+[ -n "$out" ] || out="$repo/runs/$(date +%Y%m%d-%H%M%S)"
+mkdir -p "$out/logs"
+out="$(cd "$out" && pwd)"
+
+# Where will multicast go? Only ever to loopback.
+if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
+  if ip route get 239.255.76.67 2>/dev/null | grep -q " dev lo "; then
+    echo "launch.sh: multicast is routed to loopback here: running on this machine's network (ttl=0)"
+  elif unshare -rn true 2>/dev/null; then
+    echo "launch.sh: multicast is not routed to loopback here: running the set in a private network namespace"
+    echo "           (unshare -rn; lo up; ip route add 224.0.0.0/4 dev lo)"
+    export HBIRL_IN_NETNS=1
+    exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
+      "${BASH_SOURCE[0]}" --out "$out" --workers "$workers" --config "$config" --sorts "$sorts" \
+      --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-fps "$max_fps" --build "$build" \
+      $([ "$record" = 1 ] && echo --record) ${kill_worker_after_blocks:+--kill-worker-after-blocks "$kill_worker_after_blocks"}
+  else
+    echo "launch.sh: multicast is not routed to loopback and private network namespaces are not allowed here." >&2
+    echo "           Route it (as root): ip route add 224.0.0.0/4 dev lo   -- or pass --url." >&2
+    exit 1
+  fi
+fi
+[ -n "$url" ] || url="udpm://239.255.76.67:7667?ttl=0"
+
+pids=()
+names=()
+start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log
+  local name="$1"; shift
+  "$@" >"$out/logs/$name.log" 2>&1 &
+  pids+=($!)
+  names+=("$name")
+}
+stop_all() {
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+}
+trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; exit 130' INT TERM
+
+echo "launch.sh: logs and results in $out"
+if [ "$record" = 1 ]; then
+  start lcm-logger lcm-logger --lcm-url="$url" -f "$out/run.lcmlog"
+fi
+for i in $(seq 1 "$workers"); do
+  if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" --kill-self-after-blocks "$kill_worker_after_blocks"
+  else
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i"
+  fi
+done
+start labeller "$build/hbirl-labeller" --url "$url"
+start perception "$build/hbirl-perception" --url "$url"
+"$build/hbirl-optimiser" --url "$url" --workers "$workers" --out "$out/result.json" >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
+optimiser=$!
+start sim-driver "$build/hbirl-sim-driver" --url "$url" --config "$config" --sorts "$sorts" \
+  --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-frames-per-second "$max_fps"
+
+
+failed=0
+# Any service that dies while the optimiser works is a failure (except a worker we killed).
+set +e
+wait "$optimiser"
+status=$?
+set -e
+if [ "$status" -ne 0 ]; then
+  echo "launch.sh: the optimiser failed (exit $status); see $out/logs/optimiser.err" >&2
+  failed=1
+fi
+for i in "${!pids[@]}"; do
+  if ! kill -0 "${pids[$i]}" 2>/dev/null; then
+    set +e; wait "${pids[$i]}"; s=$?; set -e
+    if [ "$s" -ne 0 ] && ! { [ -n "$kill_worker_after_blocks" ] && [ "${names[$i]}" = sampler-1 ]; }; then
+      echo "launch.sh: ${names[$i]} failed (exit $s); see $out/logs/${names[$i]}.log" >&2
+      failed=1
+    fi
+  fi
+done
+stop_all
+trap - INT TERM
+
+if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
+  echo "launch.sh: learned (also in $out/result.json):"
+  cat "$out/result.json"
+  [ "$record" = 1 ] && echo "launch.sh: recorded $out/run.lcmlog; replay: $build/hbirl learn --log $out/run.lcmlog"
+fi
+exit "$failed"

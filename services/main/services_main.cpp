@@ -1,0 +1,259 @@
+// The service processes of the set (SPEC §4), one executable: it runs as the service it is
+// called by -- hbirl-sim-driver, hbirl-perception, hbirl-labeller, hbirl-sampler,
+// hbirl-optimiser are links to it -- or as `hbirl-services SERVICE ...`. Each process only
+// wires a library service (services/pipeline.hpp, estep_service.hpp) to the bus and to
+// its command line.
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "learner/input_error.hpp"
+#include "services/estep_service.hpp"
+#include "services/learning.hpp"
+#include "services/pipeline.hpp"
+#include "services/process.hpp"
+#include "sim_driver/onion.hpp"
+
+namespace hbirl::services {
+namespace {
+
+struct Common {
+  std::string url;
+  std::string id;
+};
+
+void add_common(CLI::App& app, Common& c) {
+  app.add_option("--url", c.url,
+                 "LCM URL (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
+  app.add_option("--id", c.id, "This process's id in STATUS messages (default: service-host-pid)");
+}
+
+// Handles the bus and beats the heart until asked to stop; then says what it did.
+int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
+  heartbeat.tick("running", true);
+  while (!stop_requested()) {
+    if (bus.handle(100) < 0) break;
+    heartbeat.tick("running");
+  }
+  heartbeat.tick("done", true);
+  std::fprintf(stderr, "hbirl-%s: stopped; %lld messages in, %lld out, %lld bad, %lld gaps\n", counters.service.c_str(),
+               static_cast<long long>(counters.messages_in), static_cast<long long>(counters.messages_out),
+               static_cast<long long>(counters.bad_messages), static_cast<long long>(counters.gaps));
+  return 0;
+}
+
+int sim_driver(int argc, char** argv) {
+  CLI::App app("hbirl-sim-driver: the onion-sorting simulator and its camera. Publishes a controlled run (no\n"
+               "confounders, true states: the subject prior), then the demonstrations in the chosen scene, as\n"
+               "EPISODE markers, GROUND_TRUTH and CAMERA frames (PNG); exits after END_RUN.");
+  Common c;
+  add_common(app, c);
+  SimDriverOptions o;
+  std::string config = "all";
+  double delay = 1.0;
+  app.add_option("--config,-c", config, "Scene: all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
+      ->capture_default_str();
+  app.add_option("--controlled-sorts", o.controlled_sorts, "Sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--sorts", o.sorts, "Demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--seed", o.seed, "Seed of the sorts and the scene")->capture_default_str();
+  app.add_option("--width", o.scene.width, "Frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
+  app.add_option("--fps", o.scene.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  app.add_option("--max-frames-per-second", o.max_frames_per_second, "Pacing in wall-clock frames per second (0: none)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  app.add_option("--start-delay", delay, "Seconds to wait before publishing, for the other services to subscribe")
+      ->check(CLI::Range(0.0, 600.0))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const onion::SceneConfig elements = onion::SceneConfig::parse(config, "--config");
+  o.scene.blue_shirt_person = elements.blue_shirt_person;
+  o.scene.other_onions = elements.other_onions;
+  o.scene.foreground_person = elements.foreground_person;
+  o.scene.mirror = elements.mirror;
+  std::unique_ptr<Bus> bus = open_bus(c.url);
+  Counters counters;
+  counters.service = "sim_driver";
+  Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
+  heartbeat.tick("starting", true);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                            std::chrono::duration<double>(delay));
+  while (std::chrono::steady_clock::now() < until && !stop_requested()) {
+    bus->handle(50);
+    heartbeat.tick("starting");
+  }
+  const bool finished = run_sim_driver(*bus, o, counters, stop_requested, [&] {
+    bus->handle(0);
+    heartbeat.tick("running");
+  });
+  heartbeat.tick(finished ? "done" : "stopped", true);
+  std::fprintf(stderr, "hbirl-sim-driver: %s; %lld messages published\n", finished ? "run published" : "stopped",
+               static_cast<long long>(counters.messages_out));
+  return 0;
+}
+
+int perception(int argc, char** argv) {
+  CLI::App app("hbirl-perception: CAMERA frames -> colour blobs -> DETECTIONS (one message per frame).");
+  Common c;
+  add_common(app, c);
+  CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(1);  // one core per process
+  std::unique_ptr<Bus> bus = open_bus(c.url);
+  Counters counters;
+  counters.service = "perception";
+  PerceptionService service(*bus, counters);
+  Heartbeat heartbeat(*bus, counters, "perception", c.id.empty() ? default_id("perception") : c.id);
+  return serve(*bus, heartbeat, counters);
+}
+
+int labeller(int argc, char** argv) {
+  CLI::App app("hbirl-labeller: DETECTIONS -> the paper's observations with their eta -> OBSERVATIONS.");
+  Common c;
+  add_common(app, c);
+  bool uniform = false;
+  app.add_flag("--uniform-eta", uniform, "Uniform eta instead of the paper's plausible rules");
+  CLI11_PARSE(app, argc, argv);
+  std::unique_ptr<Bus> bus = open_bus(c.url);
+  Counters counters;
+  counters.service = "labeller";
+  LabellerService service(*bus, counters, uniform);
+  Heartbeat heartbeat(*bus, counters, "labeller", c.id.empty() ? default_id("labeller") : c.id);
+  return serve(*bus, heartbeat, counters);
+}
+
+int sampler(int argc, char** argv) {
+  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's trajectories (TRAJECTORY) and\n"
+               "answers ESTEP_REQUEST for the blocks assigned to it (ESTEP_RESULT). Run any number, on any\n"
+               "number of machines (same LCM URL with ttl=1).");
+  Common c;
+  add_common(app, c);
+  std::string domain = "onion";
+  std::int64_t die_after = -1;
+  app.add_option("--domain", domain, "Domain of the trajectories")->capture_default_str();
+  app.add_option("--kill-self-after-blocks", die_after,
+                 "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
+  CLI11_PARSE(app, argc, argv);
+  const Mdp mdp = domain_mdp(domain);
+  std::unique_ptr<Bus> bus = open_bus(c.url);
+  Counters counters;
+  counters.service = "sampler";
+  SamplerWorker worker(*bus, mdp, c.id.empty() ? default_id("sampler") : c.id, counters);
+  while (!stop_requested()) {
+    if (worker.handle(100) < 0) break;
+    if (die_after >= 0 && worker.blocks_computed() >= die_after) {
+      std::fprintf(stderr, "hbirl-sampler: %s kills itself (SIGKILL) after %lld blocks, as asked\n", worker.id().c_str(),
+                   static_cast<long long>(worker.blocks_computed()));
+      std::raise(SIGKILL);
+    }
+  }
+  std::fprintf(stderr, "hbirl-sampler: stopped (%s); %lld blocks computed, %lld messages in, %lld bad\n", worker.id().c_str(),
+               static_cast<long long>(worker.blocks_computed()), static_cast<long long>(counters.messages_in),
+               static_cast<long long>(counters.bad_messages));
+  return 0;
+}
+
+int optimiser(int argc, char** argv) {
+  CLI::App app("hbirl-optimiser: collects the run (EPISODE, OBSERVATIONS, GROUND_TRUTH), learns the reward\n"
+               "with HiddenDataEM, the E-step on the sampler workers, and publishes EM_PROGRESS and REWARD.\n"
+               "Prints the result as JSON and exits.");
+  Common c;
+  add_common(app, c);
+  OptimiserOptions o;
+  std::string out;
+  app.add_option("--workers", o.workers, "Sampler workers to wait for before learning (0: compute here)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
+  app.add_option("--wait-workers-ms", o.wait_workers_ms, "How long to wait for them")->capture_default_str();
+  app.add_option("--timeout-ms", o.executor.timeout_ms, "Wait this long for an E-step block before re-asking")
+      ->check(CLI::Range(1, 3600000))
+      ->capture_default_str();
+  app.add_option("--c", o.learning.c, "Rate of the observation-model refinement")->check(CLI::Range(1e-6, 1.0))->capture_default_str();
+  app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
+  app.add_option("--out", out, "Also write the result JSON to this file");
+  CLI11_PARSE(app, argc, argv);
+  std::unique_ptr<Bus> bus = open_bus(c.url);
+  Counters counters;
+  counters.service = "optimiser";
+  Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
+  heartbeat.tick("starting", true);
+  const auto result = run_optimiser(*bus, o, counters, stop_requested, [](const std::string& s) {
+    std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str());
+  });
+  if (!result) {
+    heartbeat.tick("stopped", true);
+    std::fprintf(stderr, "hbirl-optimiser: stopped before learning; %lld messages in, %lld bad, %lld gaps\n",
+                 static_cast<long long>(counters.messages_in), static_cast<long long>(counters.bad_messages),
+                 static_cast<long long>(counters.gaps));
+    return 1;
+  }
+  nlohmann::json j;
+  j["theta"] = std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
+  j["feature_names"] = onion::feature_names();
+  if (result->learned.ile) j["ile"] = *result->learned.ile;
+  j["log_likelihood"] = result->learned.log_likelihood;
+  j["em_iterations"] = result->learned.em_iterations;
+  j["demonstrations"] = result->learned.trajectories;
+  j["controlled_episodes"] = result->data.controlled_observed.size();
+  j["dataset_digest"] = result->learned.digest;
+  j["missing_frames"] = result->missing_frames;
+  j["workers"] = result->workers;
+  j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
+                {"local_blocks", result->estep.local_blocks}, {"retried_blocks", result->estep.retried_blocks},
+                {"stale", result->estep.stale},               {"duplicates", result->estep.duplicates},
+                {"round_trip_seconds", result->estep.round_trip_s}};
+  j["bad_messages"] = counters.bad_messages;
+  j["gaps"] = counters.gaps;
+  std::cout << j.dump(2) << std::endl;
+  if (!out.empty()) {
+    std::ofstream file(out);
+    file << j.dump(2) << "\n";
+    if (!file) throw InputError("--out", "cannot write " + out);
+  }
+  heartbeat.tick("done", true);
+  return 0;
+}
+
+const std::map<std::string, int (*)(int, char**)>& services() {
+  static const std::map<std::string, int (*)(int, char**)> s = {{"sim-driver", sim_driver},
+                                                                {"perception", perception},
+                                                                {"labeller", labeller},
+                                                                {"sampler", sampler},
+                                                                {"optimiser", optimiser}};
+  return s;
+}
+
+}  // namespace
+}  // namespace hbirl::services
+
+int main(int argc, char** argv) {
+  using namespace hbirl::services;
+  install_stop_handlers();
+  std::string name = std::filesystem::path(argv[0]).filename().string();
+  if (name.rfind("hbirl-", 0) == 0) name = name.substr(6);
+  if (name == "services") {
+    if (argc < 2 || !services().count(argv[1])) {
+      std::fprintf(stderr, "usage: hbirl-services SERVICE [OPTIONS]   SERVICE: sim-driver, perception, labeller, sampler, optimiser\n");
+      return 2;
+    }
+    name = argv[1];
+    --argc;
+    ++argv;
+  }
+  const auto it = services().find(name);
+  if (it == services().end()) {
+    std::fprintf(stderr, "hbirl-services: called as '%s', which is not a service\n", name.c_str());
+    return 2;
+  }
+  try {
+    return it->second(argc, argv);
+  } catch (const hbirl::InputError& e) {
+    std::fprintf(stderr, "hbirl-%s: %s\n", name.c_str(), e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hbirl-%s: internal error: %s\n", name.c_str(), e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,55 @@
+#include "services/bus.hpp"
+
+#include <regex.h>
+
+#include <cstdio>
+
+#include "learner/input_error.hpp"
+#include "services/lcm_bus.hpp"
+#include "services/log_bus.hpp"
+#include "services/typed.hpp"
+
+namespace hbirl::services {
+
+struct ChannelPattern::Compiled {
+  regex_t regex;
+};
+
+ChannelPattern::ChannelPattern(const std::string& pattern) : compiled_(std::make_unique<Compiled>()) {
+  if (regcomp(&compiled_->regex, ("^(" + pattern + ")$").c_str(), REG_EXTENDED | REG_NOSUB) != 0) {
+    compiled_.reset();
+    throw InputError("channel", "'" + pattern + "' is not a regular expression");
+  }
+}
+
+ChannelPattern::~ChannelPattern() {
+  if (compiled_) regfree(&compiled_->regex);
+}
+
+bool ChannelPattern::matches(const std::string& channel) const {
+  return regexec(&compiled_->regex, channel.c_str(), 0, nullptr, 0) == 0;
+}
+
+std::unique_ptr<Bus> open_bus(const std::string& url) {
+  if (url.rfind("log:", 0) == 0) {
+    std::string path = url.substr(4), out;
+    const size_t q = path.find("?out=");
+    if (q != std::string::npos) {
+      out = path.substr(q + 5);
+      path = path.substr(0, q);
+    }
+    return std::make_unique<LogBus>(path, out);
+  }
+  return std::make_unique<LcmBus>(url);
+}
+
+void Counters::bad(const std::string& channel, const std::string& why) {
+  ++bad_messages;
+  last_problem = channel + ": " + why;
+  if (!quiet && (bad_messages <= 20 || bad_messages % 1000 == 0)) {
+    std::fprintf(stderr, "%s: bad message #%lld on %s: %s\n", service.empty() ? "hbirl" : service.c_str(),
+                 static_cast<long long>(bad_messages), channel.c_str(), why.c_str());
+  }
+}
+
+}  // namespace hbirl::services

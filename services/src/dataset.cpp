@@ -1,0 +1,155 @@
+#include "services/dataset.hpp"
+
+#include <cmath>
+
+#include "learner/input_error.hpp"
+
+namespace hbirl::services {
+
+void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
+  counters_ = &counters;
+  // A whole run's messages may be waiting when a replay starts or a slow learner catches up.
+  constexpr int kQueue = 1 << 20;
+  services::subscribe<hbirl::episode_marker_t>(bus, channels::kEpisode, counters,
+                                               [this](const auto& m, const Message&) { on_marker(m); }, kQueue);
+  services::subscribe<hbirl::observations_t>(bus, channels::kObservations, counters,
+                                             [this](const auto& m, const Message&) { on_observations(m); }, kQueue);
+  services::subscribe<hbirl::ground_truth_t>(bus, channels::kGroundTruth, counters,
+                                             [this](const auto& m, const Message&) { on_truth(m); }, kQueue);
+}
+
+DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
+  if (id < 0) throw InputError("episode", "is negative");
+  return episodes_[id];
+}
+
+void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
+  if (counters_) counters_->gaps += marker_seq_.see(m.seq);
+  if (!domain_.empty() && m.domain != domain_) throw InputError("episode_marker.domain", "changed from " + domain_ + " to " + m.domain);
+  domain_ = m.domain;
+  last_utime_ = std::max(last_utime_, m.utime);
+  switch (m.kind) {
+    case hbirl::episode_marker_t::BEGIN_EPISODE:
+    case hbirl::episode_marker_t::BEGIN_STEP: {
+      Episode& e = episode(m.episode);
+      e.controlled = m.controlled;
+      if (m.frames_per_step < 1) throw InputError("episode_marker.frames_per_step", "must be at least 1");
+      e.frames_per_step = m.frames_per_step;
+      break;
+    }
+    case hbirl::episode_marker_t::END_EPISODE: {
+      Episode& e = episode(m.episode);
+      if (m.num_steps < 1) throw InputError("episode_marker.num_steps", "must be at least 1");
+      if (m.frames_per_step < 1) throw InputError("episode_marker.frames_per_step", "must be at least 1");
+      e.controlled = m.controlled;
+      e.ended = true;
+      e.num_steps = m.num_steps;
+      e.frames_per_step = m.frames_per_step;
+      e.ends_in_terminal = m.ends_in_terminal;
+      break;
+    }
+    case hbirl::episode_marker_t::END_RUN:
+      run_ended_ = true;
+      break;
+    default:
+      throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
+  }
+}
+
+void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
+  if (counters_) counters_->gaps += observation_seq_.see(m.seq);
+  if (m.num_symbols < 1) throw InputError("observations.num_symbols", "must be at least 1");
+  if (m.num_sources < 1) throw InputError("observations.num_sources", "must be at least 1");
+  if (num_symbols_ && (m.num_symbols != num_symbols_ || m.num_sources != num_sources_)) {
+    throw InputError("observations.num_sources", "the alphabet or the sources changed mid-run");
+  }
+  if (m.step < 0 || m.frame < 0) throw InputError("observations.step", "step and frame must be >= 0");
+  Frame f;
+  for (int i = 0; i < m.n; ++i) {
+    const int s = m.symbol[static_cast<size_t>(i)];
+    if (s < 0 || s >= m.num_symbols) throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
+    double sum = 0.0;
+    for (double x : m.eta[static_cast<size_t>(i)]) {
+      if (!std::isfinite(x) || x < 0.0) throw InputError("observations.eta[" + std::to_string(i) + "]", "must be finite and >= 0");
+      sum += x;
+    }
+    if (!(sum > 0.0)) throw InputError("observations.eta[" + std::to_string(i) + "]", "sums to 0");
+    f.symbols.push_back(s);
+    f.eta.insert(f.eta.end(), m.eta[static_cast<size_t>(i)].begin(), m.eta[static_cast<size_t>(i)].end());
+  }
+  num_symbols_ = m.num_symbols;
+  num_sources_ = m.num_sources;
+  Episode& e = episode(m.episode);
+  if (e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f)).second) ++frames_;  // a repeat is ignored
+  last_utime_ = std::max(last_utime_, m.utime);
+}
+
+void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
+  if (counters_) counters_->gaps += truth_seq_.see(m.seq);
+  if (m.step < 0 || m.state < 0 || m.action < 0) throw InputError("ground_truth.step", "step, state and action must be >= 0");
+  episode(m.episode).truth[m.step] = {m.state, m.action};
+}
+
+std::int64_t DatasetBuilder::missing_frames() const {
+  std::int64_t missing = 0;
+  for (const auto& [id, e] : episodes_) {
+    if (!e.ended) continue;
+    std::int64_t have = 0;
+    for (const auto& [key, f] : e.frames) have += key.first < e.num_steps && key.second < e.frames_per_step;
+    missing += static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - have;
+  }
+  return missing;
+}
+
+bool DatasetBuilder::complete() const {
+  if (!run_ended_) return false;
+  for (const auto& [id, e] : episodes_) {
+    if (!e.ended) return false;
+  }
+  return missing_frames() == 0;
+}
+
+Dataset DatasetBuilder::build() const {
+  Dataset d;
+  d.domain = domain_;
+  d.num_symbols = num_symbols_;
+  d.num_sources = num_sources_;
+  d.last_utime = last_utime_;
+  for (const auto& [id, e] : episodes_) {
+    if (!e.ended) continue;
+    ObservedTrajectory t;
+    t.ends_in_terminal = e.ends_in_terminal;
+    std::vector<double> eta;
+    for (int step = 0; step < e.num_steps; ++step) {
+      for (auto it = e.frames.lower_bound({step, 0}); it != e.frames.end() && it->first.first == step; ++it) {
+        t.symbols.insert(t.symbols.end(), it->second.symbols.begin(), it->second.symbols.end());
+        eta.insert(eta.end(), it->second.eta.begin(), it->second.eta.end());
+      }
+      t.step_begin.push_back(static_cast<int>(t.symbols.size()));
+    }
+    t.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), std::max(1, num_sources_));
+    Trajectory truth;
+    for (int step = 0; step < e.num_steps; ++step) {
+      const auto it = e.truth.find(step);
+      if (it == e.truth.end()) break;
+      truth.push_back(it->second);
+    }
+    const bool truth_complete = static_cast<int>(truth.size()) == e.num_steps;
+    if (e.controlled) {
+      if (!truth_complete) {
+        throw InputError("ground_truth", "controlled episode " + std::to_string(id) + " lacks the true state of step " +
+                                              std::to_string(truth.size()));
+      }
+      d.controlled_observed.push_back(std::move(t));
+      d.controlled_truth.push_back(std::move(truth));
+    } else {
+      d.episodes.push_back(id);
+      d.observed.push_back(std::move(t));
+      if (truth_complete) d.truth.push_back(std::move(truth));
+    }
+  }
+  if (d.truth.size() != d.observed.size()) d.truth.clear();  // ground truth only when complete
+  return d;
+}
+
+}  // namespace hbirl::services

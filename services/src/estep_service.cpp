@@ -1,0 +1,412 @@
+#include "services/estep_service.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "learner/input_error.hpp"
+
+namespace hbirl::services {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }
+
+}  // namespace
+
+std::int64_t wall_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest) {
+  hbirl::trajectory_t m{};
+  m.utime = 0;  // a data set, not a moment of the demonstration
+  m.dataset_digest = static_cast<std::int64_t>(digest);
+  m.index = index;
+  m.num_trajectories = count;
+  m.episode = index;
+  m.ends_in_terminal = t.ends_in_terminal;
+  m.num_steps = t.length();
+  m.step_begin.assign(t.step_begin.begin(), t.step_begin.end() - 1);
+  m.n = t.num_observations();
+  for (int s : t.symbols) m.symbol.push_back(static_cast<std::int16_t>(s));
+  m.num_sources = static_cast<std::int32_t>(t.eta.cols());
+  m.eta.resize(static_cast<size_t>(m.n));
+  for (int i = 0; i < m.n; ++i) {
+    m.eta[static_cast<size_t>(i)].assign(t.eta.row(i).data(), t.eta.row(i).data() + t.eta.cols());
+  }
+  m.num_weights = static_cast<std::int32_t>(t.weights.size());
+  m.weights = t.weights;
+  return m;
+}
+
+ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
+  if (m.num_steps < 1) throw InputError("trajectory.num_steps", "must be at least 1");
+  if (m.n < 0) throw InputError("trajectory.n", "is negative");
+  if (m.num_sources < 1) throw InputError("trajectory.num_sources", "must be at least 1 (the subject)");
+  ObservedTrajectory t;
+  t.step_begin.assign(m.step_begin.begin(), m.step_begin.end());
+  t.step_begin.push_back(m.n);
+  if (t.step_begin.front() != 0) throw InputError("trajectory.step_begin[0]", "must be 0");
+  for (size_t i = 1; i < t.step_begin.size(); ++i) {
+    if (t.step_begin[i] < t.step_begin[i - 1]) {
+      throw InputError("trajectory.step_begin[" + std::to_string(i) + "]", "goes backwards or past the observations");
+    }
+  }
+  for (int i = 0; i < m.n; ++i) {
+    if (m.symbol[static_cast<size_t>(i)] < 0) throw InputError("trajectory.symbol[" + std::to_string(i) + "]", "is negative");
+    t.symbols.push_back(m.symbol[static_cast<size_t>(i)]);
+  }
+  t.eta.resize(m.n, m.num_sources);
+  for (int i = 0; i < m.n; ++i) {
+    for (int e = 0; e < m.num_sources; ++e) {
+      const double x = m.eta[static_cast<size_t>(i)][static_cast<size_t>(e)];
+      if (!finite_nonnegative(x)) throw InputError("trajectory.eta[" + std::to_string(i) + "]", "must be finite and >= 0");
+      t.eta(i, e) = x;
+    }
+  }
+  if (m.num_weights != 0 && m.num_weights != m.n) throw InputError("trajectory.num_weights", "must be 0 or n");
+  for (double w : m.weights) {
+    if (!(std::isfinite(w) && w > 0.0)) throw InputError("trajectory.weights", "must be finite and > 0");
+  }
+  t.weights = m.weights;
+  t.ends_in_terminal = m.ends_in_terminal;
+  return t;
+}
+
+// ---- the worker ----------------------------------------------------------------------
+
+SamplerWorker::SamplerWorker(Bus& bus, const Mdp& mdp, std::string id, Counters& counters)
+    : bus_(bus), mdp_(mdp), id_(std::move(id)), counters_(counters) {
+  // A whole data set may arrive between two handle() calls; only the newest requests matter.
+  subscribe<hbirl::trajectory_t>(bus_, channels::kTrajectory, counters_,
+                                 [this](const hbirl::trajectory_t& m, const Message&) { on_trajectory(m); }, 100000);
+  subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
+                                    [this](const hbirl::estep_request_t& m, const Message&) { on_request(m); }, 8);
+}
+
+int SamplerWorker::handle(int timeout_ms) {
+  if (Clock::now() >= next_status_) {
+    publish_status();
+    next_status_ = Clock::now() + std::chrono::seconds(1);
+  }
+  return bus_.handle(timeout_ms);
+}
+
+void SamplerWorker::publish_status() {
+  hbirl::service_status_t s{};
+  s.utime = wall_utime();
+  s.service = "sampler";
+  s.id = id_;
+  s.seq = ++status_seq_;
+  s.state = trajectories_.empty() ? "starting" : "running";
+  s.messages_in = counters_.messages_in;
+  s.messages_out = counters_.messages_out;
+  s.bad_messages = counters_.bad_messages;
+  s.gaps = counters_.gaps;
+  s.trajectories = static_cast<std::int32_t>(trajectories_.size());
+  s.dataset_digest = static_cast<std::int64_t>(digest_);
+  s.detail = counters_.last_problem;
+  publish(bus_, channels::kStatus, s, counters_);
+}
+
+void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
+  if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
+    throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
+  }
+  const auto d = static_cast<std::uint64_t>(m.dataset_digest);
+  if (d == digest_ && !trajectories_.empty()) return;  // have it already
+  if (d != incoming_digest_ || incoming_.size() != static_cast<size_t>(m.num_trajectories)) {
+    incoming_digest_ = d;
+    incoming_.assign(static_cast<size_t>(m.num_trajectories), std::nullopt);
+  }
+  incoming_[static_cast<size_t>(m.index)] = from_message(m);
+  if (std::any_of(incoming_.begin(), incoming_.end(), [](const auto& t) { return !t.has_value(); })) return;
+  std::vector<ObservedTrajectory> all;
+  for (auto& t : incoming_) all.push_back(std::move(*t));
+  incoming_.clear();
+  incoming_digest_ = 0;
+  if (dataset_digest(all) != d) throw InputError("trajectory.dataset_digest", "does not match the trajectories received");
+  trajectories_ = std::move(all);
+  digest_ = d;
+  estep_.reset();
+  publish_status();  // tell the optimiser at once
+}
+
+void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
+  if (!answered_.insert({m.request_id, m.attempt}).second) return;  // a repeat: answered already
+  while (answered_.size() > 256) answered_.erase(answered_.begin());
+  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_ || trajectories_.empty()) {
+    publish_status();  // the optimiser sees our digest and sends its data set
+    return;
+  }
+  std::vector<int> mine;
+  for (int b = 0; b < m.num_blocks; ++b) {
+    if (m.assigned_worker[static_cast<size_t>(b)] == id_) mine.push_back(b);
+  }
+  if (mine.empty()) return;
+  const int P = mdp_.num_pairs(), W = m.num_symbols, E = m.num_confounders;
+  if (m.engine != "exact") throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
+  if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not this domain's |S||A| = " + std::to_string(P));
+  if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
+  if (m.num_trajectories != static_cast<int>(trajectories_.size())) throw InputError("estep_request.num_trajectories", "differs");
+  if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
+  if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds) {
+    ObservationPrior shape;  // the worker never refines alpha: only its shape matters here
+    shape.num_symbols = W;
+    shape.num_confounders = E;
+    shape.subject_alpha = Eigen::MatrixXd::Ones(P, W);
+    shape.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
+    ObservationEStepOptions options;
+    options.max_kinds = m.max_kinds;
+    estep_.emplace(mdp_, trajectories_, shape, options);
+    estep_symbols_ = W;
+    estep_confounders_ = E;
+  }
+  if (m.num_blocks != estep_->num_blocks()) throw InputError("estep_request.num_blocks", "differs from this worker's");
+  SoftSolution policy;
+  policy.log_policy = Eigen::Map<const Eigen::VectorXd>(m.log_policy.data(), P);
+  policy.policy = Eigen::Map<const Eigen::VectorXd>(m.policy.data(), P);
+  ObservationModel model;
+  model.subject.resize(P, W);
+  for (int r = 0; r < P; ++r) {
+    for (int w = 0; w < W; ++w) model.subject(r, w) = m.subject_o[static_cast<size_t>(r)][static_cast<size_t>(w)];
+  }
+  model.confounders.resize(E, W);
+  for (int e = 0; e < E; ++e) {
+    for (int w = 0; w < W; ++w) model.confounders(e, w) = m.confounder_o[static_cast<size_t>(e)][static_cast<size_t>(w)];
+  }
+  if (!model.subject.allFinite() || !model.confounders.allFinite() || (model.subject.array() < 0).any() ||
+      (model.confounders.array() < 0).any()) {
+    throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
+  }
+  const auto start = Clock::now();
+  const std::vector<EStepStatistics> stats =
+      estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), mine, 1);
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  for (size_t k = 0; k < mine.size(); ++k) {
+    const EStepStatistics& s = stats[k];
+    hbirl::estep_result_t r{};
+    r.utime = m.utime;
+    r.request_id = m.request_id;
+    r.worker = id_;
+    r.dataset_digest = static_cast<std::int64_t>(digest_);
+    r.block = mine[k];
+    r.num_pairs = P;
+    r.counts.assign(s.counts.data(), s.counts.data() + P);
+    r.num_symbols = W;
+    r.num_confounders = E;
+    r.alpha_subject.assign(static_cast<size_t>(P), std::vector<double>(static_cast<size_t>(W)));
+    for (int i = 0; i < P; ++i) {
+      for (int w = 0; w < W; ++w) r.alpha_subject[static_cast<size_t>(i)][static_cast<size_t>(w)] = s.alpha_dot.subject(i, w);
+    }
+    r.alpha_confounder.assign(static_cast<size_t>(E), std::vector<double>(static_cast<size_t>(W)));
+    for (int e = 0; e < E; ++e) {
+      for (int w = 0; w < W; ++w) r.alpha_confounder[static_cast<size_t>(e)][static_cast<size_t>(w)] = s.alpha_dot.confounders(e, w);
+    }
+    r.log_likelihood = s.log_likelihood;
+    r.impossible = s.impossible;
+    r.compute_seconds = seconds / static_cast<double>(mine.size());
+    publish(bus_, channels::kEStepResult, r, counters_);
+    ++blocks_computed_;
+  }
+}
+
+// ---- the optimiser's executor --------------------------------------------------------
+
+BusBlockExecutor::BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dataset, Counters& counters,
+                                   BusExecutorOptions options)
+    : bus_(bus),
+      dataset_(std::move(dataset)),
+      digest_(dataset_digest(dataset_)),
+      counters_(counters),
+      options_(options),
+      request_id_(wall_utime()) {  // unique across restarts of the optimiser
+  subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+                                     [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000);
+  // Every block of a pass may arrive between two handle() calls.
+  subscribe<hbirl::estep_result_t>(bus_, channels::kEStepResult, counters_,
+                                   [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000);
+}
+
+void BusBlockExecutor::publish_dataset() const {
+  last_dataset_sent_ = Clock::now();
+  const int n = static_cast<int>(dataset_.size());
+  for (int i = 0; i < n; ++i) publish(bus_, channels::kTrajectory, to_message(dataset_[static_cast<size_t>(i)], i, n, digest_), counters_);
+}
+
+void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
+  if (m.service != "sampler") return;
+  if (m.id.empty()) throw InputError("status.id", "is empty");
+  Worker& w = workers_[m.id];
+  w.digest = static_cast<std::uint64_t>(m.dataset_digest);
+  w.trajectories = m.trajectories;
+  w.last_seen = Clock::now();
+  w.suspect = false;
+  // A worker without our data set: send it (not more than twice a second).
+  if (w.digest != digest_ && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
+}
+
+void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
+  if (m.request_id != request_id_ || received_.empty()) {
+    ++stats_.stale;
+    return;
+  }
+  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_) {
+    ++stats_.foreign;
+    return;
+  }
+  if (m.block < 0 || m.block >= blocks_) throw InputError("estep_result.block", std::to_string(m.block) + " is not a block");
+  if (m.num_pairs != pairs_ || m.num_symbols != symbols_ || m.num_confounders != confounders_) {
+    throw InputError("estep_result.num_pairs", "the statistics have the wrong shape");
+  }
+  if (!std::isfinite(m.log_likelihood) && m.log_likelihood != -std::numeric_limits<double>::infinity()) {
+    throw InputError("estep_result.log_likelihood", "is NaN or +inf");
+  }
+  auto& slot = received_[static_cast<size_t>(m.block)];
+  if (slot) {
+    ++stats_.duplicates;
+    return;
+  }
+  EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_);
+  s.counts = Eigen::Map<const Eigen::VectorXd>(m.counts.data(), pairs_);
+  for (int i = 0; i < pairs_; ++i) {
+    for (int w = 0; w < symbols_; ++w) s.alpha_dot.subject(i, w) = m.alpha_subject[static_cast<size_t>(i)][static_cast<size_t>(w)];
+  }
+  for (int e = 0; e < confounders_; ++e) {
+    for (int w = 0; w < symbols_; ++w) {
+      s.alpha_dot.confounders(e, w) = m.alpha_confounder[static_cast<size_t>(e)][static_cast<size_t>(w)];
+    }
+  }
+  if (!s.counts.allFinite() || !s.alpha_dot.subject.allFinite() || !s.alpha_dot.confounders.allFinite()) {
+    throw InputError("estep_result.counts", "are not finite");
+  }
+  s.log_likelihood = m.log_likelihood;
+  s.impossible = m.impossible;
+  slot = std::move(s);
+  answered_.insert(m.worker);
+  ++stats_.remote_blocks;
+}
+
+std::vector<std::string> BusBlockExecutor::live_workers() const {
+  std::vector<std::string> out;
+  const auto now = Clock::now();
+  for (const auto& [id, w] : workers_) {
+    if (w.digest == digest_ && !w.suspect &&
+        std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
+      out.push_back(id);
+    }
+  }
+  return out;  // sorted: std::map
+}
+
+int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
+  const std::lock_guard<std::recursive_mutex> lock(mutex_);
+  publish_dataset();
+  const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (static_cast<int>(live_workers().size()) < count && Clock::now() < deadline) {
+    if (bus_.handle(20) < 0) break;
+  }
+  return static_cast<int>(live_workers().size());
+}
+
+BusBlockExecutor::Stats BusBlockExecutor::stats() const {
+  const std::lock_guard<std::recursive_mutex> lock(mutex_);
+  return stats_;
+}
+
+std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep, const SoftSolution& policy,
+                                                   const ObservationModel& model, std::uint64_t seed) const {
+  const std::lock_guard<std::recursive_mutex> lock(mutex_);
+  const auto start = Clock::now();
+  // First what came while the optimiser was busy elsewhere (heartbeats above all: who is
+  // live is decided from them). Bounded, so a flood cannot hold the pass up.
+  for (int k = 0; k < 100000 && bus_.handle(0) > 0; ++k) {
+  }
+  ++request_id_;
+  ++stats_.requests;
+  blocks_ = estep.num_blocks();
+  pairs_ = estep.mdp().num_pairs();
+  symbols_ = model.num_symbols();
+  confounders_ = model.num_confounders();
+  received_.assign(static_cast<size_t>(blocks_), std::nullopt);
+  answered_.clear();
+
+  hbirl::estep_request_t request{};
+  request.utime = 0;
+  request.request_id = request_id_;
+  request.dataset_digest = static_cast<std::int64_t>(digest_);
+  request.num_trajectories = static_cast<std::int32_t>(dataset_.size());
+  request.block_size = ObservationEStep::kBlockSize;
+  request.num_blocks = blocks_;
+  request.seed = static_cast<std::int64_t>(seed);
+  request.engine = "exact";
+  request.max_kinds = estep.options().max_kinds;
+  request.num_pairs = pairs_;
+  request.log_policy.assign(policy.log_policy.data(), policy.log_policy.data() + pairs_);
+  request.policy.assign(policy.policy.data(), policy.policy.data() + pairs_);
+  request.num_symbols = symbols_;
+  request.num_confounders = confounders_;
+  request.subject_o.assign(static_cast<size_t>(pairs_), std::vector<double>(static_cast<size_t>(symbols_)));
+  for (int r = 0; r < pairs_; ++r) {
+    for (int w = 0; w < symbols_; ++w) request.subject_o[static_cast<size_t>(r)][static_cast<size_t>(w)] = model.subject(r, w);
+  }
+  request.confounder_o.assign(static_cast<size_t>(confounders_), std::vector<double>(static_cast<size_t>(symbols_)));
+  for (int e = 0; e < confounders_; ++e) {
+    for (int w = 0; w < symbols_; ++w) request.confounder_o[static_cast<size_t>(e)][static_cast<size_t>(w)] = model.confounders(e, w);
+  }
+
+  const auto missing = [this] {
+    std::vector<int> out;
+    for (int b = 0; b < blocks_; ++b) {
+      if (!received_[static_cast<size_t>(b)]) out.push_back(b);
+    }
+    return out;
+  };
+  for (int attempt = 0; attempt < options_.max_attempts; ++attempt) {
+    std::vector<int> todo = missing();
+    if (todo.empty()) break;
+    // First attempt: every live worker. Later ones: those that answered this request.
+    std::vector<std::string> workers = live_workers();
+    if (attempt > 0) {
+      std::vector<std::string> proven;
+      for (const auto& w : workers) {
+        if (answered_.count(w)) proven.push_back(w);
+      }
+      if (!proven.empty()) workers = proven;
+    }
+    if (workers.empty()) break;
+    if (attempt > 0) stats_.retried_blocks += static_cast<std::int64_t>(todo.size());
+    ++stats_.attempts;
+    request.attempt = attempt;
+    request.assigned_worker.assign(static_cast<size_t>(blocks_), std::string());
+    for (size_t k = 0; k < todo.size(); ++k) request.assigned_worker[static_cast<size_t>(todo[k])] = workers[k % workers.size()];
+    publish(bus_, channels::kEStepRequest, request, counters_);
+    const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
+    while (!missing().empty() && Clock::now() < deadline) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+      if (bus_.handle(static_cast<int>(std::clamp<long long>(left, 0, 50))) < 0) break;
+    }
+    // Workers that left blocks unanswered get no more work until they are heard from again.
+    for (int b : missing()) {
+      const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
+      if (!w.empty() && !answered_.count(w)) workers_[w].suspect = true;
+    }
+  }
+  const std::vector<int> rest = missing();
+  if (!rest.empty()) {
+    const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads);
+    for (size_t k = 0; k < rest.size(); ++k) received_[static_cast<size_t>(rest[k])] = local[k];
+    stats_.local_blocks += static_cast<std::int64_t>(rest.size());
+  }
+  std::vector<EStepStatistics> out;
+  out.reserve(received_.size());
+  for (auto& s : received_) out.push_back(std::move(*s));
+  received_.clear();  // answers from now on are stale
+  stats_.round_trip_s += std::chrono::duration<double>(Clock::now() - start).count();
+  return out;
+}
+
+}  // namespace hbirl::services

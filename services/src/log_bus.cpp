@@ -1,0 +1,44 @@
+#include "services/log_bus.hpp"
+
+#include "learner/input_error.hpp"
+
+namespace hbirl::services {
+
+LogBus::LogBus(const std::string& path, const std::string& out_path) : path_(path), in_(path, "r") {
+  if (!in_.good()) throw InputError("bus", "cannot read the LCM log '" + path + "'");
+  if (!out_path.empty()) {
+    out_ = std::make_unique<lcm::LogFile>(out_path, "w");
+    if (!out_->good()) throw InputError("bus", "cannot write the LCM log '" + out_path + "'");
+  }
+}
+
+bool LogBus::publish(const std::string& channel, const void* data, int size) {
+  if (!out_) return true;
+  lcm::LogEvent event;
+  event.timestamp = last_utime_;  // the replayed clock
+  event.channel = channel;
+  event.datalen = size;
+  event.data = const_cast<void*>(data);
+  return out_->writeEvent(&event) == 0;
+}
+
+void LogBus::subscribe(const std::string& channel, RawHandler handler, int) {
+  subscriptions_.push_back(Subscription{std::make_unique<ChannelPattern>(channel), std::move(handler)});
+}
+
+int LogBus::handle(int) {
+  while (const lcm::LogEvent* event = in_.readNextEvent()) {
+    ++events_;
+    last_utime_ = event->timestamp;
+    int delivered = 0;
+    for (const Subscription& s : subscriptions_) {
+      if (!s.channel->matches(event->channel)) continue;
+      s.handler(Message{event->channel, static_cast<const std::uint8_t*>(event->data), event->datalen, event->timestamp});
+      ++delivered;
+    }
+    if (delivered > 0) return 1;
+  }
+  return -1;
+}
+
+}  // namespace hbirl::services

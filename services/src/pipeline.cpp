@@ -1,0 +1,313 @@
+#include "services/pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "experiments/onion_data.hpp"
+#include "learner/input_error.hpp"
+#include "learner/metrics.hpp"
+#include "perception/labeller.hpp"
+#include "services/log_bus.hpp"
+#include "sim_driver/onion.hpp"
+
+namespace hbirl::services {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::int64_t micros(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e6)); }
+
+hbirl::episode_marker_t marker(std::int64_t utime, std::int64_t seq, int episode, bool controlled, std::int8_t kind) {
+  hbirl::episode_marker_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.domain = "onion";
+  m.episode = episode;
+  m.controlled = controlled;
+  m.kind = kind;
+  m.step = 0;
+  m.num_steps = 0;
+  m.ends_in_terminal = false;
+  m.frames_per_step = 0;
+  return m;
+}
+
+}  // namespace
+
+bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, const std::function<bool()>& stop,
+                    const std::function<void()>& idle) {
+  const Mdp mdp = onion::make_onion_mdp();
+  onion::SceneConfig controlled_scene = onion::SceneConfig::controlled();
+  controlled_scene.width = o.scene.width;
+  controlled_scene.fps = o.scene.fps;
+  controlled_scene.step_seconds = o.scene.step_seconds;
+  onion::DemonstrationOptions controlled_sorts;
+  controlled_sorts.sorts = o.controlled_sorts;
+  const std::vector<onion::Episode> controlled = onion::plan_sorts(mdp, controlled_scene, controlled_sorts, o.seed + 1);
+  double end = 0.0;
+  for (const auto& e : controlled) end += static_cast<double>(e.steps.size()) * controlled_scene.step_seconds;
+  onion::DemonstrationOptions demo_sorts;
+  demo_sorts.sorts = o.sorts;
+  demo_sorts.start_time = end;
+  const std::vector<onion::Episode> demos = onion::plan_sorts(mdp, o.scene, demo_sorts, o.seed);
+  const onion::OnionScene controlled_camera(controlled_scene, o.seed + 1), camera(o.scene, o.seed);
+  if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
+  const std::string extension = o.encoding == "png" ? ".png" : ".jpg";
+
+  std::int64_t marker_seq = 0, truth_seq = 0, frame_seq = 0;
+  const auto started = Clock::now();
+  std::int64_t frames_sent = 0;
+  cv::Mat frame;
+  std::vector<unsigned char> bytes;
+  const int fps = o.scene.frames_per_step();
+  for (int id = 0; id < static_cast<int>(controlled.size() + demos.size()); ++id) {
+    const bool is_controlled = id < static_cast<int>(controlled.size());
+    const onion::Episode& e = is_controlled ? controlled[static_cast<size_t>(id)] : demos[static_cast<size_t>(id) - controlled.size()];
+    const onion::OnionScene& scene = is_controlled ? controlled_camera : camera;
+    auto m = marker(micros(e.start_time), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_EPISODE);
+    m.frames_per_step = fps;
+    publish(bus, channels::kEpisode, m, counters);
+    for (int t = 0; t < static_cast<int>(e.steps.size()); ++t) {
+      m = marker(micros(e.start_time + t * o.scene.step_seconds), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_STEP);
+      m.step = t;
+      m.frames_per_step = fps;
+      publish(bus, channels::kEpisode, m, counters);
+      hbirl::ground_truth_t truth{};
+      truth.utime = m.utime;
+      truth.seq = ++truth_seq;
+      truth.domain = "onion";
+      truth.episode = id;
+      truth.step = t;
+      truth.state = e.steps[static_cast<size_t>(t)].state;
+      truth.action = e.steps[static_cast<size_t>(t)].action;
+      truth.blemished = e.blemished;
+      publish(bus, channels::kGroundTruth, truth, counters);
+      for (int k = 0; k < fps; ++k) {
+        if (stop && stop()) return false;
+        scene.render(e, t, k, frame);
+        cv::imencode(extension, frame, bytes);
+        hbirl::camera_frame_t f{};
+        f.utime = micros(scene.time_of(e, t, k));
+        f.seq = ++frame_seq;
+        f.episode = id;
+        f.step = t;
+        f.frame = k;
+        f.width = static_cast<std::int16_t>(frame.cols);
+        f.height = static_cast<std::int16_t>(frame.rows);
+        f.encoding = o.encoding;
+        f.size = static_cast<std::int32_t>(bytes.size());
+        f.data.assign(bytes.begin(), bytes.end());
+        publish(bus, channels::kCamera, f, counters);
+        ++frames_sent;
+        if (idle) idle();
+        if (o.max_frames_per_second > 0) {
+          const auto due = started + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(static_cast<double>(frames_sent) / o.max_frames_per_second));
+          std::this_thread::sleep_until(due);
+        }
+      }
+    }
+    m = marker(micros(e.start_time + static_cast<double>(e.steps.size()) * o.scene.step_seconds), ++marker_seq, id, is_controlled,
+               hbirl::episode_marker_t::END_EPISODE);
+    m.num_steps = static_cast<std::int32_t>(e.steps.size());
+    m.ends_in_terminal = true;  // a sort ends with the release
+    m.frames_per_step = fps;
+    publish(bus, channels::kEpisode, m, counters);
+  }
+  auto last = marker(0, ++marker_seq, -1, false, hbirl::episode_marker_t::END_RUN);
+  last.episode = 0;
+  publish(bus, channels::kEpisode, last, counters);
+  return true;
+}
+
+// ---- perception ----
+
+PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), counters_(counters) {
+  // Frames come at camera rate; a queue of a few seconds' worth rides out a slow moment.
+  subscribe<hbirl::camera_frame_t>(bus_, channels::kCamera, counters_,
+                                   [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000);
+}
+
+void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
+  counters_.gaps += frames_.see(m.seq);
+  if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
+  if (m.size <= 0) throw InputError("camera_frame.data", "is empty");
+  const cv::Mat frame = cv::imdecode(cv::Mat(1, m.size, CV_8UC1, const_cast<std::uint8_t*>(m.data.data())), cv::IMREAD_COLOR);
+  if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);
+  if (frame.cols != m.width || frame.rows != m.height) {
+    throw InputError("camera_frame.width", "the image is " + std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
+                                               ", the message says " + std::to_string(m.width) + "x" + std::to_string(m.height));
+  }
+  const std::vector<perception::Detection> found = detector_.detect(frame);
+  hbirl::detections_t d{};
+  d.utime = m.utime;
+  d.seq = ++seq_;
+  d.episode = m.episode;
+  d.step = m.step;
+  d.frame = m.frame;
+  d.width = m.width;
+  d.height = m.height;
+  d.n = static_cast<std::int32_t>(found.size());
+  for (const auto& x : found) {
+    d.cls.push_back(x.cls == perception::BlobClass::kGripper ? hbirl::detections_t::CLASS_GRIPPER : hbirl::detections_t::CLASS_ONION);
+    d.x.push_back(static_cast<float>(x.x));
+    d.y.push_back(static_cast<float>(x.y));
+    d.area.push_back(x.area);
+    d.box_x.push_back(static_cast<std::int16_t>(x.box.x));
+    d.box_y.push_back(static_cast<std::int16_t>(x.box.y));
+    d.box_w.push_back(static_cast<std::int16_t>(x.box.width));
+    d.box_h.push_back(static_cast<std::int16_t>(x.box.height));
+    d.dark_share.push_back(static_cast<float>(x.dark_share));
+  }
+  publish(bus_, channels::kDetections, d, counters_);
+}
+
+// ---- labeller ----
+
+LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
+    : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
+  subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
+                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000);
+}
+
+void LabellerService::on_detections(const hbirl::detections_t& m) {
+  counters_.gaps += detections_.see(m.seq);
+  onion::SceneConfig config;
+  config.width = m.width;
+  config.validate();
+  if (m.height != config.height()) throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
+  std::vector<perception::Detection> found(static_cast<size_t>(m.n));
+  for (int i = 0; i < m.n; ++i) {
+    auto& d = found[static_cast<size_t>(i)];
+    const auto k = static_cast<size_t>(i);
+    if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
+      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
+    }
+    if (!std::isfinite(m.x[k]) || !std::isfinite(m.y[k]) || m.area[k] <= 0 || !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
+      throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
+    }
+    d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper : perception::BlobClass::kOnion;
+    d.x = m.x[k];
+    d.y = m.y[k];
+    d.area = m.area[k];
+    d.box = cv::Rect(m.box_x[k], m.box_y[k], m.box_w[k], m.box_h[k]);
+    d.dark_share = m.dark_share[k];
+  }
+  const std::vector<perception::Observation> obs = perception::label(found, onion::labeller_options(config, uniform_eta_));
+  hbirl::observations_t o{};
+  o.utime = m.utime;
+  o.seq = ++seq_;
+  o.episode = m.episode;
+  o.step = m.step;
+  o.frame = m.frame;
+  o.num_symbols = perception::kNumSymbols;
+  o.num_sources = perception::kNumSources;
+  o.n = static_cast<std::int32_t>(obs.size());
+  for (const auto& x : obs) {
+    o.symbol.push_back(static_cast<std::int16_t>(x.symbol));
+    o.eta.emplace_back(x.eta.begin(), x.eta.end());
+  }
+  publish(bus_, channels::kObservations, o, counters_);
+}
+
+// ---- optimiser ----
+
+std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
+                                             const std::function<bool()>& stop,
+                                             const std::function<void(const std::string&)>& log) {
+  DatasetBuilder builder;
+  builder.subscribe(bus, counters);
+  const auto say = [&log](const std::string& s) {
+    if (log) log(s);
+  };
+  std::int64_t frames = -1;
+  auto last_frame = Clock::now();
+  bool announced_end = false;
+  while (!builder.complete()) {
+    if (stop && stop()) return std::nullopt;
+    if (bus.handle(100) < 0) break;  // a log at its end
+    if (builder.frames() != frames) {
+      frames = builder.frames();
+      last_frame = Clock::now();
+    }
+    if (builder.run_ended() && !announced_end) {
+      say("end of the run announced; " + std::to_string(builder.frames()) + " frames observed so far");
+      announced_end = true;
+    }
+    if (builder.run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.quiet_ms)) {
+      say("no frames for " + std::to_string(options.quiet_ms) + " ms after the end of the run: learning from what came (" +
+          std::to_string(builder.missing_frames()) + " frames missing)");
+      break;
+    }
+  }
+  if (stop && stop()) return std::nullopt;
+  OptimiserResult result;
+  result.data = builder.build();
+  result.missing_frames = builder.missing_frames();
+  const Mdp mdp = domain_mdp(result.data.domain);
+  auto executor = std::make_shared<BusBlockExecutor>(bus, result.data.observed, counters, options.executor);
+  say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
+      std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");
+  if (options.workers > 0) {
+    result.workers = executor->wait_for_workers(options.workers, options.wait_workers_ms);
+    say(std::to_string(result.workers) + " of " + std::to_string(options.workers) + " sampler workers ready");
+  }
+  const auto truth = domain_true_weights(result.data.domain);
+  const auto start = Clock::now();
+  const std::int64_t utime = result.data.last_utime;
+  result.learned = learn_from_dataset(mdp, result.data, options.learning, executor,
+                                      [&](int iteration, double ll, const Eigen::VectorXd& theta) {
+                                        hbirl::em_progress_t p{};
+                                        p.utime = utime;
+                                        p.restart = 0;
+                                        p.iteration = iteration;
+                                        p.log_likelihood = ll;
+                                        p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
+                                        p.num_features = static_cast<std::int32_t>(theta.size());
+                                        p.theta.assign(theta.data(), theta.data() + theta.size());
+                                        const auto s = executor->stats();
+                                        p.retries = static_cast<std::int32_t>(s.retried_blocks);
+                                        p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
+                                        p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+                                        publish(bus, channels::kEmProgress, p, counters);
+                                      });
+  result.estep = executor->stats();
+  hbirl::reward_t r{};
+  r.utime = utime;
+  r.domain = result.data.domain;
+  r.final = true;
+  r.num_features = static_cast<std::int32_t>(result.learned.theta.size());
+  r.theta.assign(result.learned.theta.data(), result.learned.theta.data() + result.learned.theta.size());
+  r.num_true = truth ? r.num_features : 0;
+  if (truth) r.true_theta.assign(truth->data(), truth->data() + truth->size());
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.features * result.learned.theta);
+  r.num_states = mdp.num_states;
+  r.num_actions = mdp.num_actions;
+  r.policy.assign(static_cast<size_t>(mdp.num_states), std::vector<double>(static_cast<size_t>(mdp.num_actions)));
+  for (int s = 0; s < mdp.num_states; ++s) {
+    for (int a = 0; a < mdp.num_actions; ++a) r.policy[static_cast<size_t>(s)][static_cast<size_t>(a)] = policy.policy[mdp.pair(s, a)];
+  }
+  r.log_likelihood = result.learned.log_likelihood;
+  r.ile = result.learned.ile.value_or(-1.0);
+  publish(bus, channels::kReward, r, counters);
+  return result;
+}
+
+OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters) {
+  LogBus bus(path);
+  DatasetBuilder builder;
+  builder.subscribe(bus, counters);
+  while (bus.handle(0) >= 0) {
+  }
+  OptimiserResult result;
+  result.data = builder.build();
+  result.missing_frames = builder.missing_frames();
+  const Mdp mdp = domain_mdp(result.data.domain.empty() ? std::string("?") : result.data.domain);
+  result.learned = learn_from_dataset(mdp, result.data, options);
+  return result;
+}
+
+}  // namespace hbirl::services

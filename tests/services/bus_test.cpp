@@ -1,0 +1,214 @@
+#include "services/bus.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "hbirl/observations_t.hpp"
+#include "hbirl/service_status_t.hpp"
+#include "learner/input_error.hpp"
+#include "services/lcm_bus.hpp"
+#include "services/log_bus.hpp"
+#include "services/memory_bus.hpp"
+#include "services/typed.hpp"
+
+namespace hbirl::services {
+namespace {
+
+hbirl::observations_t observations(std::int64_t seq, int n) {
+  hbirl::observations_t m{};
+  m.utime = 1000 * seq;
+  m.seq = seq;
+  m.episode = 2;
+  m.step = 3;
+  m.frame = 4;
+  m.num_symbols = 22;
+  m.num_sources = 2;
+  m.n = n;
+  for (int i = 0; i < n; ++i) {
+    m.symbol.push_back(static_cast<int16_t>(i));
+    m.eta.push_back({0.75, 0.25});
+  }
+  return m;
+}
+
+Counters quiet_counters() {
+  Counters c;
+  c.quiet = true;
+  return c;
+}
+
+// Typed messages round-trip between endpoints of one hub, in order, on the channels a
+// subscription's regular expression matches (the whole name).
+TEST(MemoryBus, DeliversTypedMessagesInOrder) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus a(hub), b(hub);
+  Counters out = quiet_counters(), in = quiet_counters();
+  std::vector<std::int64_t> seen;
+  subscribe<hbirl::observations_t>(b, "OBS.*", in, [&](const hbirl::observations_t& m, const Message& raw) {
+    EXPECT_EQ(raw.channel.substr(0, 3), "OBS");
+    EXPECT_EQ(m.eta.size(), static_cast<size_t>(m.n));
+    seen.push_back(m.seq);
+  });
+  for (int s = 1; s <= 5; ++s) EXPECT_TRUE(publish(a, s % 2 ? "OBSERVATIONS" : "OBS_B", observations(s, s), out));
+  EXPECT_TRUE(publish(a, "XOBSERVATIONS", observations(9, 1), out));  // not a whole-name match
+  EXPECT_EQ(b.handle(0), 5);
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(in.messages_in, 5);
+  EXPECT_EQ(out.messages_out, 6);
+  EXPECT_EQ(b.handle(0), 0);  // nothing left: times out at once
+}
+
+// Garbage, another type, a truncated message and a message its handler rejects are each
+// counted once and dropped; the good messages around them still arrive.
+TEST(MemoryBus, BadMessagesAreCountedNotFatal) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub);
+  Counters c = quiet_counters();
+  int good = 0;
+  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) {
+    if (m.num_sources < 1) throw InputError("num_sources", "must be at least 1");
+    ++good;
+  });
+  Counters out = quiet_counters();
+  publish(bus, "OBSERVATIONS", observations(1, 3), out);
+  const char garbage[] = "definitely not an LCM message";
+  bus.publish("OBSERVATIONS", garbage, sizeof garbage);
+  hbirl::service_status_t status{};  // a valid message of the wrong type
+  status.service = "sampler";
+  publish(bus, "OBSERVATIONS", status, out);
+  const std::vector<std::uint8_t> whole = encode(observations(2, 3));
+  bus.publish("OBSERVATIONS", whole.data(), static_cast<int>(whole.size()) - 5);  // truncated
+  hbirl::observations_t bad = observations(3, 1);
+  bad.num_sources = 0;
+  bad.eta = {{}};
+  publish(bus, "OBSERVATIONS", bad, out);
+  bus.publish("OBSERVATIONS", nullptr, 0);  // empty
+  publish(bus, "OBSERVATIONS", observations(4, 2), out);
+  EXPECT_EQ(bus.handle(0), 7);
+  EXPECT_EQ(good, 2);
+  EXPECT_EQ(c.messages_in, 2);
+  EXPECT_EQ(c.bad_messages, 5);
+  EXPECT_NE(c.last_problem.find("OBSERVATIONS"), std::string::npos);
+}
+
+// A full subscription queue drops its oldest message (LCM's rule), and the hub counts it.
+TEST(MemoryBus, QueueCapacityDropsTheOldest) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub);
+  Counters c = quiet_counters(), out = quiet_counters();
+  std::vector<std::int64_t> seen;
+  subscribe<hbirl::observations_t>(
+      bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); }, 3);
+  for (int s = 1; s <= 5; ++s) publish(bus, "OBSERVATIONS", observations(s, 1), out);
+  EXPECT_EQ(bus.handle(0), 3);
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{3, 4, 5}));
+  EXPECT_EQ(hub->dropped(), 2);
+}
+
+// handle() waits for a message from another thread; a disconnected endpoint ends.
+TEST(MemoryBus, WaitsAcrossThreadsAndEnds) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus a(hub), b(hub);
+  Counters c = quiet_counters(), out = quiet_counters();
+  int got = 0;
+  subscribe<hbirl::observations_t>(b, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++got; });
+  std::thread sender([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    publish(a, "OBSERVATIONS", observations(1, 1), out);
+  });
+  int handled = 0;
+  for (int i = 0; i < 200 && handled == 0; ++i) handled = b.handle(50);
+  sender.join();
+  EXPECT_EQ(handled, 1);
+  EXPECT_EQ(got, 1);
+  b.disconnect();
+  EXPECT_EQ(b.handle(10), -1);
+  publish(a, "OBSERVATIONS", observations(2, 1), out);  // no one to deliver to: fine
+}
+
+TEST(SequenceTracker, CountsSkippedNumbers) {
+  SequenceTracker t;
+  EXPECT_EQ(t.see(5), 0);
+  EXPECT_EQ(t.see(6), 0);
+  EXPECT_EQ(t.see(9), 2);
+  EXPECT_EQ(t.see(9), 0);  // a duplicate is not a gap
+  EXPECT_EQ(t.see(1), 0);  // the publisher restarted
+  EXPECT_EQ(t.see(2), 0);
+}
+
+// LCM's own in-process provider exercises LcmBus without any network.
+TEST(LcmBus, RoundTripOverMemq) {
+  LcmBus bus("memq://");
+  Counters c = quiet_counters(), out = quiet_counters();
+  std::vector<std::int64_t> seen;
+  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c,
+                                   [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+  publish(bus, "OBSERVATIONS", observations(7, 2), out);
+  const char garbage[] = "noise";
+  bus.publish("OBSERVATIONS", garbage, sizeof garbage);
+  publish(bus, "OBSERVATIONS", observations(8, 2), out);
+  int handled = 0;
+  for (int i = 0; i < 10 && handled < 3; ++i) handled += std::max(0, bus.handle(100));
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{7, 8}));
+  EXPECT_EQ(c.bad_messages, 1);
+}
+
+TEST(LcmBus, BadUrlIsAClearError) {
+  try {
+    LcmBus bus("nosuchprovider://x");
+    FAIL() << "opened a bus on a bad URL";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bus"), std::string::npos) << e.what();
+  }
+}
+
+// A recorded log replays event by event, in order, skipping channels nobody wants, and
+// ends; what a replaying service publishes can go to a log of its own.
+TEST(LogBus, ReplaysARecordedLogDeterministically) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_logbus_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "run.lcmlog").string(), out_path = (dir / "out.lcmlog").string();
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    for (int s = 1; s <= 4; ++s) {
+      const std::vector<std::uint8_t> bytes = encode(observations(s, s));
+      lcm::LogEvent e;
+      e.timestamp = 100 * s;
+      e.channel = s == 3 ? "CAMERA" : "OBSERVATIONS";
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = const_cast<std::uint8_t*>(bytes.data());
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    }
+  }
+  std::unique_ptr<Bus> bus = open_bus("log:" + path + "?out=" + out_path);
+  Counters c = quiet_counters(), out = quiet_counters();
+  std::vector<std::int64_t> seen, stamps;
+  subscribe<hbirl::observations_t>(*bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message& raw) {
+    seen.push_back(m.seq);
+    stamps.push_back(raw.recv_utime);
+    publish(*bus, "ECHO", m, out);
+  });
+  int handled = 0;
+  while (bus->handle(0) > 0) ++handled;
+  EXPECT_EQ(handled, 3);
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 4}));
+  EXPECT_EQ(stamps, (std::vector<std::int64_t>{100, 200, 400}));
+  EXPECT_EQ(bus->handle(0), -1);
+  bus.reset();
+  lcm::LogFile echoed(out_path, "r");
+  int n = 0;
+  while (const lcm::LogEvent* e = echoed.readNextEvent()) {
+    EXPECT_EQ(e->channel, "ECHO");
+    ++n;
+  }
+  EXPECT_EQ(n, 3);
+  EXPECT_THROW(open_bus("log:" + (dir / "missing.lcmlog").string()), InputError);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace hbirl::services

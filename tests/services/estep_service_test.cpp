@@ -1,0 +1,202 @@
+#include "services/estep_service.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "learner/hidden_data_em.hpp"
+#include "services/memory_bus.hpp"
+#include "service_threads.hpp"
+#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld_observations.hpp"
+
+namespace hbirl::services {
+namespace {
+
+using testing::quiet;
+
+// Workers on the task's MDP.
+struct WorkerThread : testing::WorkerThread {
+  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1);
+};
+
+// 40 trajectories (3 blocks of the E-step's sum) of the paper's Gridworld with three
+// confounding elements and plausible eta.
+struct Task {
+  GridworldTask task;
+  std::vector<ObservedTrajectory> observed;
+  ObservationPrior prior;
+};
+
+const Task& task() {
+  static const Task t = [] {
+    Rng rng(5);
+    Task out{make_gridworld_task({}, 40, 10, rng), {}, {}};
+    const Eigen::MatrixXd subject = gridworld_subject_observation_model(5, 1.0);
+    const Eigen::MatrixXd elements = random_confounder_observation_model(3, rng);
+    GridworldObservationOptions options;
+    options.per_step = 6;
+    out.observed = observe_gridworld(out.task.mdp, out.task.trajectories, subject, elements, options, rng).trajectories;
+    const std::vector<Trajectory> controlled = soft_expert_demonstration(out.task.mdp, out.task.true_weights, 20, 10, rng);
+    out.prior.num_symbols = 4;
+    out.prior.num_confounders = 3;
+    out.prior.subject_alpha = controlled_run_alpha(out.task.mdp, controlled, subject, 6, 1.0, rng);
+    out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
+    out.prior.c = 0.5;
+    return out;
+  }();
+  return t;
+}
+
+LearnResult learn(std::shared_ptr<const BlockExecutor> executor) {
+  const Task& t = task();
+  ObservationEStepOptions options;
+  options.executor = std::move(executor);
+  const ObservationEStep estep(t.task.mdp, t.observed, t.prior, options);
+  LearnOptions learn;
+  learn.seed = 3;
+  learn.threads = 1;
+  learn.max_em_iterations = 12;  // identity, not convergence, is the point: keep the sanitizer build quick
+  return learn_reward(t.task.mdp, estep, learn);
+}
+
+const LearnResult& local() {
+  static const LearnResult r = learn(nullptr);
+  return r;
+}
+
+void expect_identical(const LearnResult& a, const LearnResult& b) {
+  ASSERT_EQ(a.theta.size(), b.theta.size());
+  for (Eigen::Index k = 0; k < a.theta.size(); ++k) EXPECT_EQ(a.theta[k], b.theta[k]) << "theta[" << k << "]";
+  EXPECT_EQ(a.log_likelihood, b.log_likelihood);
+}
+
+WorkerThread::WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after)
+    : testing::WorkerThread(std::move(hub), task().task.mdp, id, die_after) {}
+
+struct Optimiser {
+  explicit Optimiser(std::shared_ptr<MemoryHub> hub, BusExecutorOptions options = {})
+      : bus(std::move(hub)), counters(quiet("optimiser")),
+        executor(std::make_shared<BusBlockExecutor>(bus, task().observed, counters, options)) {}
+  MemoryBus bus;
+  Counters counters;
+  std::shared_ptr<BusBlockExecutor> executor;
+};
+
+TEST(EStepService, TrajectoriesRoundTrip) {
+  const auto& observed = task().observed;
+  std::vector<ObservedTrajectory> back;
+  for (size_t i = 0; i < observed.size(); ++i) {
+    back.push_back(from_message(to_message(observed[i], static_cast<int>(i), static_cast<int>(observed.size()), 1)));
+  }
+  EXPECT_EQ(dataset_digest(back), dataset_digest(observed));
+  hbirl::trajectory_t bad = to_message(observed[0], 0, 1, 1);
+  bad.step_begin[1] = bad.n + 5;
+  EXPECT_THROW(from_message(bad), InputError);
+  bad = to_message(observed[0], 0, 1, 1);
+  bad.eta[0][0] = std::nan("");
+  EXPECT_THROW(from_message(bad), InputError);
+}
+
+// The learned theta is bit-identical to learning without the bus, with 1, 2 and 4
+// workers: every block is computed by the same code and summed in block order.
+TEST(EStepService, SameThetaWithOneTwoOrFourWorkers) {
+  for (int n : {1, 2, 4}) {
+    auto hub = std::make_shared<MemoryHub>();
+    std::vector<std::unique_ptr<WorkerThread>> workers;
+    for (int w = 0; w < n; ++w) workers.push_back(std::make_unique<WorkerThread>(hub, "sampler-" + std::to_string(w)));
+    Optimiser opt(hub);
+    ASSERT_EQ(opt.executor->wait_for_workers(n, 10000), n);
+    expect_identical(learn(opt.executor), local());
+    const auto stats = opt.executor->stats();
+    EXPECT_GT(stats.remote_blocks, 0) << n << " workers";
+    EXPECT_EQ(stats.local_blocks, 0) << n << " workers";
+    // 40 trajectories are 3 blocks: each goes to a different worker.
+    int busy = 0;
+    for (const auto& w : workers) busy += w->worker().blocks_computed() > 0;
+    EXPECT_EQ(busy, std::min(n, 3)) << n << " workers";
+  }
+}
+
+// A worker dies mid-run: its blocks time out, go to the worker that answers, and the
+// result is still bit-identical.
+TEST(EStepService, WorkerKilledMidRunSameTheta) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread steady(hub, "sampler-a");
+  WorkerThread doomed(hub, "sampler-b", 5);
+  BusExecutorOptions options;
+  options.timeout_ms = 300;
+  options.worker_silence_s = 2.5;  // > the 1 s heartbeat, with room for a loaded machine
+  Optimiser opt(hub, options);
+  ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
+  expect_identical(learn(opt.executor), local());
+  const auto stats = opt.executor->stats();
+  EXPECT_GT(stats.retried_blocks, 0);
+  EXPECT_GE(doomed.worker().blocks_computed(), 5);
+}
+
+// No worker at all: the optimiser computes every block itself; learning does not stall.
+TEST(EStepService, NoWorkersComputesLocally) {
+  auto hub = std::make_shared<MemoryHub>();
+  BusExecutorOptions options;
+  options.timeout_ms = 100;
+  Optimiser opt(hub, options);
+  EXPECT_EQ(opt.executor->wait_for_workers(1, 100), 0);
+  expect_identical(learn(opt.executor), local());
+  EXPECT_EQ(opt.executor->stats().remote_blocks, 0);
+  EXPECT_GT(opt.executor->stats().local_blocks, 0);
+}
+
+// Duplicated and stale answers, garbage and wrong-type messages on every channel of the
+// protocol: counted, ignored, and theta is still bit-identical.
+TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, "sampler-a");
+  // A meddler: repeats every answer twice (once as stale) and sprays garbage.
+  MemoryBus meddler(hub);
+  Counters meddler_counters = quiet("meddler");
+  std::atomic<bool> stop{false};
+  subscribe<hbirl::estep_result_t>(meddler, channels::kEStepResult, meddler_counters,
+                                   [&](const hbirl::estep_result_t& m, const Message&) {
+                                     if (m.worker == "meddler") return;
+                                     hbirl::estep_result_t copy = m;
+                                     copy.worker = "meddler";
+                                     publish(meddler, channels::kEStepResult, copy, meddler_counters);
+                                     copy.request_id -= 1;
+                                     publish(meddler, channels::kEStepResult, copy, meddler_counters);
+                                     const char garbage[] = "garbage";
+                                     for (const auto* ch : {&channels::kEStepResult, &channels::kEStepRequest,
+                                                            &channels::kTrajectory, &channels::kStatus}) {
+                                       meddler.publish(*ch, garbage, sizeof garbage);
+                                     }
+                                   },
+                                   1000);
+  std::thread meddling([&] {
+    while (!stop) meddler.handle(20);
+  });
+  Optimiser opt(hub);
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  expect_identical(learn(opt.executor), local());
+  stop = true;
+  meddling.join();
+  const auto stats = opt.executor->stats();
+  EXPECT_GT(stats.duplicates, 0);
+  EXPECT_GT(stats.stale, 0);
+  EXPECT_GT(opt.counters.bad_messages, 0);
+  EXPECT_GT(worker.counters().bad_messages, 0);
+}
+
+// A worker that starts after the data set went out asks for it by reporting its digest.
+TEST(EStepService, LateWorkerGetsTheDataSet) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread early(hub, "sampler-a");
+  Optimiser opt(hub);
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  WorkerThread late(hub, "sampler-b");
+  EXPECT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
+  EXPECT_EQ(late.worker().digest(), opt.executor->digest());
+}
+
+}  // namespace
+}  // namespace hbirl::services
