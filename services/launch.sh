@@ -110,6 +110,7 @@ stop_all() {
   for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
 }
 trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; exit 130' INT TERM
+trap 'stop_all' EXIT
 
 echo "launch.sh: logs and results in $out"
 if [ "$record" = 1 ]; then
@@ -126,6 +127,8 @@ start labeller "$build/hbirl-labeller" --url "$url"
 start perception "$build/hbirl-perception" --url "$url"
 "$build/hbirl-optimiser" --url "$url" --workers "$workers" --out "$out/result.json" >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
 optimiser=$!
+pids+=("$optimiser")
+names+=(optimiser)
 start sim-driver "$build/hbirl-sim-driver" --url "$url" --config "$config" --sorts "$sorts" \
   --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-frames-per-second "$max_fps"
 
@@ -141,6 +144,7 @@ if [ "$status" -ne 0 ]; then
   failed=1
 fi
 for i in "${!pids[@]}"; do
+  [ "${pids[$i]}" = "$optimiser" ] && continue
   if ! kill -0 "${pids[$i]}" 2>/dev/null; then
     set +e; wait "${pids[$i]}"; s=$?; set -e
     if [ "$s" -ne 0 ] && ! { [ -n "$kill_worker_after_blocks" ] && [ "${names[$i]}" = sampler-1 ]; }; then
@@ -150,7 +154,7 @@ for i in "${!pids[@]}"; do
   fi
 done
 stop_all
-trap - INT TERM
+trap - INT TERM EXIT
 
 if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
   echo "launch.sh: learned (also in $out/result.json):"

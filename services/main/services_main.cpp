@@ -85,13 +85,26 @@ int sim_driver(int argc, char** argv) {
     bus->handle(50);
     heartbeat.tick("starting");
   }
-  const bool finished = run_sim_driver(*bus, o, counters, stop_requested, [&] {
+  SimDriver driver(*bus, o, counters);
+  const bool finished = driver.publish_run(stop_requested, [&] {
     bus->handle(0);
     heartbeat.tick("running");
   });
-  heartbeat.tick(finished ? "done" : "stopped", true);
   std::fprintf(stderr, "hbirl-sim-driver: %s; %lld messages published\n", finished ? "run published" : "stopped",
                static_cast<long long>(counters.messages_out));
+  // Then stay to send frames again that were lost on the way (FRAME_REQUEST), until the
+  // optimiser has published its reward or we are stopped.
+  bool learned = false;
+  subscribe<hbirl::reward_t>(*bus, channels::kReward, counters, [&learned](const hbirl::reward_t& r, const Message&) {
+    learned = learned || r.final;
+  });
+  while (finished && !learned && !stop_requested()) {
+    bus->handle(100);
+    heartbeat.tick("serving lost frames");
+  }
+  heartbeat.tick(finished ? "done" : "stopped", true);
+  std::fprintf(stderr, "hbirl-sim-driver: done; %lld frames sent again on request, %lld bad messages\n",
+               static_cast<long long>(driver.frames_resent()), static_cast<long long>(counters.bad_messages));
   return 0;
 }
 
@@ -170,6 +183,13 @@ int optimiser(int argc, char** argv) {
   app.add_option("--timeout-ms", o.executor.timeout_ms, "Wait this long for an E-step block before re-asking")
       ->check(CLI::Range(1, 3600000))
       ->capture_default_str();
+  app.add_option("--resend-after-ms", o.resend_after_ms,
+                 "After the end of the run, ask for lost frames again once none has come for this long")
+      ->check(CLI::Range(1, 3600000))
+      ->capture_default_str();
+  app.add_option("--quiet-ms", o.quiet_ms, "After the end of the run, learn anyway once no frame has come for this long")
+      ->check(CLI::Range(1, 3600000))
+      ->capture_default_str();
   app.add_option("--c", o.learning.c, "Rate of the observation-model refinement")->check(CLI::Range(1e-6, 1.0))->capture_default_str();
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
   app.add_option("--out", out, "Also write the result JSON to this file");
@@ -199,6 +219,7 @@ int optimiser(int argc, char** argv) {
   j["controlled_episodes"] = result->data.controlled_observed.size();
   j["dataset_digest"] = result->learned.digest;
   j["missing_frames"] = result->missing_frames;
+  j["frame_requests"] = result->frame_requests;
   j["workers"] = result->workers;
   j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
                 {"local_blocks", result->estep.local_blocks}, {"retried_blocks", result->estep.retried_blocks},

@@ -18,6 +18,11 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
                                              [this](const auto& m, const Message&) { on_truth(m); }, kQueue);
 }
 
+namespace {
+constexpr int kMaxSteps = 100000;         // per episode
+constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
+}  // namespace
+
 DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
   if (id < 0) throw InputError("episode", "is negative");
   return episodes_[id];
@@ -33,14 +38,20 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
     case hbirl::episode_marker_t::BEGIN_STEP: {
       Episode& e = episode(m.episode);
       e.controlled = m.controlled;
-      if (m.frames_per_step < 1) throw InputError("episode_marker.frames_per_step", "must be at least 1");
+      if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
+        throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+      }
       e.frames_per_step = m.frames_per_step;
       break;
     }
     case hbirl::episode_marker_t::END_EPISODE: {
       Episode& e = episode(m.episode);
-      if (m.num_steps < 1) throw InputError("episode_marker.num_steps", "must be at least 1");
-      if (m.frames_per_step < 1) throw InputError("episode_marker.frames_per_step", "must be at least 1");
+      if (m.num_steps < 1 || m.num_steps > kMaxSteps) {
+        throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
+      }
+      if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
+        throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+      }
       e.controlled = m.controlled;
       e.ended = true;
       e.num_steps = m.num_steps;
@@ -63,7 +74,10 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   if (num_symbols_ && (m.num_symbols != num_symbols_ || m.num_sources != num_sources_)) {
     throw InputError("observations.num_sources", "the alphabet or the sources changed mid-run");
   }
-  if (m.step < 0 || m.frame < 0) throw InputError("observations.step", "step and frame must be >= 0");
+  if (m.step < 0 || m.frame < 0 || m.step >= kMaxSteps || m.frame >= kMaxFramesPerStep) {
+    throw InputError("observations.step", "step or frame out of range");
+  }
+  if (m.episode < 0) throw InputError("observations.episode", "is negative");
   Frame f;
   for (int i = 0; i < m.n; ++i) {
     const int s = m.symbol[static_cast<size_t>(i)];
@@ -101,6 +115,20 @@ std::int64_t DatasetBuilder::missing_frames() const {
   return missing;
 }
 
+std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t limit) const {
+  std::vector<std::tuple<int, int, int>> out;
+  for (const auto& [id, e] : episodes_) {
+    if (!e.ended) continue;
+    for (int t = 0; t < e.num_steps; ++t) {
+      for (int k = 0; k < e.frames_per_step; ++k) {
+        if (out.size() >= limit) return out;
+        if (!e.frames.count({t, k})) out.emplace_back(id, t, k);
+      }
+    }
+  }
+  return out;
+}
+
 bool DatasetBuilder::complete() const {
   if (!run_ended_) return false;
   for (const auto& [id, e] : episodes_) {
@@ -121,7 +149,8 @@ Dataset DatasetBuilder::build() const {
     t.ends_in_terminal = e.ends_in_terminal;
     std::vector<double> eta;
     for (int step = 0; step < e.num_steps; ++step) {
-      for (auto it = e.frames.lower_bound({step, 0}); it != e.frames.end() && it->first.first == step; ++it) {
+      for (auto it = e.frames.lower_bound({step, 0});
+           it != e.frames.end() && it->first.first == step && it->first.second < e.frames_per_step; ++it) {
         t.symbols.insert(t.symbols.end(), it->second.symbols.begin(), it->second.symbols.end());
         eta.insert(eta.end(), it->second.eta.begin(), it->second.eta.end());
       }
@@ -136,9 +165,9 @@ Dataset DatasetBuilder::build() const {
     }
     const bool truth_complete = static_cast<int>(truth.size()) == e.num_steps;
     if (e.controlled) {
-      if (!truth_complete) {
-        throw InputError("ground_truth", "controlled episode " + std::to_string(id) + " lacks the true state of step " +
-                                              std::to_string(truth.size()));
+      if (!truth_complete) {  // a lost GROUND_TRUTH message: leave the episode out of the prior
+        ++d.skipped_controlled;
+        continue;
       }
       d.controlled_observed.push_back(std::move(t));
       d.controlled_truth.push_back(std::move(truth));

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
+#include <stdexcept>
 
 #include "learner/input_error.hpp"
 
@@ -113,7 +115,7 @@ void SamplerWorker::publish_status() {
 }
 
 void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
-  if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
+  if (m.num_trajectories < 1 || m.num_trajectories > 10000000 || m.index < 0 || m.index >= m.num_trajectories) {
     throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
   }
   const auto d = static_cast<std::uint64_t>(m.dataset_digest);
@@ -130,6 +132,10 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
   incoming_digest_ = 0;
   if (dataset_digest(all) != d) throw InputError("trajectory.dataset_digest", "does not match the trajectories received");
   trajectories_ = std::move(all);
+  max_symbol_ = -1;
+  for (const auto& t : trajectories_) {
+    for (int w : t.symbols) max_symbol_ = std::max(max_symbol_, w);
+  }
   digest_ = d;
   estep_.reset();
   publish_status();  // tell the optimiser at once
@@ -153,6 +159,10 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
   if (m.num_trajectories != static_cast<int>(trajectories_.size())) throw InputError("estep_request.num_trajectories", "differs");
   if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
+  if (max_symbol_ >= W) throw InputError("estep_request.num_symbols", "is smaller than the data set's alphabet");
+  for (const auto& t : trajectories_) {
+    if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the data set's eta");
+  }
   if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds) {
     ObservationPrior shape;  // the worker never refines alpha: only its shape matters here
     shape.num_symbols = W;
@@ -182,18 +192,16 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
       (model.confounders.array() < 0).any()) {
     throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
   }
-  const auto start = Clock::now();
-  const std::vector<EStepStatistics> stats =
-      estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), mine, 1);
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  for (size_t k = 0; k < mine.size(); ++k) {
-    const EStepStatistics& s = stats[k];
+  // One block at a time, each answer sent as soon as it is ready.
+  for (const int block : mine) {
+    const auto start = Clock::now();
+    const EStepStatistics s = estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), {block}, 1).front();
     hbirl::estep_result_t r{};
     r.utime = m.utime;
     r.request_id = m.request_id;
     r.worker = id_;
     r.dataset_digest = static_cast<std::int64_t>(digest_);
-    r.block = mine[k];
+    r.block = block;
     r.num_pairs = P;
     r.counts.assign(s.counts.data(), s.counts.data() + P);
     r.num_symbols = W;
@@ -208,7 +216,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     }
     r.log_likelihood = s.log_likelihood;
     r.impossible = s.impossible;
-    r.compute_seconds = seconds / static_cast<double>(mine.size());
+    r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     publish(bus_, channels::kEStepResult, r, counters_);
     ++blocks_computed_;
   }
@@ -223,7 +231,13 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dat
       digest_(dataset_digest(dataset_)),
       counters_(counters),
       options_(options),
-      request_id_(wall_utime()) {  // unique across restarts of the optimiser
+      request_id_(0) {
+  // Request ids: random, so that two optimisers on one bus never take each other's answers.
+  std::random_device entropy;
+  request_id_ = static_cast<std::int64_t>((static_cast<std::uint64_t>(entropy()) << 32 | entropy()) >> 1);
+  std::vector<ObservedTrajectory> merged;
+  for (const auto& t : dataset_) merged.push_back(merge_identical_observations(t));
+  merged_digest_ = dataset_digest(merged);
   subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
                                      [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000);
   // Every block of a pass may arrive between two handle() calls.
@@ -244,7 +258,6 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   w.digest = static_cast<std::uint64_t>(m.dataset_digest);
   w.trajectories = m.trajectories;
   w.last_seen = Clock::now();
-  w.suspect = false;
   // A worker without our data set: send it (not more than twice a second).
   if (w.digest != digest_ && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
 }
@@ -280,13 +293,16 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
       s.alpha_dot.confounders(e, w) = m.alpha_confounder[static_cast<size_t>(e)][static_cast<size_t>(w)];
     }
   }
-  if (!s.counts.allFinite() || !s.alpha_dot.subject.allFinite() || !s.alpha_dot.confounders.allFinite()) {
-    throw InputError("estep_result.counts", "are not finite");
+  if (!s.counts.allFinite() || !s.alpha_dot.subject.allFinite() || !s.alpha_dot.confounders.allFinite() ||
+      (s.counts.array() < 0).any() || (s.alpha_dot.subject.array() < 0).any() || (s.alpha_dot.confounders.array() < 0).any()) {
+    throw InputError("estep_result.counts", "must be finite and >= 0");
   }
+  if (m.impossible < 0 || m.impossible > ObservationEStep::kBlockSize) throw InputError("estep_result.impossible", "out of range");
   s.log_likelihood = m.log_likelihood;
   s.impossible = m.impossible;
   slot = std::move(s);
   answered_.insert(m.worker);
+  workers_[m.worker].suspect = false;  // it does answer
   ++stats_.remote_blocks;
 }
 
@@ -325,6 +341,11 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   // live is decided from them). Bounded, so a flood cannot hold the pass up.
   for (int k = 0; k < 100000 && bus_.handle(0) > 0; ++k) {
   }
+  // The workers compute with the exact engine on this executor's data set: the pass must too.
+  if (dataset_digest(estep.trajectories()) != merged_digest_) {
+    throw std::logic_error("BusBlockExecutor: the E-step's trajectories are not the data set the workers have");
+  }
+  if (!estep.options().engine(estep.mdp())->exact()) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
   ++request_id_;
   ++stats_.requests;
   blocks_ = estep.num_blocks();

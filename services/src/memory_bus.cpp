@@ -16,6 +16,11 @@ std::int64_t MemoryHub::published() const {
   return published_;
 }
 
+void MemoryHub::set_loss(std::function<bool(const std::string&, const std::uint8_t*, int)> lose) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  lose_ = std::move(lose);
+}
+
 std::int64_t MemoryHub::dropped() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   return dropped_;
@@ -45,6 +50,10 @@ bool MemoryBus::publish(const std::string& channel, const void* data, int size) 
   const std::int64_t now = now_utime();
   const std::lock_guard<std::mutex> lock(hub_->mutex_);  // one order of delivery for everyone
   ++hub_->published_;
+  if (hub_->lose_ && hub_->lose_(channel, static_cast<const std::uint8_t*>(data), size)) {
+    ++hub_->dropped_;
+    return true;  // sent, and lost on the way
+  }
   for (MemoryBus* endpoint : hub_->endpoints_) {
     endpoint->deliver(channel, static_cast<const std::uint8_t*>(data), size, now);
   }

@@ -37,44 +37,96 @@ hbirl::episode_marker_t marker(std::int64_t utime, std::int64_t seq, int episode
 
 }  // namespace
 
-bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, const std::function<bool()>& stop,
-                    const std::function<void()>& idle) {
+struct SimDriver::Plan {
+  std::vector<onion::Episode> episodes;  // the controlled run, then the demonstrations
+  int controlled = 0;
+  onion::SceneConfig controlled_scene;
+  std::unique_ptr<onion::OnionScene> controlled_camera, camera;
+  cv::Mat frame;
+  std::vector<unsigned char> bytes;
+};
+
+SimDriver::SimDriver(Bus& bus, const SimDriverOptions& o, Counters& counters)
+    : bus_(bus), options_(o), counters_(counters), plan_(std::make_unique<Plan>()) {
+  if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
   const Mdp mdp = onion::make_onion_mdp();
-  onion::SceneConfig controlled_scene = onion::SceneConfig::controlled();
-  controlled_scene.width = o.scene.width;
-  controlled_scene.fps = o.scene.fps;
-  controlled_scene.step_seconds = o.scene.step_seconds;
+  Plan& p = *plan_;
+  p.controlled_scene = onion::SceneConfig::controlled();
+  p.controlled_scene.width = o.scene.width;
+  p.controlled_scene.fps = o.scene.fps;
+  p.controlled_scene.step_seconds = o.scene.step_seconds;
   onion::DemonstrationOptions controlled_sorts;
   controlled_sorts.sorts = o.controlled_sorts;
-  const std::vector<onion::Episode> controlled = onion::plan_sorts(mdp, controlled_scene, controlled_sorts, o.seed + 1);
+  p.episodes = onion::plan_sorts(mdp, p.controlled_scene, controlled_sorts, o.seed + 1);
+  p.controlled = static_cast<int>(p.episodes.size());
   double end = 0.0;
-  for (const auto& e : controlled) end += static_cast<double>(e.steps.size()) * controlled_scene.step_seconds;
+  for (const auto& e : p.episodes) end += static_cast<double>(e.steps.size()) * p.controlled_scene.step_seconds;
   onion::DemonstrationOptions demo_sorts;
   demo_sorts.sorts = o.sorts;
   demo_sorts.start_time = end;
-  const std::vector<onion::Episode> demos = onion::plan_sorts(mdp, o.scene, demo_sorts, o.seed);
-  const onion::OnionScene controlled_camera(controlled_scene, o.seed + 1), camera(o.scene, o.seed);
-  if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
-  const std::string extension = o.encoding == "png" ? ".png" : ".jpg";
+  for (auto& e : onion::plan_sorts(mdp, o.scene, demo_sorts, o.seed)) p.episodes.push_back(std::move(e));
+  p.controlled_camera = std::make_unique<onion::OnionScene>(p.controlled_scene, o.seed + 1);
+  p.camera = std::make_unique<onion::OnionScene>(o.scene, o.seed);
+  subscribe<hbirl::frame_request_t>(bus_, channels::kFrameRequest, counters_,
+                                    [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100);
+}
 
-  std::int64_t marker_seq = 0, truth_seq = 0, frame_seq = 0;
+SimDriver::~SimDriver() = default;
+
+void SimDriver::publish_frame(int id, int t, int k) {
+  Plan& p = *plan_;
+  const onion::Episode& e = p.episodes[static_cast<size_t>(id)];
+  const onion::OnionScene& scene = id < p.controlled ? *p.controlled_camera : *p.camera;
+  scene.render(e, t, k, p.frame);
+  cv::imencode(options_.encoding == "png" ? ".png" : ".jpg", p.frame, p.bytes);
+  hbirl::camera_frame_t f{};
+  f.utime = micros(scene.time_of(e, t, k));
+  f.seq = ++frame_seq_;
+  f.episode = id;
+  f.step = t;
+  f.frame = k;
+  f.width = static_cast<std::int16_t>(p.frame.cols);
+  f.height = static_cast<std::int16_t>(p.frame.rows);
+  f.encoding = options_.encoding;
+  f.size = static_cast<std::int32_t>(p.bytes.size());
+  f.data.assign(p.bytes.begin(), p.bytes.end());
+  publish(bus_, channels::kCamera, f, counters_);
+}
+
+void SimDriver::on_request(const hbirl::frame_request_t& m) {
+  const int fps = options_.scene.frames_per_step();
+  for (int i = 0; i < m.n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const int id = m.episode[k], t = m.step[k], f = m.frame[k];
+    if (id < 0 || id >= static_cast<int>(plan_->episodes.size()) || t < 0 ||
+        t >= static_cast<int>(plan_->episodes[static_cast<size_t>(id)].steps.size()) || f < 0 || f >= fps) {
+      throw InputError("frame_request[" + std::to_string(i) + "]", "is not a frame of this run");
+    }
+  }
+  for (int i = 0; i < m.n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    publish_frame(m.episode[k], m.step[k], m.frame[k]);
+    ++resent_;
+  }
+}
+
+bool SimDriver::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
+  const SimDriverOptions& o = options_;
+  std::int64_t marker_seq = 0, truth_seq = 0;
   const auto started = Clock::now();
   std::int64_t frames_sent = 0;
-  cv::Mat frame;
-  std::vector<unsigned char> bytes;
   const int fps = o.scene.frames_per_step();
-  for (int id = 0; id < static_cast<int>(controlled.size() + demos.size()); ++id) {
-    const bool is_controlled = id < static_cast<int>(controlled.size());
-    const onion::Episode& e = is_controlled ? controlled[static_cast<size_t>(id)] : demos[static_cast<size_t>(id) - controlled.size()];
-    const onion::OnionScene& scene = is_controlled ? controlled_camera : camera;
+  for (int id = 0; id < static_cast<int>(plan_->episodes.size()); ++id) {
+    const bool is_controlled = id < plan_->controlled;
+    const onion::Episode& e = plan_->episodes[static_cast<size_t>(id)];
     auto m = marker(micros(e.start_time), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_EPISODE);
     m.frames_per_step = fps;
-    publish(bus, channels::kEpisode, m, counters);
+    publish(bus_, channels::kEpisode, m, counters_);
     for (int t = 0; t < static_cast<int>(e.steps.size()); ++t) {
       m = marker(micros(e.start_time + t * o.scene.step_seconds), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_STEP);
       m.step = t;
       m.frames_per_step = fps;
-      publish(bus, channels::kEpisode, m, counters);
+      publish(bus_, channels::kEpisode, m, counters_);
       hbirl::ground_truth_t truth{};
       truth.utime = m.utime;
       truth.seq = ++truth_seq;
@@ -84,23 +136,10 @@ bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, con
       truth.state = e.steps[static_cast<size_t>(t)].state;
       truth.action = e.steps[static_cast<size_t>(t)].action;
       truth.blemished = e.blemished;
-      publish(bus, channels::kGroundTruth, truth, counters);
+      publish(bus_, channels::kGroundTruth, truth, counters_);
       for (int k = 0; k < fps; ++k) {
         if (stop && stop()) return false;
-        scene.render(e, t, k, frame);
-        cv::imencode(extension, frame, bytes);
-        hbirl::camera_frame_t f{};
-        f.utime = micros(scene.time_of(e, t, k));
-        f.seq = ++frame_seq;
-        f.episode = id;
-        f.step = t;
-        f.frame = k;
-        f.width = static_cast<std::int16_t>(frame.cols);
-        f.height = static_cast<std::int16_t>(frame.rows);
-        f.encoding = o.encoding;
-        f.size = static_cast<std::int32_t>(bytes.size());
-        f.data.assign(bytes.begin(), bytes.end());
-        publish(bus, channels::kCamera, f, counters);
+        publish_frame(id, t, k);
         ++frames_sent;
         if (idle) idle();
         if (o.max_frames_per_second > 0) {
@@ -115,12 +154,17 @@ bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, con
     m.num_steps = static_cast<std::int32_t>(e.steps.size());
     m.ends_in_terminal = true;  // a sort ends with the release
     m.frames_per_step = fps;
-    publish(bus, channels::kEpisode, m, counters);
+    publish(bus_, channels::kEpisode, m, counters_);
   }
-  auto last = marker(0, ++marker_seq, -1, false, hbirl::episode_marker_t::END_RUN);
-  last.episode = 0;
-  publish(bus, channels::kEpisode, last, counters);
+  auto last = marker(0, ++marker_seq, 0, false, hbirl::episode_marker_t::END_RUN);
+  publish(bus_, channels::kEpisode, last, counters_);
   return true;
+}
+
+bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, const std::function<bool()>& stop,
+                    const std::function<void()>& idle) {
+  SimDriver driver(bus, o, counters);
+  return driver.publish_run(stop, idle);
 }
 
 // ---- perception ----
@@ -135,6 +179,9 @@ void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
   counters_.gaps += frames_.see(m.seq);
   if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
   if (m.size <= 0) throw InputError("camera_frame.data", "is empty");
+  if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096) {
+    throw InputError("camera_frame.width", "the frame must be between 1x1 and 4096x4096");  // before decoding it
+  }
   const cv::Mat frame = cv::imdecode(cv::Mat(1, m.size, CV_8UC1, const_cast<std::uint8_t*>(m.data.data())), cv::IMREAD_COLOR);
   if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);
   if (frame.cols != m.width || frame.rows != m.height) {
@@ -186,7 +233,8 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
     if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
       throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
     }
-    if (!std::isfinite(m.x[k]) || !std::isfinite(m.y[k]) || m.area[k] <= 0 || !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
+    if (!(m.x[k] >= 0.0f && m.x[k] < m.width) || !(m.y[k] >= 0.0f && m.y[k] < m.height) || m.area[k] <= 0 ||
+        !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
       throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
     }
     d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper : perception::BlobClass::kOnion;
@@ -225,6 +273,8 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   };
   std::int64_t frames = -1;
   auto last_frame = Clock::now();
+  auto last_request = Clock::now();
+  int result_requests = 0;
   bool announced_end = false;
   while (!builder.complete()) {
     if (stop && stop()) return std::nullopt;
@@ -237,6 +287,26 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
       say("end of the run announced; " + std::to_string(builder.frames()) + " frames observed so far");
       announced_end = true;
     }
+    // Frames lost on the way: ask for them again (a few hundred per request), once a second.
+    if (builder.run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
+        Clock::now() - last_request > std::chrono::milliseconds(options.resend_after_ms)) {
+      const auto missing = builder.missing_frame_keys(500);
+      if (!missing.empty()) {
+        hbirl::frame_request_t r{};
+        r.utime = builder.build_utime();
+        r.requester = "optimiser";
+        r.n = static_cast<std::int32_t>(missing.size());
+        for (const auto& [episode, step, frame] : missing) {
+          r.episode.push_back(episode);
+          r.step.push_back(step);
+          r.frame.push_back(frame);
+        }
+        publish(bus, channels::kFrameRequest, r, counters);
+        say("asked for " + std::to_string(missing.size()) + " lost frames again");
+        ++result_requests;
+      }
+      last_request = Clock::now();
+    }
     if (builder.run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.quiet_ms)) {
       say("no frames for " + std::to_string(options.quiet_ms) + " ms after the end of the run: learning from what came (" +
           std::to_string(builder.missing_frames()) + " frames missing)");
@@ -247,6 +317,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   OptimiserResult result;
   result.data = builder.build();
   result.missing_frames = builder.missing_frames();
+  result.frame_requests = result_requests;
   const Mdp mdp = domain_mdp(result.data.domain);
   auto executor = std::make_shared<BusBlockExecutor>(bus, result.data.observed, counters, options.executor);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
@@ -300,7 +371,8 @@ OptimiserResult learn_from_log(const std::string& path, const LearningOptions& o
   LogBus bus(path);
   DatasetBuilder builder;
   builder.subscribe(bus, counters);
-  while (bus.handle(0) >= 0) {
+  // As the live optimiser does: up to the moment the run is complete.
+  while (!builder.complete() && bus.handle(0) >= 0) {
   }
   OptimiserResult result;
   result.data = builder.build();

@@ -180,6 +180,7 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   expect_identical(learn(opt.executor), local());
   stop = true;
   meddling.join();
+  worker.stop();
   const auto stats = opt.executor->stats();
   EXPECT_GT(stats.duplicates, 0);
   EXPECT_GT(stats.stale, 0);

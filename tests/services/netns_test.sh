@@ -16,7 +16,8 @@ fi
 
 tmp="$(mktemp -d)"
 # HBIRL_KEEP=1 keeps the runs' logs and results for a look.
-trap '[ -n "${HBIRL_KEEP:-}" ] && echo "kept $tmp" >&2 || rm -rf "$tmp"' EXIT
+# On the way out, whatever happened: stop what this test started.
+trap 'kill $(jobs -p) 2>/dev/null || true; if [ -n "${HBIRL_KEEP:-}" ]; then echo "kept $tmp" >&2; else rm -rf "$tmp"; fi' EXIT
 url="udpm://239.255.76.67:7667?ttl=0"
 # Paced at 100 frames/s: UDP drops what a slow receiver (a sanitizer build on a busy
 # machine) cannot take in, and lost frames would change the data.
@@ -41,7 +42,8 @@ case "$case" in
     # lcm-logger and learned again from the log, offline and by replaying it.
     launch live --workers 2 --record
     live_theta="$(theta "$tmp/live/result.json")"
-    awk -v x="$(ile "$tmp/live/result.json")" 'BEGIN { exit !(x < 1e-6) }' || fail "ILE $(ile "$tmp/live/result.json") >= 1e-6"
+    [ -n "$(ile "$tmp/live/result.json")" ] || fail "no ILE in the result"
+    awk -v x="$(ile "$tmp/live/result.json")" 'BEGIN { exit !(x + 0 < 1e-6) }' || fail "ILE $(ile "$tmp/live/result.json") >= 1e-6"
     "$build/hbirl" learn --log "$tmp/live/run.lcmlog" --out "$tmp/offline.json"
     [ "$(theta "$tmp/offline.json")" = "$live_theta" ] || fail "hbirl learn --log: theta $(theta "$tmp/offline.json") != live $live_theta"
     "$build/hbirl-optimiser" --url "$url" --workers 0 --out "$tmp/replay.json" >/dev/null 2>"$tmp/replay.err" &
@@ -49,6 +51,7 @@ case "$case" in
     sleep 0.5
     lcm-logplayer -s 1 -e '^(EPISODE|OBSERVATIONS|GROUND_TRUTH)$' -l "$url" "$tmp/live/run.lcmlog" >/dev/null
     wait "$optimiser" || { cat "$tmp/replay.err"; fail "the optimiser on the replayed log failed"; }
+    grep -q '"missing_frames": 0' "$tmp/replay.json" || fail "the replay lost frames"
     [ "$(theta "$tmp/replay.json")" = "$live_theta" ] || fail "lcm-logplayer replay: theta $(theta "$tmp/replay.json") != live $live_theta"
     echo "live, offline and replayed theta: $live_theta; ILE $(ile "$tmp/live/result.json")"
     ;;

@@ -76,6 +76,8 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
     EXPECT_EQ(live->workers, 2);
     EXPECT_EQ(live->missing_frames, 0);
     EXPECT_GT(live->estep.remote_blocks, 0);
+    perception.stop();
+    labeller.stop();
     EXPECT_EQ(perception.counters().bad_messages, 0);
     EXPECT_EQ(labeller.counters().bad_messages, 0);
     EXPECT_EQ(opt_counters.gaps, 0);
@@ -111,6 +113,53 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   EXPECT_EQ(replay.learned.digest, live->learned.digest);
   for (int k = 0; k < 4; ++k) EXPECT_EQ(replay.learned.theta[k], live->learned.theta[k]) << k;
   std::filesystem::remove(log_path);
+}
+
+// Camera frames lost on the way (every 6th, and again when sent again): the optimiser asks
+// for them (FRAME_REQUEST), the simulator renders them again, and the data set is the
+// same as without loss.
+TEST(Pipeline, LostFramesAreAskedForAgain) {
+  const SimDriverOptions run = small_run();
+  const Mdp mdp = onion::make_onion_mdp();
+  auto hub = std::make_shared<MemoryHub>();
+  hub->set_loss([](const std::string& channel, const std::uint8_t* data, int size) {
+    if (channel != channels::kCamera) return false;
+    hbirl::camera_frame_t f;
+    return f.decode(data, 0, size) > 0 && f.seq % 6 == 0;
+  });
+  ServiceThread<PerceptionService> perception(hub, "perception");
+  ServiceThread<LabellerService> labeller(hub, "labeller");
+  MemoryBus sim_bus(hub);
+  Counters sim_counters = quiet("sim_driver");
+  SimDriver driver(sim_bus, run, sim_counters);
+  std::atomic<bool> done{false};
+  std::thread sim([&] {
+    driver.publish_run(nullptr);
+    while (!done) sim_bus.handle(20);  // serving FRAME_REQUEST
+  });
+  MemoryBus opt_bus(hub);
+  Counters opt_counters = quiet("optimiser");
+  OptimiserOptions options;
+  options.resend_after_ms = 200;
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr);
+  done = true;
+  sim.join();
+  ASSERT_TRUE(live.has_value());
+  EXPECT_GT(hub->dropped(), 0);
+  EXPECT_GT(live->frame_requests, 0);
+  EXPECT_GT(driver.frames_resent(), 0);
+  EXPECT_EQ(live->missing_frames, 0);
+  onion::DemonstrationOptions demo_sorts;
+  demo_sorts.sorts = run.sorts;
+  demo_sorts.start_time = 0.0;
+  onion::SceneConfig controlled = onion::SceneConfig::controlled();
+  controlled.fps = run.scene.fps;
+  onion::DemonstrationOptions controlled_sorts;
+  controlled_sorts.sorts = run.controlled_sorts;
+  const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.seed + 1);
+  for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.scene.step_seconds;
+  EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.scene, demo_sorts, run.seed).observed));
+  EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed));
 }
 
 // Corrupt inputs to the services: counted, and the services keep going.

@@ -26,9 +26,11 @@ class ServiceThread {
       : bus_(std::move(hub)), counters_(quiet(name)), service_(bus_, counters_), thread_([this] {
           while (!stop_) bus_.handle(20);
         }) {}
-  ~ServiceThread() {
+  ~ServiceThread() { stop(); }
+  // Ends the thread (then counters() may be read).
+  void stop() {
     stop_ = true;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
   const Counters& counters() const { return counters_; }
 
@@ -56,9 +58,11 @@ class WorkerThread {
       }
     });
   }
-  ~WorkerThread() {
+  ~WorkerThread() { stop(); }
+  // Ends the thread (then counters() may be read).
+  void stop() {
     stop_ = true;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
   const SamplerWorker& worker() const { return worker_; }
   const Counters& counters() const { return counters_; }

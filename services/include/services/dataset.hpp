@@ -7,6 +7,7 @@
 // a replayed log gives the same data as the live run.
 #include <map>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include "hbirl/episode_marker_t.hpp"
@@ -35,6 +36,7 @@ struct Dataset {
   std::vector<ObservedTrajectory> controlled_observed;  // the controlled run
   std::vector<Trajectory> controlled_truth;
   std::int64_t last_utime = 0;                  // sim time of the newest message used
+  int skipped_controlled = 0;                   // controlled episodes left out: ground truth incomplete
 };
 
 class DatasetBuilder {
@@ -50,10 +52,13 @@ class DatasetBuilder {
   // The run has ended and every episode has every frame's observations.
   bool complete() const;
   std::int64_t missing_frames() const;   // of episodes that ended
+  // Up to `limit` missing (episode, step, frame), in order.
+  std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
+  std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }
   int episodes() const { return static_cast<int>(episodes_.size()); }
-  // The data of the episodes that ended, in episode order. Throws InputError when a
-  // controlled episode lacks ground truth for a step.
+  // The data of the episodes that ended, in episode order (controlled episodes whose
+  // ground truth is incomplete are left out and counted).
   Dataset build() const;
 
  private:

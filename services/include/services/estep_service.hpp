@@ -17,6 +17,7 @@
 // computes what is still missing itself: learning never stalls. Answers to other
 // requests, for blocks it already has, or from workers with another data set are
 // counted and ignored. Workers answer only when their digest equals the request's.
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <mutex>
@@ -59,7 +60,6 @@ class SamplerWorker {
   void publish_status();
   const std::string& id() const { return id_; }
   std::uint64_t digest() const { return digest_; }
-  int trajectories() const { return static_cast<int>(trajectories_.size()); }
   std::int64_t blocks_computed() const { return blocks_computed_; }
 
  private:
@@ -74,11 +74,12 @@ class SamplerWorker {
   std::uint64_t incoming_digest_ = 0;
   std::vector<std::optional<ObservedTrajectory>> incoming_;
   std::vector<ObservedTrajectory> trajectories_;
-  std::uint64_t digest_ = 0;
+  std::atomic<std::uint64_t> digest_{0};  // read by tests from another thread
+  int max_symbol_ = -1;
   std::optional<ObservationEStep> estep_;
   int estep_symbols_ = -1, estep_confounders_ = -1;
   std::set<std::pair<std::int64_t, int>> answered_;  // (request id, attempt): idempotent
-  std::int64_t blocks_computed_ = 0;
+  std::atomic<std::int64_t> blocks_computed_{0};
   std::int64_t status_seq_ = 0;
   std::chrono::steady_clock::time_point next_status_{};
 };
@@ -127,6 +128,7 @@ class BusBlockExecutor final : public BlockExecutor {
   Bus& bus_;
   std::vector<ObservedTrajectory> dataset_;
   std::uint64_t digest_;
+  std::uint64_t merged_digest_ = 0;  // of the data set as ObservationEStep holds it
   Counters& counters_;
   BusExecutorOptions options_;
   mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held

@@ -5,6 +5,7 @@
 // LCM's. See bus.hpp.
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <vector>
 
@@ -15,7 +16,9 @@ namespace hbirl::services {
 class MemoryHub {
  public:
   std::int64_t published() const;
-  std::int64_t dropped() const;  // by full subscription queues
+  std::int64_t dropped() const;  // by full subscription queues or the loss filter
+  // Testing: a message for which `lose` returns true is lost on the way (as UDP may lose it).
+  void set_loss(std::function<bool(const std::string& channel, const std::uint8_t* data, int size)> lose);
 
  private:
   friend class MemoryBus;
@@ -23,6 +26,7 @@ class MemoryHub {
   std::vector<class MemoryBus*> endpoints_;
   std::int64_t published_ = 0;
   std::int64_t dropped_ = 0;
+  std::function<bool(const std::string&, const std::uint8_t*, int)> lose_;
 };
 
 class MemoryBus final : public Bus {

@@ -10,6 +10,7 @@
 #include "hbirl/camera_frame_t.hpp"
 #include "hbirl/detections_t.hpp"
 #include "hbirl/em_progress_t.hpp"
+#include "hbirl/frame_request_t.hpp"
 #include "hbirl/reward_t.hpp"
 #include "perception/blobs.hpp"
 #include "services/dataset.hpp"
@@ -24,6 +25,7 @@ inline const std::string kCamera = "CAMERA";
 inline const std::string kDetections = "DETECTIONS";
 inline const std::string kEmProgress = "EM_PROGRESS";
 inline const std::string kReward = "REWARD";
+inline const std::string kFrameRequest = "FRAME_REQUEST";
 }  // namespace channels
 
 // ---- sim_driver ----
@@ -35,8 +37,30 @@ struct SimDriverOptions {
   double max_frames_per_second = 300.0;  // pacing, wall clock (0: as fast as it renders)
   std::string encoding = "png";          // lossless: replay and live see the same pixels
 };
-// Publishes the whole run (EPISODE, GROUND_TRUTH, CAMERA), then END_RUN. Returns false if
-// asked to stop first.
+// The simulator: publishes the whole run (EPISODE, GROUND_TRUTH, CAMERA), then END_RUN,
+// and afterwards answers FRAME_REQUEST by rendering the asked frames again (the scene is
+// deterministic: the same pixels) -- so frames lost on the way can be recovered.
+class SimDriver {
+ public:
+  SimDriver(Bus& bus, const SimDriverOptions& options, Counters& counters);
+  ~SimDriver();
+  // Returns false if asked to stop first. `idle` runs after every frame.
+  bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
+  std::int64_t frames_resent() const { return resent_; }
+
+ private:
+  struct Plan;
+  void publish_frame(int episode, int step, int frame);
+  void on_request(const hbirl::frame_request_t& m);
+  Bus& bus_;
+  SimDriverOptions options_;
+  Counters& counters_;
+  std::unique_ptr<Plan> plan_;
+  std::int64_t frame_seq_ = 0;
+  std::int64_t resent_ = 0;
+};
+
+// Publishes the run with a SimDriver (the in-process tests' way).
 bool run_sim_driver(Bus& bus, const SimDriverOptions& options, Counters& counters, const std::function<bool()>& stop,
                     const std::function<void()>& idle = nullptr);
 
@@ -74,12 +98,14 @@ struct OptimiserOptions {
   BusExecutorOptions executor;
   int workers = 0;              // wait for this many sampler workers before learning
   int wait_workers_ms = 10000;
-  int quiet_ms = 5000;          // after END_RUN, learn anyway if no frame came for this long
+  int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
+  int quiet_ms = 5000;          // ... and learn without them when still none came for this long
 };
 struct OptimiserResult {
   Learned learned;
   Dataset data;
-  std::int64_t missing_frames = 0;
+  std::int64_t missing_frames = 0;   // never came, even when asked for again
+  int frame_requests = 0;            // FRAME_REQUEST messages sent
   int workers = 0;
   BusBlockExecutor::Stats estep;
 };

@@ -3,6 +3,7 @@
 // that does not decode as its channel's type (garbage, another type's fingerprint, a
 // truncated packet) or that its handler rejects (InputError naming the field) is
 // counted and reported in one line, and the service carries on.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <optional>
@@ -96,12 +97,14 @@ class SequenceTracker {
   // of the publisher at a lower number).
   std::int64_t see(std::int64_t seq) {
     std::int64_t skipped = 0;
-    if (started_ && seq > last_ + 1) skipped = seq - last_ - 1;
+    if (started_ && seq > last_) {  // unsigned difference: no overflow whatever the numbers
+      const std::uint64_t step = static_cast<std::uint64_t>(seq) - static_cast<std::uint64_t>(last_);
+      skipped = static_cast<std::int64_t>(std::min<std::uint64_t>(step - 1, 1u << 30));
+    }
     started_ = true;
     last_ = seq;
     return skipped;
   }
-
  private:
   bool started_ = false;
   std::int64_t last_ = 0;
