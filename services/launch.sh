@@ -23,6 +23,7 @@ url=""
 fps=15
 max_fps=400
 kill_worker_after_blocks=""
+timeout=900
 
 usage() {
   cat <<USAGE
@@ -44,6 +45,7 @@ Runs the onion-sorting demo as separate processes over LCM and prints the learne
   --url URL              an LCM URL to use instead of a private network namespace, e.g.
                          udpm://239.255.76.67:7667?ttl=1 to include workers on other
                          machines (they run: hbirl-sampler --url URL)
+  --timeout S            give up (and fail) when there is no result after S seconds (default $timeout)
   --kill-worker-after-blocks N
                          (testing) the first worker SIGKILLs itself after computing N blocks
 USAGE
@@ -63,6 +65,7 @@ while [ $# -gt 0 ]; do
     --build) build="$2"; shift 2 ;;
     --url) url="$2"; shift 2 ;;
     --kill-worker-after-blocks) kill_worker_after_blocks="$2"; shift 2 ;;
+    --timeout) timeout="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "launch.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -87,7 +90,7 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     export HBIRL_IN_NETNS=1
     exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
       "${BASH_SOURCE[0]}" --out "$out" --workers "$workers" --config "$config" --sorts "$sorts" \
-      --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-fps "$max_fps" --build "$build" \
+      --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-fps "$max_fps" --build "$build" --timeout "$timeout" \
       $([ "$record" = 1 ] && echo --record) ${kill_worker_after_blocks:+--kill-worker-after-blocks "$kill_worker_after_blocks"}
   else
     echo "launch.sh: multicast is not routed to loopback and private network namespaces are not allowed here." >&2
@@ -134,25 +137,45 @@ start sim-driver "$build/hbirl-sim-driver" --url "$url" --config "$config" --sor
 
 
 failed=0
-# Any service that dies while the optimiser works is a failure (except a worker we killed).
-set +e
-wait "$optimiser"
-status=$?
-set -e
-if [ "$status" -ne 0 ]; then
-  echo "launch.sh: the optimiser failed (exit $status); see $out/logs/optimiser.err" >&2
-  failed=1
-fi
-for i in "${!pids[@]}"; do
-  [ "${pids[$i]}" = "$optimiser" ] && continue
-  if ! kill -0 "${pids[$i]}" 2>/dev/null; then
-    set +e; wait "${pids[$i]}"; s=$?; set -e
-    if [ "$s" -ne 0 ] && ! { [ -n "$kill_worker_after_blocks" ] && [ "${names[$i]}" = sampler-1 ]; }; then
-      echo "launch.sh: ${names[$i]} failed (exit $s); see $out/logs/${names[$i]}.log" >&2
-      failed=1
+checked=()
+# Watch everything until the optimiser is done: a service that dies with an error (except
+# a worker we asked to die) fails the run at once; so does running past --timeout.
+check_services() {
+  for i in "${!pids[@]}"; do
+    [ "${pids[$i]}" = "$optimiser" ] && continue
+    [ -n "${checked[$i]:-}" ] && continue
+    if ! kill -0 "${pids[$i]}" 2>/dev/null; then
+      checked[$i]=1
+      set +e; wait "${pids[$i]}"; s=$?; set -e
+      if [ "$s" -ne 0 ] && ! { [ -n "$kill_worker_after_blocks" ] && [ "${names[$i]}" = sampler-1 ]; }; then
+        echo "launch.sh: ${names[$i]} failed (exit $s); see $out/logs/${names[$i]}.log" >&2
+        failed=1
+      fi
     fi
+  done
+}
+deadline=$((SECONDS + timeout))
+while kill -0 "$optimiser" 2>/dev/null; do
+  check_services
+  if [ "$failed" = 1 ]; then break; fi
+  if [ "$SECONDS" -ge "$deadline" ]; then
+    echo "launch.sh: no result after $timeout s (--timeout); stopping" >&2
+    failed=1
+    break
   fi
+  sleep 0.2
 done
+if [ "$failed" = 0 ]; then
+  set +e
+  wait "$optimiser"
+  status=$?
+  set -e
+  if [ "$status" -ne 0 ]; then
+    echo "launch.sh: the optimiser failed (exit $status); see $out/logs/optimiser.err" >&2
+    failed=1
+  fi
+  check_services
+fi
 stop_all
 trap - INT TERM EXIT
 

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "learner/input_error.hpp"
 #include "services/estep_service.hpp"
@@ -54,7 +55,7 @@ int sim_driver(int argc, char** argv) {
   add_common(app, c);
   SimDriverOptions o;
   std::string config = "all";
-  double delay = 1.0;
+  double delay = 10.0;
   app.add_option("--config,-c", config, "Scene: all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
   app.add_option("--controlled-sorts", o.controlled_sorts, "Sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
@@ -65,7 +66,8 @@ int sim_driver(int argc, char** argv) {
   app.add_option("--max-frames-per-second", o.max_frames_per_second, "Pacing in wall-clock frames per second (0: none)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
-  app.add_option("--start-delay", delay, "Seconds to wait before publishing, for the other services to subscribe")
+  app.add_option("--start-delay", delay,
+                 "At most this many seconds to wait for perception, labeller and optimiser to be listening")
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -79,11 +81,21 @@ int sim_driver(int argc, char** argv) {
   counters.service = "sim_driver";
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
+  // Wait until the services downstream listen (their first heartbeat), at most --start-delay.
+  std::set<std::string> waiting = {"perception", "labeller", "optimiser"};
+  subscribe<hbirl::service_status_t>(*bus, channels::kStatus, counters, [&waiting](const hbirl::service_status_t& s, const Message&) {
+    waiting.erase(s.service);
+  }, 1000);
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                             std::chrono::duration<double>(delay));
-  while (std::chrono::steady_clock::now() < until && !stop_requested()) {
+  while (!waiting.empty() && std::chrono::steady_clock::now() < until && !stop_requested()) {
     bus->handle(50);
     heartbeat.tick("starting");
+  }
+  if (!waiting.empty()) {
+    std::string names;
+    for (const auto& w : waiting) names += " " + w;
+    std::fprintf(stderr, "hbirl-sim-driver: starting without hearing from:%s\n", names.c_str());
   }
   SimDriver driver(*bus, o, counters);
   const bool finished = driver.publish_run(stop_requested, [&] {
@@ -98,9 +110,14 @@ int sim_driver(int argc, char** argv) {
   subscribe<hbirl::reward_t>(*bus, channels::kReward, counters, [&learned](const hbirl::reward_t& r, const Message&) {
     learned = learned || r.final;
   });
+  auto next_markers = std::chrono::steady_clock::now() + std::chrono::seconds(1);
   while (finished && !learned && !stop_requested()) {
     bus->handle(100);
     heartbeat.tick("serving lost frames");
+    if (std::chrono::steady_clock::now() >= next_markers) {  // in case the end markers were lost
+      driver.republish_end_markers();
+      next_markers = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    }
   }
   heartbeat.tick(finished ? "done" : "stopped", true);
   std::fprintf(stderr, "hbirl-sim-driver: done; %lld frames sent again on request, %lld bad messages\n",
@@ -198,10 +215,9 @@ int optimiser(int argc, char** argv) {
   Counters counters;
   counters.service = "optimiser";
   Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
-  heartbeat.tick("starting", true);
-  const auto result = run_optimiser(*bus, o, counters, stop_requested, [](const std::string& s) {
-    std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str());
-  });
+  const auto result = run_optimiser(
+      *bus, o, counters, stop_requested, [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
+      [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start
   if (!result) {
     heartbeat.tick("stopped", true);
     std::fprintf(stderr, "hbirl-optimiser: stopped before learning; %lld messages in, %lld bad, %lld gaps\n",

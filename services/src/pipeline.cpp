@@ -112,7 +112,8 @@ void SimDriver::on_request(const hbirl::frame_request_t& m) {
 
 bool SimDriver::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
   const SimDriverOptions& o = options_;
-  std::int64_t marker_seq = 0, truth_seq = 0;
+  std::int64_t& marker_seq = marker_seq_;
+  std::int64_t truth_seq = 0;
   const auto started = Clock::now();
   std::int64_t frames_sent = 0;
   const int fps = o.scene.frames_per_step();
@@ -149,16 +150,25 @@ bool SimDriver::publish_run(const std::function<bool()>& stop, const std::functi
         }
       }
     }
-    m = marker(micros(e.start_time + static_cast<double>(e.steps.size()) * o.scene.step_seconds), ++marker_seq, id, is_controlled,
-               hbirl::episode_marker_t::END_EPISODE);
-    m.num_steps = static_cast<std::int32_t>(e.steps.size());
-    m.ends_in_terminal = true;  // a sort ends with the release
-    m.frames_per_step = fps;
-    publish(bus_, channels::kEpisode, m, counters_);
+    publish(bus_, channels::kEpisode, end_marker(id), counters_);
   }
-  auto last = marker(0, ++marker_seq, 0, false, hbirl::episode_marker_t::END_RUN);
-  publish(bus_, channels::kEpisode, last, counters_);
+  publish(bus_, channels::kEpisode, marker(0, ++marker_seq_, 0, false, hbirl::episode_marker_t::END_RUN), counters_);
   return true;
+}
+
+hbirl::episode_marker_t SimDriver::end_marker(int id) {
+  const onion::Episode& e = plan_->episodes[static_cast<size_t>(id)];
+  auto m = marker(micros(e.start_time + static_cast<double>(e.steps.size()) * options_.scene.step_seconds), ++marker_seq_, id,
+                  id < plan_->controlled, hbirl::episode_marker_t::END_EPISODE);
+  m.num_steps = static_cast<std::int32_t>(e.steps.size());
+  m.ends_in_terminal = true;  // a sort ends with the release
+  m.frames_per_step = options_.scene.frames_per_step();
+  return m;
+}
+
+void SimDriver::republish_end_markers() {
+  for (int id = 0; id < static_cast<int>(plan_->episodes.size()); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
+  publish(bus_, channels::kEpisode, marker(0, ++marker_seq_, 0, false, hbirl::episode_marker_t::END_RUN), counters_);
 }
 
 bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, const std::function<bool()>& stop,
@@ -265,9 +275,11 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
 
 std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
                                              const std::function<bool()>& stop,
-                                             const std::function<void(const std::string&)>& log) {
+                                             const std::function<void(const std::string&)>& log,
+                                             const std::function<void()>& ready) {
   DatasetBuilder builder;
   builder.subscribe(bus, counters);
+  if (ready) ready();
   const auto say = [&log](const std::string& s) {
     if (log) log(s);
   };

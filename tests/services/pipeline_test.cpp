@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <future>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
@@ -63,12 +64,16 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
     WorkerThread w1(hub, mdp, "sampler-1"), w2(hub, mdp, "sampler-2");
     MemoryBus sim_bus(hub);
     Counters sim_counters = quiet("sim_driver");
-    std::thread sim([&] { run_sim_driver(sim_bus, run, sim_counters, nullptr); });
+    std::promise<void> listening;
+    std::thread sim([&] {
+      listening.get_future().wait();  // the optimiser must hear the run from its first message
+      run_sim_driver(sim_bus, run, sim_counters, nullptr);
+    });
     MemoryBus opt_bus(hub);
     Counters opt_counters = quiet("optimiser");
     OptimiserOptions options;
     options.workers = 2;
-    live = run_optimiser(opt_bus, options, opt_counters, nullptr);
+    live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
     sim.join();
     stop_recorder = true;
     recorder.join();
@@ -133,7 +138,9 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   Counters sim_counters = quiet("sim_driver");
   SimDriver driver(sim_bus, run, sim_counters);
   std::atomic<bool> done{false};
+  std::promise<void> listening;
   std::thread sim([&] {
+    listening.get_future().wait();
     driver.publish_run(nullptr);
     while (!done) sim_bus.handle(20);  // serving FRAME_REQUEST
   });
@@ -141,7 +148,7 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   Counters opt_counters = quiet("optimiser");
   OptimiserOptions options;
   options.resend_after_ms = 200;
-  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr);
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
   done = true;
   sim.join();
   ASSERT_TRUE(live.has_value());
@@ -159,7 +166,9 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.seed + 1);
   for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.scene.step_seconds;
   EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.scene, demo_sorts, run.seed).observed));
-  EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed));
+  EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed))
+      << live->data.controlled_observed.size() << " controlled episodes (" << live->data.skipped_controlled << " left out) vs "
+      << c.observed.size();
 }
 
 // Corrupt inputs to the services: counted, and the services keep going.

@@ -47,9 +47,14 @@ class SimDriver {
   // Returns false if asked to stop first. `idle` runs after every frame.
   bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
   std::int64_t frames_resent() const { return resent_; }
+  // Publishes every END_EPISODE marker and END_RUN again (receivers take repeats as one):
+  // the learner must not wait forever for an end marker lost on the way.
+  void republish_end_markers();
 
  private:
   struct Plan;
+  hbirl::episode_marker_t end_marker(int episode);
+  std::int64_t marker_seq_ = 0;
   void publish_frame(int episode, int step, int frame);
   void on_request(const hbirl::frame_request_t& m);
   Bus& bus_;
@@ -111,9 +116,11 @@ struct OptimiserResult {
 };
 // Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
 // to stop first.
+// `ready` is called once it listens (so a simulator may start).
 std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
                                              const std::function<bool()>& stop,
-                                             const std::function<void(const std::string&)>& log = nullptr);
+                                             const std::function<void(const std::string&)>& log = nullptr,
+                                             const std::function<void()>& ready = nullptr);
 
 // Learns offline from a recorded log (hbirl learn --log): the same data set and the same
 // learning as the live optimiser, computed here. Throws InputError for unusable logs.
