@@ -16,8 +16,11 @@ ctest --test-dir build --output-on-failure -j"$jobs"
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
       -DHBIRL_WERROR=ON -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
 cmake --build build-sanitize -j"$jobs"
-# The multi-process tests (label multiprocess: whole service sets over LCM in network
-# namespaces) run in the Release build only; the same service code runs under the
-# sanitizers in the in-process tests.
+# Run in the Release build only: the multi-process tests (label multiprocess: whole
+# service sets over LCM in network namespaces; the same service code runs under the
+# sanitizers in the in-process tests), and four statistics-heavy tests that take seconds
+# in Release and minutes under the sanitizers (the E-step, EM and the experiment runners
+# they drive run under the sanitizers in the other tests).
+heavy='^(HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate)$'
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -LE multiprocess
+  ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"

@@ -82,7 +82,12 @@ int run_learn_from_log(const LearnArgs& args) {
   const services::OptimiserResult r = services::learn_from_log(args.log, options, counters);
   nlohmann::ordered_json out;
   out["log"] = args.log;
+  out["domain"] = r.data.domain;
+  out["feature_names"] = services::domain_feature_names(r.data.domain);
   out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
+  if (r.data.true_weights) {
+    out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
+  }
   if (r.learned.ile) out["ile"] = *r.learned.ile;
   out["log_likelihood"] = r.learned.log_likelihood;
   out["em_iterations"] = r.learned.em_iterations;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Starts hbirl's onion service set -- simulator, perception, labeller, sampler workers,
-# optimiser -- waits for the optimiser to learn, prints the learned reward and shuts
+# Starts hbirl's service set -- simulator, perception and labeller (onion), sampler
+# workers, optimiser -- waits for the optimiser to learn, prints the learned reward and shuts
 # everything down (also on Ctrl-C). Exits non-zero if any service failed.
 #
 # LCM talks UDP multicast. Where multicast to loopback is not routed (the usual case in
@@ -13,6 +13,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(dirname "$here")"
 build="$repo/build"
 workers=2
+domain=onion
+confounders=3
+trajectories=20
+eta=plausible
 config=all
 sorts=6
 controlled_sorts=20
@@ -29,15 +33,25 @@ usage() {
   cat <<USAGE
 usage: services/launch.sh [options]
 
-Runs the onion-sorting demo as separate processes over LCM and prints the learned reward.
+Runs a demo as separate processes over LCM and prints the learned reward.
+  --domain D             onion (camera frames -> perception -> labeller -> learner) or
+                         gridworld (the paper's 5x5 Gridworld; its simulator publishes the
+                         observations itself) (default $domain)
   --workers N            sampler workers (default $workers)
+  --seed S               seed of the run (default $seed)
+ onion:
   --config C             demonstrations' scene: all, controlled, or a list of
                          blue-shirt, other-onions, foreground, mirror (default $config)
   --sorts N              demonstrated sorts (default $sorts)
   --controlled-sorts N   sorts in the controlled run that gives the subject prior ($controlled_sorts)
-  --seed S               seed of the sorts and the scene (default $seed)
   --fps F                camera frames per simulated second (default $fps)
-  --max-fps F            pacing of the camera, frames per wall-clock second (default $max_fps)
+  --max-fps F            pacing of the camera, frames per wall-clock second (default $max_fps;
+                         gridworld: steps per second)
+ gridworld:
+  --confounders N        confounding elements |E| (default $confounders)
+  --trajectories N       demonstrations (default $trajectories)
+  --eta K                plausible or uniform (default $eta)
+ both:
   --record               record every message with lcm-logger to OUT/run.lcmlog
                          (replay: build/hbirl learn --log OUT/run.lcmlog)
   --out DIR              where logs and results go (default runs/<date-time>)
@@ -54,6 +68,10 @@ USAGE
 while [ $# -gt 0 ]; do
   case "$1" in
     --workers) workers="$2"; shift 2 ;;
+    --domain) domain="$2"; shift 2 ;;
+    --confounders) confounders="$2"; shift 2 ;;
+    --trajectories) trajectories="$2"; shift 2 ;;
+    --eta) eta="$2"; shift 2 ;;
     --config) config="$2"; shift 2 ;;
     --sorts) sorts="$2"; shift 2 ;;
     --controlled-sorts) controlled_sorts="$2"; shift 2 ;;
@@ -71,6 +89,10 @@ while [ $# -gt 0 ]; do
   esac
 done
 
+case "$domain" in
+  onion|gridworld) ;;
+  *) echo "launch.sh: --domain must be onion or gridworld, not '$domain'" >&2; exit 2 ;;
+esac
 bin="$build/hbirl-services"
 if [ ! -x "$bin" ]; then
   echo "launch.sh: $bin not found: build first (cmake -S . -B build && cmake --build build -j)" >&2
@@ -89,7 +111,8 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     echo "           (unshare -rn; lo up; ip route add 224.0.0.0/4 dev lo)"
     export HBIRL_IN_NETNS=1
     exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-      "${BASH_SOURCE[0]}" --out "$out" --workers "$workers" --config "$config" --sorts "$sorts" \
+      "${BASH_SOURCE[0]}" --out "$out" --domain "$domain" --confounders "$confounders" --trajectories "$trajectories" \
+      --eta "$eta" --workers "$workers" --config "$config" --sorts "$sorts" \
       --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-fps "$max_fps" --build "$build" --timeout "$timeout" \
       $([ "$record" = 1 ] && echo --record) ${kill_worker_after_blocks:+--kill-worker-after-blocks "$kill_worker_after_blocks"}
   else
@@ -121,19 +144,27 @@ if [ "$record" = 1 ]; then
 fi
 for i in $(seq 1 "$workers"); do
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" --kill-self-after-blocks "$kill_worker_after_blocks"
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --domain "$domain" --id "sampler-$i" \
+      --kill-self-after-blocks "$kill_worker_after_blocks"
   else
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i"
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --domain "$domain" --id "sampler-$i"
   fi
 done
-start labeller "$build/hbirl-labeller" --url "$url"
-start perception "$build/hbirl-perception" --url "$url"
+if [ "$domain" = onion ]; then
+  start labeller "$build/hbirl-labeller" --url "$url"
+  start perception "$build/hbirl-perception" --url "$url"
+fi
 "$build/hbirl-optimiser" --url "$url" --workers "$workers" --out "$out/result.json" >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
 optimiser=$!
 pids+=("$optimiser")
 names+=(optimiser)
-start sim-driver "$build/hbirl-sim-driver" --url "$url" --config "$config" --sorts "$sorts" \
-  --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-frames-per-second "$max_fps"
+if [ "$domain" = onion ]; then
+  start sim-driver "$build/hbirl-sim-driver" --url "$url" --domain onion --config "$config" --sorts "$sorts" \
+    --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-frames-per-second "$max_fps"
+else
+  start sim-driver "$build/hbirl-sim-driver" --url "$url" --domain gridworld --confounders "$confounders" \
+    --trajectories "$trajectories" --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
+fi
 
 
 failed=0

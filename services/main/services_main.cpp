@@ -48,27 +48,45 @@ int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
 }
 
 int sim_driver(int argc, char** argv) {
-  CLI::App app("hbirl-sim-driver: the onion-sorting simulator and its camera. Publishes a controlled run (no\n"
-               "confounders, true states: the subject prior), then the demonstrations in the chosen scene, as\n"
-               "EPISODE markers, GROUND_TRUTH and CAMERA frames (PNG); exits after END_RUN.");
+  CLI::App app("hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
+               "the subject prior), then the demonstrations, as EPISODE markers and GROUND_TRUTH, and\n"
+               "  onion:     CAMERA frames (PNG) of the onion-sorting scene, for perception and the labeller;\n"
+               "  gridworld: the paper's 5x5 Gridworld, whose simulated sensor publishes OBSERVATIONS with\n"
+               "             their eta itself (no perception or labeller needed).\n"
+               "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
   Common c;
   add_common(app, c);
   SimDriverOptions o;
   std::string config = "all";
+  std::string eta = "plausible";
   double delay = 10.0;
-  app.add_option("--config,-c", config, "Scene: all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
+  app.add_option("--domain", o.domain, "onion or gridworld")->check(CLI::IsMember({"onion", "gridworld"}))->capture_default_str();
+  app.add_option("--seed", o.seed, "Seed of the run (onion: sorts and scene; gridworld: goal, trajectories, observations)")
       ->capture_default_str();
-  app.add_option("--controlled-sorts", o.controlled_sorts, "Sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--sorts", o.sorts, "Demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--seed", o.seed, "Seed of the sorts and the scene")->capture_default_str();
-  app.add_option("--width", o.scene.width, "Frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
-  app.add_option("--fps", o.scene.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
-  app.add_option("--max-frames-per-second", o.max_frames_per_second, "Pacing in wall-clock frames per second (0: none)")
+  app.add_option("--max-frames-per-second", o.max_frames_per_second,
+                 "Pacing in wall-clock frames (gridworld: steps) per second (0: none)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
-  app.add_option("--start-delay", delay,
-                 "At most this many seconds to wait for perception, labeller and optimiser to be listening")
+  app.add_option("--start-delay", delay, "At most this many seconds to wait for the services downstream to be listening")
       ->check(CLI::Range(0.0, 600.0))
+      ->capture_default_str();
+  app.add_option("--config,-c", config, "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
+      ->capture_default_str();
+  app.add_option("--controlled-sorts", o.controlled_sorts, "onion: sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--sorts", o.sorts, "onion: demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--width", o.scene.width, "onion: frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
+  app.add_option("--fps", o.scene.fps, "onion: frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  app.add_option("--confounders", o.gridworld.confounders, "gridworld: confounding elements |E|")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  app.add_option("--per-step", o.gridworld.per_step, "gridworld: observations per step")->check(CLI::Range(0, 100000))->capture_default_str();
+  app.add_option("--trajectories", o.gridworld.trajectories, "gridworld: demonstrations")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--controlled-trajectories", o.gridworld.controlled_trajectories, "gridworld: trajectories of the controlled run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--length", o.gridworld.length, "gridworld: steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--eta", eta, "gridworld: the observations' eta, plausible or uniform")
+      ->check(CLI::IsMember({"plausible", "uniform"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const onion::SceneConfig elements = onion::SceneConfig::parse(config, "--config");
@@ -76,13 +94,16 @@ int sim_driver(int argc, char** argv) {
   o.scene.other_onions = elements.other_onions;
   o.scene.foreground_person = elements.foreground_person;
   o.scene.mirror = elements.mirror;
+  o.gridworld.eta = eta == "uniform" ? EtaKind::kUniform : EtaKind::kPlausible;
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sim_driver";
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
+  SimDriver driver(*bus, o, counters);
   // Wait until the services downstream listen (their first heartbeat), at most --start-delay.
-  std::set<std::string> waiting = {"perception", "labeller", "optimiser"};
+  std::set<std::string> waiting;
+  for (const auto& l : driver.listeners()) waiting.insert(l);
   subscribe<hbirl::service_status_t>(*bus, channels::kStatus, counters, [&waiting](const hbirl::service_status_t& s, const Message&) {
     waiting.erase(s.service);
   }, 1000);
@@ -97,7 +118,6 @@ int sim_driver(int argc, char** argv) {
     for (const auto& w : waiting) names += " " + w;
     std::fprintf(stderr, "hbirl-sim-driver: starting without hearing from:%s\n", names.c_str());
   }
-  SimDriver driver(*bus, o, counters);
   const bool finished = driver.publish_run(stop_requested, [&] {
     bus->handle(0);
     heartbeat.tick("running");
@@ -162,7 +182,9 @@ int sampler(int argc, char** argv) {
   add_common(app, c);
   std::string domain = "onion";
   std::int64_t die_after = -1;
-  app.add_option("--domain", domain, "Domain of the trajectories")->capture_default_str();
+  app.add_option("--domain", domain, "Domain of the trajectories: onion or gridworld")
+      ->check(CLI::IsMember({"onion", "gridworld"}))
+      ->capture_default_str();
   app.add_option("--kill-self-after-blocks", die_after,
                  "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
   CLI11_PARSE(app, argc, argv);
@@ -207,6 +229,9 @@ int optimiser(int argc, char** argv) {
   app.add_option("--quiet-ms", o.quiet_ms, "After the end of the run, learn anyway once no frame has come for this long")
       ->check(CLI::Range(1, 3600000))
       ->capture_default_str();
+  app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
+               "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
+               "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
   app.add_option("--c", o.learning.c, "Rate of the observation-model refinement")->check(CLI::Range(1e-6, 1.0))->capture_default_str();
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
   app.add_option("--out", out, "Also write the result JSON to this file");
@@ -220,14 +245,16 @@ int optimiser(int argc, char** argv) {
       [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start
   if (!result) {
     heartbeat.tick("stopped", true);
-    std::fprintf(stderr, "hbirl-optimiser: stopped before learning; %lld messages in, %lld bad, %lld gaps\n",
+    std::fprintf(stderr, "hbirl-optimiser: stopped before the end of learning; %lld messages in, %lld bad, %lld gaps\n",
                  static_cast<long long>(counters.messages_in), static_cast<long long>(counters.bad_messages),
                  static_cast<long long>(counters.gaps));
     return 1;
   }
   nlohmann::json j;
   j["theta"] = std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
-  j["feature_names"] = onion::feature_names();
+  j["domain"] = result->data.domain;
+  j["feature_names"] = domain_feature_names(result->data.domain);
+  if (const auto& w = result->data.true_weights) j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
   if (result->learned.ile) j["ile"] = *result->learned.ile;
   j["log_likelihood"] = result->learned.log_likelihood;
   j["em_iterations"] = result->learned.em_iterations;
@@ -240,6 +267,7 @@ int optimiser(int argc, char** argv) {
   j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
                 {"local_blocks", result->estep.local_blocks}, {"retried_blocks", result->estep.retried_blocks},
                 {"stale", result->estep.stale},               {"duplicates", result->estep.duplicates},
+                {"workers_with_other_numerics", result->estep.other_numerics},
                 {"round_trip_seconds", result->estep.round_trip_s}};
   j["bad_messages"] = counters.bad_messages;
   j["gaps"] = counters.gaps;

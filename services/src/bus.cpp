@@ -52,4 +52,8 @@ void Counters::bad(const std::string& channel, const std::string& why) {
   }
 }
 
+void Counters::note(const std::string& what) const {
+  if (!quiet) std::fprintf(stderr, "%s: %s\n", service.empty() ? "hbirl" : service.c_str(), what.c_str());
+}
+
 }  // namespace hbirl::services

@@ -10,17 +10,18 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   counters_ = &counters;
   // A whole run's messages may be waiting when a replay starts or a slow learner catches up.
   constexpr int kQueue = 1 << 20;
-  services::subscribe<hbirl::episode_marker_t>(bus, channels::kEpisode, counters,
-                                               [this](const auto& m, const Message&) { on_marker(m); }, kQueue);
-  services::subscribe<hbirl::observations_t>(bus, channels::kObservations, counters,
-                                             [this](const auto& m, const Message&) { on_observations(m); }, kQueue);
-  services::subscribe<hbirl::ground_truth_t>(bus, channels::kGroundTruth, counters,
-                                             [this](const auto& m, const Message&) { on_truth(m); }, kQueue);
+  subs_.add(bus, services::subscribe<hbirl::episode_marker_t>(bus, channels::kEpisode, counters,
+                                                              [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::observations_t>(bus, channels::kObservations, counters,
+                                                            [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::ground_truth_t>(bus, channels::kGroundTruth, counters,
+                                                            [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
 }
 
 namespace {
 constexpr int kMaxSteps = 100000;         // per episode
 constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
+constexpr int kMaxFeatures = 100000;
 }  // namespace
 
 DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
@@ -101,7 +102,25 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
 void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (counters_) counters_->gaps += truth_seq_.see(m.seq);
   if (m.step < 0 || m.state < 0 || m.action < 0) throw InputError("ground_truth.step", "step, state and action must be >= 0");
+  if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
+  if (!domain_.empty() && m.domain != domain_) throw InputError("ground_truth.domain", "is " + m.domain + ", the run's " + domain_);
+  if (m.num_features < 0 || m.num_features > kMaxFeatures) {
+    throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
+  }
   episode(m.episode).truth[m.step] = {m.state, m.action};
+  // The expert's weights are for the ILE only: weights that disagree with earlier ones
+  // leave the ILE unknown; the steps above are kept either way.
+  if (m.num_features > 0 && !weights_conflict_) {
+    Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(m.true_weights.data(), m.num_features);
+    if (!w.allFinite()) throw InputError("ground_truth.true_weights", "must be finite");
+    if (true_weights_ && (true_weights_->size() != w.size() || *true_weights_ != w)) {
+      weights_conflict_ = true;
+      true_weights_.reset();
+      if (counters_) counters_->note("ground_truth.true_weights changed mid-run: no ILE for this run");
+      return;
+    }
+    true_weights_ = std::move(w);
+  }
 }
 
 std::int64_t DatasetBuilder::missing_frames() const {
@@ -143,6 +162,7 @@ Dataset DatasetBuilder::build() const {
   d.num_symbols = num_symbols_;
   d.num_sources = num_sources_;
   d.last_utime = last_utime_;
+  d.true_weights = true_weights_;
   for (const auto& [id, e] : episodes_) {
     if (!e.ended) continue;
     ObservedTrajectory t;

@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "learner/input_error.hpp"
+#include "learner/soft_value_iteration.hpp"
+#include "sim_driver/gridworld_observations.hpp"
 
 namespace hbirl::services {
 
@@ -20,6 +22,39 @@ bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
 std::int64_t wall_utime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+std::uint64_t numerics_fingerprint() {
+  static const std::uint64_t fingerprint = [] {
+    Rng rng(20211);
+    const GridworldTask task = make_gridworld_task({}, 3, 6, rng);
+    const Eigen::MatrixXd subject = gridworld_subject_observation_model(5, 1.0);
+    GridworldObservationOptions observe;
+    observe.confounders = 2;
+    observe.per_step = 5;
+    const std::vector<ObservedTrajectory> observed =
+        observe_gridworld(task.mdp, task.trajectories, subject, random_confounder_observation_model(2, rng), observe, rng).trajectories;
+    ObservationPrior prior;
+    prior.num_symbols = 4;
+    prior.num_confounders = 2;
+    prior.subject_alpha = subject.array() * 3.0 + 0.5;
+    prior.confounder_alpha = Eigen::MatrixXd::Ones(2, 4);
+    const ObservationEStep estep(task.mdp, observed, prior, {});
+    const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(Eigen::Vector4d(0.3, -0.2, 0.1, 1.0)));
+    const EStepStatistics stats = estep.block_statistics(policy, dirichlet_mean(prior), 1, {0}).front();
+    std::uint64_t h = 14695981039346656037ull;  // FNV-1a over the bits of every result
+    const auto mix = [&h](const double* x, Eigen::Index n) {
+      const auto* bytes = reinterpret_cast<const unsigned char*>(x);
+      for (size_t i = 0; i < static_cast<size_t>(n) * sizeof(double); ++i) h = (h ^ bytes[i]) * 1099511628211ull;
+    };
+    mix(policy.log_policy.data(), policy.log_policy.size());
+    mix(stats.counts.data(), stats.counts.size());
+    mix(stats.alpha_dot.subject.data(), stats.alpha_dot.subject.size());
+    mix(stats.alpha_dot.confounders.data(), stats.alpha_dot.confounders.size());
+    mix(&stats.log_likelihood, 1);
+    return h;
+  }();
+  return fingerprint;
 }
 
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest) {
@@ -83,10 +118,10 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
 SamplerWorker::SamplerWorker(Bus& bus, const Mdp& mdp, std::string id, Counters& counters)
     : bus_(bus), mdp_(mdp), id_(std::move(id)), counters_(counters) {
   // A whole data set may arrive between two handle() calls; only the newest requests matter.
-  subscribe<hbirl::trajectory_t>(bus_, channels::kTrajectory, counters_,
-                                 [this](const hbirl::trajectory_t& m, const Message&) { on_trajectory(m); }, 100000);
-  subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
-                                    [this](const hbirl::estep_request_t& m, const Message&) { on_request(m); }, 8);
+  subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::kTrajectory, counters_,
+                                                 [this](const hbirl::trajectory_t& m, const Message&) { on_trajectory(m); }, 100000));
+  subs_.add(bus_, subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
+                                                    [this](const hbirl::estep_request_t& m, const Message&) { on_request(m); }, 8));
 }
 
 int SamplerWorker::handle(int timeout_ms) {
@@ -110,6 +145,7 @@ void SamplerWorker::publish_status() {
   s.gaps = counters_.gaps;
   s.trajectories = static_cast<std::int32_t>(trajectories_.size());
   s.dataset_digest = static_cast<std::int64_t>(digest_);
+  s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
   s.detail = counters_.last_problem;
   publish(bus_, channels::kStatus, s, counters_);
 }
@@ -238,11 +274,12 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dat
   std::vector<ObservedTrajectory> merged;
   for (const auto& t : dataset_) merged.push_back(merge_identical_observations(t));
   merged_digest_ = dataset_digest(merged);
-  subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
-                                     [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000);
+  numerics_ = numerics_fingerprint();
+  subs_.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+                                                     [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000));
   // Every block of a pass may arrive between two handle() calls.
-  subscribe<hbirl::estep_result_t>(bus_, channels::kEStepResult, counters_,
-                                   [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000);
+  subs_.add(bus_, subscribe<hbirl::estep_result_t>(bus_, channels::kEStepResult, counters_,
+                                                   [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000));
 }
 
 void BusBlockExecutor::publish_dataset() const {
@@ -258,6 +295,14 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   w.digest = static_cast<std::uint64_t>(m.dataset_digest);
   w.trajectories = m.trajectories;
   w.last_seen = Clock::now();
+  const auto numerics = static_cast<std::uint64_t>(m.numerics);
+  if (numerics != numerics_ && other_numerics_.insert(m.id).second) {
+    ++stats_.other_numerics;
+    counters_.note("sampler " + m.id + " computes with other numerics (fingerprint " + std::to_string(numerics) + ", here " +
+                   std::to_string(numerics_) + ")" +
+                   (options_.same_numerics_only ? ": it gets no work" : ": theta may differ from a one-process run in the last bits"));
+  }
+  w.numerics = numerics;
   // A worker without our data set: send it (not more than twice a second).
   if (w.digest != digest_ && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
 }
@@ -310,7 +355,7 @@ std::vector<std::string> BusBlockExecutor::live_workers() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
   for (const auto& [id, w] : workers_) {
-    if (w.digest == digest_ && !w.suspect &&
+    if (w.digest == digest_ && !w.suspect && (!options_.same_numerics_only || w.numerics == numerics_) &&
         std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
       out.push_back(id);
     }
@@ -323,6 +368,7 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
   publish_dataset();
   const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
   while (static_cast<int>(live_workers().size()) < count && Clock::now() < deadline) {
+    if (options_.stop && options_.stop()) break;
     if (bus_.handle(20) < 0) break;
   }
   return static_cast<int>(live_workers().size());
@@ -336,6 +382,7 @@ BusBlockExecutor::Stats BusBlockExecutor::stats() const {
 std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep, const SoftSolution& policy,
                                                    const ObservationModel& model, std::uint64_t seed) const {
   const std::lock_guard<std::recursive_mutex> lock(mutex_);
+  if (options_.stop && options_.stop()) throw Stopped();
   const auto start = Clock::now();
   // First what came while the optimiser was busy elsewhere (heartbeats above all: who is
   // live is decided from them). Bounded, so a flood cannot hold the pass up.
@@ -407,6 +454,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     publish(bus_, channels::kEStepRequest, request, counters_);
     const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
     while (!missing().empty() && Clock::now() < deadline) {
+      if (options_.stop && options_.stop()) throw Stopped();
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
       if (bus_.handle(static_cast<int>(std::clamp<long long>(left, 0, 50))) < 0) break;
     }

@@ -31,11 +31,25 @@ extern "C" void on_lcm_message(const lcm_recv_buf_t* buffer, const char* channel
 }
 }  // namespace
 
-void LcmBus::subscribe(const std::string& channel, RawHandler handler, int queue_capacity) {
-  subscribers_.push_back(Subscriber{std::move(handler)});
-  lcm_subscription_t* s = lcm_subscribe(lcm_.getUnderlyingLCM(), channel.c_str(), on_lcm_message, &subscribers_.back().handler);
-  if (!s) throw InputError("channel", "LCM could not subscribe to '" + channel + "'");
-  if (queue_capacity > 0) lcm_subscription_set_queue_capacity(s, queue_capacity);
+SubscriptionId LcmBus::subscribe(const std::string& channel, RawHandler handler, int queue_capacity) {
+  subscribers_.push_back(Subscriber{next_id_++, std::move(handler)});
+  Subscriber& added = subscribers_.back();
+  added.lcm = lcm_subscribe(lcm_.getUnderlyingLCM(), channel.c_str(), on_lcm_message, &added.handler);
+  if (!added.lcm) {
+    subscribers_.pop_back();
+    throw InputError("channel", "LCM could not subscribe to '" + channel + "'");
+  }
+  if (queue_capacity > 0) lcm_subscription_set_queue_capacity(added.lcm, queue_capacity);
+  return added.id;
+}
+
+void LcmBus::unsubscribe(SubscriptionId id) {
+  for (auto it = subscribers_.begin(); it != subscribers_.end(); ++it) {
+    if (it->id != id) continue;
+    lcm_unsubscribe(lcm_.getUnderlyingLCM(), it->lcm);
+    subscribers_.erase(it);
+    return;
+  }
 }
 
 int LcmBus::handle(int timeout_ms) {

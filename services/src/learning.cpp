@@ -3,37 +3,68 @@
 #include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "sim_driver/gridworld.hpp"
 #include "sim_driver/onion.hpp"
 
 namespace hbirl::services {
 
+namespace {
+[[noreturn]] void unknown_domain(const std::string& domain) {
+  throw InputError("domain", "'" + domain + "' is not a domain hbirl's services know (onion, gridworld)");
+}
+}  // namespace
+
 Mdp domain_mdp(const std::string& domain) {
   if (domain == "onion") return onion::make_onion_mdp();
-  throw InputError("domain", "'" + domain + "' is not a domain hbirl's services know (onion)");
+  if (domain == "gridworld") return make_gridworld();
+  unknown_domain(domain);
 }
 
-std::optional<Eigen::VectorXd> domain_true_weights(const std::string& domain) {
-  if (domain == "onion") return onion::expert_weights();
-  return std::nullopt;
+std::vector<std::string> domain_feature_names(const std::string& domain) {
+  if (domain == "onion") return onion::feature_names();
+  if (domain == "gridworld") return gridworld_feature_names();
+  unknown_domain(domain);
+}
+
+Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
+                              const std::vector<ObservedTrajectory>& observed, int num_symbols) {
+  if (truth.size() != observed.size()) throw InputError("ground_truth", "not one trajectory of true steps per controlled episode");
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (static_cast<int>(truth[i].size()) != observed[i].length()) throw InputError("ground_truth", "steps differ from the episode's");
+    for (const auto& x : truth[i]) {
+      if (x.state >= mdp.num_states || x.action >= mdp.num_actions) throw InputError("ground_truth", "state or action outside the domain");
+    }
+  }
+  if (domain == "onion") {
+    onion::OnionDemonstration controlled;
+    controlled.truth = truth;
+    controlled.observed = observed;
+    Eigen::MatrixXd alpha = onion::controlled_prior(mdp, controlled);
+    if (alpha.cols() != num_symbols) throw InputError("observations.num_symbols", "differs from the domain's");
+    return alpha;
+  }
+  if (domain != "gridworld") unknown_domain(domain);
+  Eigen::MatrixXd alpha = Eigen::MatrixXd::Ones(mdp.num_pairs(), num_symbols);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    const ObservedTrajectory& o = observed[i];
+    for (int t = 0; t < o.length(); ++t) {
+      const StateAction& x = truth[i][static_cast<size_t>(t)];
+      for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        alpha(mdp.pair(x.state, x.action), o.symbols[static_cast<size_t>(n)]) += o.weight(n);
+      }
+    }
+  }
+  return alpha;
 }
 
 Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOptions& options,
                            std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
   if (data.observed.empty()) throw InputError("demonstrations", "none received");
   if (data.controlled_observed.empty()) throw InputError("controlled run", "no controlled episodes: no subject prior");
-  onion::OnionDemonstration controlled;
-  controlled.truth = data.controlled_truth;
-  controlled.observed = data.controlled_observed;
-  for (const auto& t : data.controlled_truth) {
-    for (const auto& x : t) {
-      if (x.state >= mdp.num_states || x.action >= mdp.num_actions) throw InputError("ground_truth", "state or action outside the domain");
-    }
-  }
   ObservationPrior prior;
   prior.num_symbols = data.num_symbols;
   prior.num_confounders = data.num_sources - 1;
-  prior.subject_alpha = onion::controlled_prior(mdp, controlled);
-  if (prior.subject_alpha.cols() != data.num_symbols) throw InputError("observations.num_symbols", "differs from the domain's");
+  prior.subject_alpha = subject_prior(data.domain, mdp, data.controlled_truth, data.controlled_observed, data.num_symbols);
   prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
   prior.c = options.c;
   ObservationEStepOptions estep_options;
@@ -58,7 +89,9 @@ Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOp
   out.em_iterations = result.restarts[static_cast<size_t>(result.selected_restart)].em_iterations;
   out.trajectories = static_cast<int>(data.observed.size());
   out.digest = dataset_digest(data.observed);
-  if (const auto truth = domain_true_weights(data.domain)) out.ile = inverse_learning_error(mdp, *truth, out.theta).ile;
+  if (data.true_weights && data.true_weights->size() == mdp.num_features()) {  // else: no ILE
+    out.ile = inverse_learning_error(mdp, *data.true_weights, out.theta).ile;
+  }
   return out;
 }
 

@@ -22,8 +22,13 @@ bool LogBus::publish(const std::string& channel, const void* data, int size) {
   return out_->writeEvent(&event) == 0;
 }
 
-void LogBus::subscribe(const std::string& channel, RawHandler handler, int) {
-  subscriptions_.push_back(Subscription{std::make_unique<ChannelPattern>(channel), std::move(handler)});
+SubscriptionId LogBus::subscribe(const std::string& channel, RawHandler handler, int) {
+  subscriptions_.push_back(Subscription{next_id_, std::make_unique<ChannelPattern>(channel), std::move(handler)});
+  return next_id_++;
+}
+
+void LogBus::unsubscribe(SubscriptionId id) {
+  std::erase_if(subscriptions_, [id](const Subscription& s) { return s.id == id; });
 }
 
 int LogBus::handle(int) {

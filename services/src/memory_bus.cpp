@@ -76,20 +76,27 @@ void MemoryBus::deliver(const std::string& channel, const std::uint8_t* data, in
   if (any) ready_.notify_all();
 }
 
-void MemoryBus::subscribe(const std::string& channel, RawHandler handler, int queue_capacity) {
-  auto s = std::make_unique<Subscription>();
+SubscriptionId MemoryBus::subscribe(const std::string& channel, RawHandler handler, int queue_capacity) {
+  auto s = std::make_shared<Subscription>();
   s->pattern = channel;
   s->channel = std::make_unique<ChannelPattern>(channel);
   s->handler = std::move(handler);
   s->capacity = queue_capacity > 0 ? static_cast<size_t>(queue_capacity) : 30;
   const std::lock_guard<std::mutex> lock(mutex_);
-  subscriptions_.push_back(std::move(s));
+  s->id = next_id_++;
+  subscriptions_.push_back(s);
+  return s->id;
+}
+
+void MemoryBus::unsubscribe(SubscriptionId id) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::erase_if(subscriptions_, [id](const auto& s) { return s->id == id; });
 }
 
 int MemoryBus::handle(int timeout_ms) {
   // Take everything queued so far, oldest first across subscriptions, then dispatch
   // without holding the lock (handlers publish).
-  std::vector<std::pair<Subscription*, Queued>> batch;
+  std::vector<std::pair<std::shared_ptr<Subscription>, Queued>> batch;
   {
     std::unique_lock<std::mutex> lock(mutex_);
     const auto any = [this] {
@@ -98,7 +105,7 @@ int MemoryBus::handle(int timeout_ms) {
     if (!any()) ready_.wait_for(lock, std::chrono::milliseconds(std::max(0, timeout_ms)), any);
     if (!connected_) return -1;
     for (auto& s : subscriptions_) {
-      for (auto& q : s->queue) batch.emplace_back(s.get(), std::move(q));
+      for (auto& q : s->queue) batch.emplace_back(s, std::move(q));
       s->queue.clear();
     }
   }

@@ -15,174 +15,15 @@
 namespace hbirl::services {
 
 namespace {
-
 using Clock = std::chrono::steady_clock;
-
-std::int64_t micros(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e6)); }
-
-hbirl::episode_marker_t marker(std::int64_t utime, std::int64_t seq, int episode, bool controlled, std::int8_t kind) {
-  hbirl::episode_marker_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.domain = "onion";
-  m.episode = episode;
-  m.controlled = controlled;
-  m.kind = kind;
-  m.step = 0;
-  m.num_steps = 0;
-  m.ends_in_terminal = false;
-  m.frames_per_step = 0;
-  return m;
-}
-
 }  // namespace
-
-struct SimDriver::Plan {
-  std::vector<onion::Episode> episodes;  // the controlled run, then the demonstrations
-  int controlled = 0;
-  onion::SceneConfig controlled_scene;
-  std::unique_ptr<onion::OnionScene> controlled_camera, camera;
-  cv::Mat frame;
-  std::vector<unsigned char> bytes;
-};
-
-SimDriver::SimDriver(Bus& bus, const SimDriverOptions& o, Counters& counters)
-    : bus_(bus), options_(o), counters_(counters), plan_(std::make_unique<Plan>()) {
-  if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
-  const Mdp mdp = onion::make_onion_mdp();
-  Plan& p = *plan_;
-  p.controlled_scene = onion::SceneConfig::controlled();
-  p.controlled_scene.width = o.scene.width;
-  p.controlled_scene.fps = o.scene.fps;
-  p.controlled_scene.step_seconds = o.scene.step_seconds;
-  onion::DemonstrationOptions controlled_sorts;
-  controlled_sorts.sorts = o.controlled_sorts;
-  p.episodes = onion::plan_sorts(mdp, p.controlled_scene, controlled_sorts, o.seed + 1);
-  p.controlled = static_cast<int>(p.episodes.size());
-  double end = 0.0;
-  for (const auto& e : p.episodes) end += static_cast<double>(e.steps.size()) * p.controlled_scene.step_seconds;
-  onion::DemonstrationOptions demo_sorts;
-  demo_sorts.sorts = o.sorts;
-  demo_sorts.start_time = end;
-  for (auto& e : onion::plan_sorts(mdp, o.scene, demo_sorts, o.seed)) p.episodes.push_back(std::move(e));
-  p.controlled_camera = std::make_unique<onion::OnionScene>(p.controlled_scene, o.seed + 1);
-  p.camera = std::make_unique<onion::OnionScene>(o.scene, o.seed);
-  subscribe<hbirl::frame_request_t>(bus_, channels::kFrameRequest, counters_,
-                                    [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100);
-}
-
-SimDriver::~SimDriver() = default;
-
-void SimDriver::publish_frame(int id, int t, int k) {
-  Plan& p = *plan_;
-  const onion::Episode& e = p.episodes[static_cast<size_t>(id)];
-  const onion::OnionScene& scene = id < p.controlled ? *p.controlled_camera : *p.camera;
-  scene.render(e, t, k, p.frame);
-  cv::imencode(options_.encoding == "png" ? ".png" : ".jpg", p.frame, p.bytes);
-  hbirl::camera_frame_t f{};
-  f.utime = micros(scene.time_of(e, t, k));
-  f.seq = ++frame_seq_;
-  f.episode = id;
-  f.step = t;
-  f.frame = k;
-  f.width = static_cast<std::int16_t>(p.frame.cols);
-  f.height = static_cast<std::int16_t>(p.frame.rows);
-  f.encoding = options_.encoding;
-  f.size = static_cast<std::int32_t>(p.bytes.size());
-  f.data.assign(p.bytes.begin(), p.bytes.end());
-  publish(bus_, channels::kCamera, f, counters_);
-}
-
-void SimDriver::on_request(const hbirl::frame_request_t& m) {
-  const int fps = options_.scene.frames_per_step();
-  for (int i = 0; i < m.n; ++i) {
-    const auto k = static_cast<size_t>(i);
-    const int id = m.episode[k], t = m.step[k], f = m.frame[k];
-    if (id < 0 || id >= static_cast<int>(plan_->episodes.size()) || t < 0 ||
-        t >= static_cast<int>(plan_->episodes[static_cast<size_t>(id)].steps.size()) || f < 0 || f >= fps) {
-      throw InputError("frame_request[" + std::to_string(i) + "]", "is not a frame of this run");
-    }
-  }
-  for (int i = 0; i < m.n; ++i) {
-    const auto k = static_cast<size_t>(i);
-    publish_frame(m.episode[k], m.step[k], m.frame[k]);
-    ++resent_;
-  }
-}
-
-bool SimDriver::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
-  const SimDriverOptions& o = options_;
-  std::int64_t& marker_seq = marker_seq_;
-  std::int64_t truth_seq = 0;
-  const auto started = Clock::now();
-  std::int64_t frames_sent = 0;
-  const int fps = o.scene.frames_per_step();
-  for (int id = 0; id < static_cast<int>(plan_->episodes.size()); ++id) {
-    const bool is_controlled = id < plan_->controlled;
-    const onion::Episode& e = plan_->episodes[static_cast<size_t>(id)];
-    auto m = marker(micros(e.start_time), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_EPISODE);
-    m.frames_per_step = fps;
-    publish(bus_, channels::kEpisode, m, counters_);
-    for (int t = 0; t < static_cast<int>(e.steps.size()); ++t) {
-      m = marker(micros(e.start_time + t * o.scene.step_seconds), ++marker_seq, id, is_controlled, hbirl::episode_marker_t::BEGIN_STEP);
-      m.step = t;
-      m.frames_per_step = fps;
-      publish(bus_, channels::kEpisode, m, counters_);
-      hbirl::ground_truth_t truth{};
-      truth.utime = m.utime;
-      truth.seq = ++truth_seq;
-      truth.domain = "onion";
-      truth.episode = id;
-      truth.step = t;
-      truth.state = e.steps[static_cast<size_t>(t)].state;
-      truth.action = e.steps[static_cast<size_t>(t)].action;
-      truth.blemished = e.blemished;
-      publish(bus_, channels::kGroundTruth, truth, counters_);
-      for (int k = 0; k < fps; ++k) {
-        if (stop && stop()) return false;
-        publish_frame(id, t, k);
-        ++frames_sent;
-        if (idle) idle();
-        if (o.max_frames_per_second > 0) {
-          const auto due = started + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(static_cast<double>(frames_sent) / o.max_frames_per_second));
-          std::this_thread::sleep_until(due);
-        }
-      }
-    }
-    publish(bus_, channels::kEpisode, end_marker(id), counters_);
-  }
-  publish(bus_, channels::kEpisode, marker(0, ++marker_seq_, 0, false, hbirl::episode_marker_t::END_RUN), counters_);
-  return true;
-}
-
-hbirl::episode_marker_t SimDriver::end_marker(int id) {
-  const onion::Episode& e = plan_->episodes[static_cast<size_t>(id)];
-  auto m = marker(micros(e.start_time + static_cast<double>(e.steps.size()) * options_.scene.step_seconds), ++marker_seq_, id,
-                  id < plan_->controlled, hbirl::episode_marker_t::END_EPISODE);
-  m.num_steps = static_cast<std::int32_t>(e.steps.size());
-  m.ends_in_terminal = true;  // a sort ends with the release
-  m.frames_per_step = options_.scene.frames_per_step();
-  return m;
-}
-
-void SimDriver::republish_end_markers() {
-  for (int id = 0; id < static_cast<int>(plan_->episodes.size()); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
-  publish(bus_, channels::kEpisode, marker(0, ++marker_seq_, 0, false, hbirl::episode_marker_t::END_RUN), counters_);
-}
-
-bool run_sim_driver(Bus& bus, const SimDriverOptions& o, Counters& counters, const std::function<bool()>& stop,
-                    const std::function<void()>& idle) {
-  SimDriver driver(bus, o, counters);
-  return driver.publish_run(stop, idle);
-}
 
 // ---- perception ----
 
 PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), counters_(counters) {
   // Frames come at camera rate; a queue of a few seconds' worth rides out a slow moment.
-  subscribe<hbirl::camera_frame_t>(bus_, channels::kCamera, counters_,
-                                   [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000);
+  subs_.add(bus_, subscribe<hbirl::camera_frame_t>(bus_, channels::kCamera, counters_,
+                                                   [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000));
 }
 
 void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
@@ -226,8 +67,8 @@ void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
 
 LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
     : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
-  subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
-                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000);
+  subs_.add(bus_, subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
+                                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
 }
 
 void LabellerService::on_detections(const hbirl::detections_t& m) {
@@ -331,32 +172,44 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   result.missing_frames = builder.missing_frames();
   result.frame_requests = result_requests;
   const Mdp mdp = domain_mdp(result.data.domain);
-  auto executor = std::make_shared<BusBlockExecutor>(bus, result.data.observed, counters, options.executor);
+  BusExecutorOptions executor_options = options.executor;
+  if (!executor_options.stop) executor_options.stop = stop;
+  auto executor = std::make_shared<BusBlockExecutor>(bus, result.data.observed, counters, executor_options);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
       std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");
   if (options.workers > 0) {
     result.workers = executor->wait_for_workers(options.workers, options.wait_workers_ms);
     say(std::to_string(result.workers) + " of " + std::to_string(options.workers) + " sampler workers ready");
   }
-  const auto truth = domain_true_weights(result.data.domain);
+  std::optional<Eigen::VectorXd> truth = result.data.true_weights;
+  if (truth && truth->size() != mdp.num_features()) {
+    say("the ground truth's true weights do not fit the domain's features: no ILE");
+    truth.reset();
+  }
   const auto start = Clock::now();
   const std::int64_t utime = result.data.last_utime;
-  result.learned = learn_from_dataset(mdp, result.data, options.learning, executor,
-                                      [&](int iteration, double ll, const Eigen::VectorXd& theta) {
-                                        hbirl::em_progress_t p{};
-                                        p.utime = utime;
-                                        p.restart = 0;
-                                        p.iteration = iteration;
-                                        p.log_likelihood = ll;
-                                        p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
-                                        p.num_features = static_cast<std::int32_t>(theta.size());
-                                        p.theta.assign(theta.data(), theta.data() + theta.size());
-                                        const auto s = executor->stats();
-                                        p.retries = static_cast<std::int32_t>(s.retried_blocks);
-                                        p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
-                                        p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-                                        publish(bus, channels::kEmProgress, p, counters);
-                                      });
+  try {
+    result.learned = learn_from_dataset(mdp, result.data, options.learning, executor,
+                                        [&](int iteration, double ll, const Eigen::VectorXd& theta) {
+                                          if (stop && stop()) throw Stopped();  // also when computing alone
+                                          hbirl::em_progress_t p{};
+                                          p.utime = utime;
+                                          p.restart = 0;
+                                          p.iteration = iteration;
+                                          p.log_likelihood = ll;
+                                          p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
+                                          p.num_features = static_cast<std::int32_t>(theta.size());
+                                          p.theta.assign(theta.data(), theta.data() + theta.size());
+                                          const auto s = executor->stats();
+                                          p.retries = static_cast<std::int32_t>(s.retried_blocks);
+                                          p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
+                                          p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+                                          publish(bus, channels::kEmProgress, p, counters);
+                                        });
+  } catch (const Stopped&) {
+    say("stopped while learning");
+    return std::nullopt;
+  }
   result.estep = executor->stats();
   hbirl::reward_t r{};
   r.utime = utime;
@@ -364,7 +217,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   r.final = true;
   r.num_features = static_cast<std::int32_t>(result.learned.theta.size());
   r.theta.assign(result.learned.theta.data(), result.learned.theta.data() + result.learned.theta.size());
-  r.num_true = truth ? r.num_features : 0;
+  r.num_true = truth ? static_cast<std::int32_t>(truth->size()) : 0;
   if (truth) r.true_theta.assign(truth->data(), truth->data() + truth->size());
   const SoftSolution policy = soft_value_iteration(mdp, mdp.features * result.learned.theta);
   r.num_states = mdp.num_states;

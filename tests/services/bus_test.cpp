@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "hbirl/observations_t.hpp"
@@ -13,6 +17,7 @@
 #include "services/log_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/typed.hpp"
+#include "service_threads.hpp"
 
 namespace hbirl::services {
 namespace {
@@ -34,10 +39,58 @@ hbirl::observations_t observations(std::int64_t seq, int n) {
   return m;
 }
 
-Counters quiet_counters() {
-  Counters c;
-  c.quiet = true;
-  return c;
+Counters quiet_counters() { return testing::quiet("test"); }
+
+long max_rss_kb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+// A 48-byte message whose length field says 100 million observations: lcm-gen's decoder
+// would allocate and zero them (200 MB of symbols, 2.4 GB of eta rows) before noticing
+// the bytes are not there; the generated headers are bounded (lcmtypes/bound_arrays.cmake)
+// and refuse it at once.
+TEST(LcmTypes, HostileLengthFieldsAreRefusedWithoutAllocating) {
+  hbirl::observations_t m = observations(1, 0);
+  std::vector<std::uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  ASSERT_EQ(bytes.size(), 48u);  // hash, 2 x int64, 6 x int32 (n last)
+  const std::uint32_t n = 100000000;
+  for (int i = 0; i < 4; ++i) bytes[44 + static_cast<size_t>(i)] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
+  const long before = max_rss_kb();
+  hbirl::observations_t hostile;
+  EXPECT_LT(hostile.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  EXPECT_LT(max_rss_kb() - before, 50 * 1024) << "kB more at the peak";
+  for (int i = 0; i < 4; ++i) bytes[44 + static_cast<size_t>(i)] = 0xff;  // n = -1
+  EXPECT_LT(hostile.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  // The real message still decodes.
+  const hbirl::observations_t good = observations(2, 3);
+  std::vector<std::uint8_t> ok(static_cast<size_t>(good.getEncodedSize()));
+  good.encode(ok.data(), 0, static_cast<int>(ok.size()));
+  hbirl::observations_t back;
+  EXPECT_EQ(back.decode(ok.data(), 0, static_cast<int>(ok.size())), static_cast<int>(ok.size()));
+  EXPECT_EQ(back.eta, good.eta);
+}
+
+// Every resize in every generated decoder got its bound (a new lcm-gen might word them
+// differently, and then bound_arrays.cmake would silently miss them).
+TEST(LcmTypes, EveryGeneratedArrayIsBounded) {
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(HBIRL_LCMTYPES_DIR)) {
+    std::ifstream in(entry.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string s = text.str();
+    const auto count = [&s](const std::string& what) {
+      long c = 0;
+      for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++c;
+      return c;
+    };
+    EXPECT_EQ(count(".resize("), count("// hbirl: bound_arrays.cmake")) << entry.path();
+    ++files;
+  }
+  EXPECT_GE(files, 12);
 }
 
 // Typed messages round-trip between endpoints of one hub, in order, on the channels a
@@ -154,6 +207,47 @@ TEST(LcmBus, RoundTripOverMemq) {
   for (int i = 0; i < 10 && handled < 3; ++i) handled += std::max(0, bus.handle(100));
   EXPECT_EQ(seen, (std::vector<std::int64_t>{7, 8}));
   EXPECT_EQ(c.bad_messages, 1);
+}
+
+// Subscriptions end with their owner (Subscriptions): after it, no handler runs, on
+// every kind of bus; the other subscriptions carry on.
+TEST(Bus, SubscriptionsEndWithTheirOwner) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("hbirl_unsub_" + std::to_string(::getpid()) + ".lcmlog");
+  {
+    lcm::LogFile log(path.string(), "w");
+    for (int seq = 1; seq <= 2; ++seq) {
+      const auto bytes = encode(observations(seq, 1));
+      lcm::LogEvent e;
+      e.timestamp = seq;
+      e.channel = "OBSERVATIONS";
+      e.datalen = static_cast<std::int32_t>(bytes.size());
+      e.data = const_cast<std::uint8_t*>(bytes.data());
+      log.writeEvent(&e);
+    }
+  }
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus memory(hub), sender(hub);
+  LcmBus lcm("memq://");
+  LogBus log(path.string());
+  for (Bus* bus : std::vector<Bus*>{&memory, &lcm, &log}) {
+    Counters c = quiet_counters(), out = quiet_counters();
+    int kept = 0, ended = 0;
+    subscribe<hbirl::observations_t>(*bus, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++kept; });
+    {
+      Subscriptions owner;
+      owner.add(*bus, subscribe<hbirl::observations_t>(*bus, "OBS.*", c, [&](const hbirl::observations_t&, const Message&) { ++ended; }));
+      Bus& to = bus == &memory ? sender : *bus;
+      publish(to, "OBSERVATIONS", observations(1, 1), out);
+      for (int i = 0; i < 5 && kept < 1; ++i) bus->handle(50);
+    }
+    Bus& to = bus == &memory ? sender : *bus;
+    publish(to, "OBSERVATIONS", observations(2, 1), out);
+    for (int i = 0; i < 5 && kept < 2; ++i) bus->handle(50);
+    EXPECT_EQ(kept, 2) << bus->url();
+    EXPECT_EQ(ended, 1) << bus->url();
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(LcmBus, BadUrlIsAClearError) {

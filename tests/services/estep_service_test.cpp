@@ -188,6 +188,46 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   EXPECT_GT(worker.counters().bad_messages, 0);
 }
 
+// A worker whose build computes other bits (another numerics fingerprint) is heard from,
+// counted, and -- with same_numerics_only -- given no work: theta stays bit-identical to
+// the one-process run. (It never answers: had it been given blocks, they would have been
+// re-asked.)
+TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
+  EXPECT_EQ(numerics_fingerprint(), numerics_fingerprint());
+  EXPECT_NE(numerics_fingerprint(), 0u);
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, "sampler-a");
+  BusExecutorOptions options;
+  options.same_numerics_only = true;
+  Optimiser opt(hub, options);
+  MemoryBus other(hub);
+  Counters other_counters = quiet("other");
+  std::atomic<bool> stop{false};
+  std::thread beating([&] {
+    for (std::int64_t seq = 1; !stop; ++seq) {
+      hbirl::service_status_t s{};
+      s.service = "sampler";
+      s.id = "sampler-other-build";
+      s.seq = seq;
+      s.state = "running";
+      s.trajectories = static_cast<std::int32_t>(task().observed.size());
+      s.dataset_digest = static_cast<std::int64_t>(opt.executor->digest());
+      s.numerics = static_cast<std::int64_t>(numerics_fingerprint() ^ 1);
+      publish(other, channels::kStatus, s, other_counters);
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  });
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  expect_identical(learn(opt.executor), local());
+  stop = true;
+  beating.join();
+  const auto stats = opt.executor->stats();
+  EXPECT_EQ(stats.other_numerics, 1);
+  EXPECT_EQ(stats.retried_blocks, 0);
+  EXPECT_EQ(stats.local_blocks, 0);
+  EXPECT_GT(stats.remote_blocks, 0);
+}
+
 // A worker that starts after the data set went out asks for it by reporting its digest.
 TEST(EStepService, LateWorkerGetsTheDataSet) {
   auto hub = std::make_shared<MemoryHub>();

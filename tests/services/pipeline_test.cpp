@@ -5,10 +5,13 @@
 #include <atomic>
 #include <filesystem>
 #include <future>
+#include <limits>
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "experiments/onion_data.hpp"
+#include "learner/input_error.hpp"
 #include "services/log_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "service_threads.hpp"
@@ -169,6 +172,174 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed))
       << live->data.controlled_observed.size() << " controlled episodes (" << live->data.skipped_controlled << " left out) vs "
       << c.observed.size();
+}
+
+SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int controlled) {
+  SimDriverOptions run;
+  run.domain = "gridworld";
+  run.seed = seed;
+  run.max_frames_per_second = 0;
+  run.gridworld.trajectories = trajectories;
+  run.gridworld.controlled_trajectories = controlled;
+  return run;
+}
+
+// The paper's Gridworld over the bus: its simulator publishes the observations itself
+// (no camera), two sampler workers do the E-step. Checked against what the simulator was
+// asked for (episodes, steps, observations per step, eta of the controlled run), against
+// learning on the same data in one process (same bits), and against the true goal.
+TEST(Pipeline, GridworldFromSimulatorToReward) {
+  SimDriverOptions run = gridworld_run(5, 20, 10);
+  run.gridworld.confounders = 3;
+  const Mdp mdp = domain_mdp("gridworld");
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread w1(hub, mdp, "sampler-1"), w2(hub, mdp, "sampler-2");
+  MemoryBus sim_bus(hub);
+  Counters sim_counters = quiet("sim_driver");
+  SimDriver driver(sim_bus, run, sim_counters);
+  EXPECT_EQ(driver.listeners(), std::vector<std::string>{"optimiser"});
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    driver.publish_run(nullptr);
+  });
+  MemoryBus opt_bus(hub);
+  Counters opt_counters = quiet("optimiser");
+  OptimiserOptions options;
+  options.workers = 2;
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  sim.join();
+  ASSERT_TRUE(live.has_value());
+  EXPECT_EQ(live->data.domain, "gridworld");
+  EXPECT_EQ(live->missing_frames, 0);
+  EXPECT_EQ(opt_counters.bad_messages, 0);
+  EXPECT_GT(live->estep.remote_blocks, 0);
+  ASSERT_EQ(live->data.observed.size(), 20u);
+  ASSERT_EQ(live->data.controlled_observed.size(), 10u);
+  ASSERT_EQ(live->data.truth.size(), 20u);
+  EXPECT_EQ(live->data.num_sources, 4);
+  for (const auto& t : live->data.observed) {
+    ASSERT_EQ(t.length(), 10);
+    for (int step = 0; step < 10; ++step) EXPECT_EQ(t.observations_at(step), 40);
+    EXPECT_FALSE(t.ends_in_terminal);
+  }
+  for (const auto& t : live->data.controlled_observed) {  // the subject alone
+    EXPECT_EQ(t.eta.col(0).minCoeff(), 1.0);
+    EXPECT_EQ(t.eta.rightCols(3).maxCoeff(), 0.0);
+  }
+  // Plausible eta: 0.6 on the favoured source, 0.4/3 on each other.
+  EXPECT_NEAR(live->data.observed[0].eta.row(0).maxCoeff(), 0.6, 1e-12);
+  ASSERT_TRUE(live->data.true_weights.has_value());
+  EXPECT_EQ(live->data.true_weights->sum(), 1.0);  // one goal corner
+  // Same bits as learning in one process; the goal corner is the learned reward's best.
+  const Learned local = learn_from_dataset(mdp, live->data, LearningOptions{});
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
+  Eigen::Index goal = 0, best = 0;
+  live->data.true_weights->maxCoeff(&goal);
+  live->learned.theta.maxCoeff(&best);
+  EXPECT_EQ(best, goal);
+  ASSERT_TRUE(live->learned.ile.has_value());
+  EXPECT_LT(*live->learned.ile, 0.5) << "theta " << live->learned.theta.transpose();
+}
+
+// Asked to stop while it learns (SIGTERM in hbirl-optimiser), the optimiser stops at the
+// next E-step -- also while waiting for a worker's answer -- publishes no reward and
+// leaves the caller's bus without its subscriptions: the caller may go on handling it.
+TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
+  const Mdp mdp = domain_mdp("gridworld");
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, mdp, "sampler-1");
+  MemoryBus sim_bus(hub), watch_bus(hub);
+  Counters sim_counters = quiet("sim_driver"), watch_counters = quiet("watch");
+  std::atomic<int> progress{0}, rewards{0};
+  subscribe<hbirl::em_progress_t>(watch_bus, channels::kEmProgress, watch_counters,
+                                  [&](const hbirl::em_progress_t&, const Message&) { ++progress; });
+  subscribe<hbirl::reward_t>(watch_bus, channels::kReward, watch_counters, [&](const hbirl::reward_t&, const Message&) { ++rewards; });
+  std::atomic<bool> done{false};
+  std::thread watch([&] {
+    while (!done) watch_bus.handle(10);
+  });
+  const SimDriverOptions run = gridworld_run(7, 8, 4);
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    run_sim_driver(sim_bus, run, sim_counters, nullptr);
+  });
+  MemoryBus opt_bus(hub);
+  Counters opt_counters = quiet("optimiser");
+  OptimiserOptions options;
+  options.workers = 1;
+  const auto stopped = run_optimiser(opt_bus, options, opt_counters, [&] { return progress >= 2; }, nullptr,
+                                     [&] { listening.set_value(); });
+  sim.join();
+  EXPECT_FALSE(stopped.has_value());
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the watcher hears the last of it
+  const int iterations_before_stop = progress;
+  EXPECT_GE(iterations_before_stop, 2);
+  // The run again on the same bus: the old optimiser's handlers are gone (under the
+  // sanitizers, a handler of the dead data set builder or executor would be caught).
+  std::promise<void> again;
+  std::thread sim2([&] {
+    again.get_future().wait();
+    run_sim_driver(sim_bus, run, sim_counters, nullptr);
+  });
+  const auto learned = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { again.set_value(); });
+  sim2.join();
+  done = true;
+  watch.join();
+  ASSERT_TRUE(learned.has_value());
+  EXPECT_EQ(learned->data.observed.size(), 8u);
+  EXPECT_EQ(rewards, 1);
+  EXPECT_LT(iterations_before_stop, learned->learned.em_iterations) << "the first run did not stop early";
+}
+
+// Ground truth is checked field by field; true weights that disagree mid-run leave the
+// ILE unknown but keep the true steps (the controlled run's prior needs them).
+TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
+  DatasetBuilder b;
+  hbirl::episode_marker_t m{};
+  m.domain = "gridworld";
+  m.episode = 0;
+  m.controlled = true;
+  m.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+  m.frames_per_step = 1;
+  b.on_marker(m);
+  hbirl::ground_truth_t t{};
+  t.domain = "gridworld";
+  t.num_features = 4;
+  t.true_weights = {0, 0, 0, 1};
+  b.on_truth(t);
+  hbirl::observations_t o{};
+  o.num_symbols = 4;
+  o.num_sources = 2;
+  o.n = 1;
+  o.symbol = {3};
+  o.eta = {{1.0, 0.0}};
+  b.on_observations(o);
+  t.step = 1;
+  t.true_weights = {0, 0, 1, 0};  // another expert?
+  b.on_truth(t);
+  o.step = 1;
+  b.on_observations(o);
+  t.domain = "onion";
+  EXPECT_THROW(b.on_truth(t), InputError);  // not this run's domain
+  t.domain = "gridworld";
+  t.true_weights = {0, 0, std::nan(""), 0};
+  t.step = 0;
+  b.on_truth(t);  // no more weights are looked at once they disagreed
+  m.kind = hbirl::episode_marker_t::END_EPISODE;
+  m.num_steps = 2;
+  b.on_marker(m);
+  const Dataset d = b.build();
+  EXPECT_FALSE(d.true_weights.has_value());
+  ASSERT_EQ(d.controlled_truth.size(), 1u);
+  EXPECT_EQ(d.controlled_truth[0].size(), 2u);
+  DatasetBuilder fresh;
+  fresh.on_marker(m);
+  t.true_weights = {0, std::numeric_limits<double>::infinity(), 0, 0};
+  EXPECT_THROW(fresh.on_truth(t), InputError);
+  t.num_features = -1;
+  EXPECT_THROW(fresh.on_truth(t), InputError);
 }
 
 // Corrupt inputs to the services: counted, and the services keep going.

@@ -12,6 +12,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace hbirl::services {
 
@@ -24,6 +26,7 @@ struct Message {
   std::int64_t recv_utime;
 };
 using RawHandler = std::function<void(const Message&)>;
+using SubscriptionId = std::uint64_t;
 
 class Bus {
  public:
@@ -33,12 +36,35 @@ class Bus {
   // `channel` is a regular expression matched against the whole channel name (LCM's
   // rule). `queue_capacity`: messages kept for this subscription between handle() calls
   // before the oldest are dropped; choose it on purpose (0: the bus's default, 30 in LCM).
-  virtual void subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) = 0;
+  virtual SubscriptionId subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) = 0;
+  // Ends a subscription: its handler is not called again (what is queued for it is
+  // dropped). Call it from the thread that calls handle() (or while none does), never
+  // from inside a handler. Unknown ids are ignored.
+  virtual void unsubscribe(SubscriptionId id) = 0;
   // Dispatches waiting messages, waiting up to timeout_ms for the first. Returns how many
   // were dispatched (0: timed out), or -1 when the bus has ended (a log at its end) or
   // failed.
   virtual int handle(int timeout_ms) = 0;
   virtual std::string url() const = 0;
+};
+
+// Subscriptions that end with their owner: a service holds one as its last member (so it
+// is destroyed first), and no handler ever runs into a destroyed service. The buses must
+// outlive it, and it ends on the thread that handles the bus (as unsubscribe() says).
+class Subscriptions {
+ public:
+  Subscriptions() = default;
+  ~Subscriptions() { clear(); }
+  Subscriptions(const Subscriptions&) = delete;
+  Subscriptions& operator=(const Subscriptions&) = delete;
+  void add(Bus& bus, SubscriptionId id) { held_.emplace_back(&bus, id); }
+  void clear() {
+    for (auto& [bus, id] : held_) bus->unsubscribe(id);
+    held_.clear();
+  }
+
+ private:
+  std::vector<std::pair<Bus*, SubscriptionId>> held_;
 };
 
 // A subscription's channel pattern: a POSIX extended regular expression matched against

@@ -35,6 +35,7 @@ struct Dataset {
   std::vector<Trajectory> truth;                // their true steps, when ground truth came
   std::vector<ObservedTrajectory> controlled_observed;  // the controlled run
   std::vector<Trajectory> controlled_truth;
+  std::optional<Eigen::VectorXd> true_weights;  // the expert's, when the ground truth gave them
   std::int64_t last_utime = 0;                  // sim time of the newest message used
   int skipped_controlled = 0;                   // controlled episodes left out: ground truth incomplete
 };
@@ -83,8 +84,11 @@ class DatasetBuilder {
   bool run_ended_ = false;
   std::int64_t frames_ = 0;
   std::int64_t last_utime_ = 0;
+  std::optional<Eigen::VectorXd> true_weights_;
+  bool weights_conflict_ = false;
   SequenceTracker marker_seq_, observation_seq_, truth_seq_;
   Counters* counters_ = nullptr;
+  Subscriptions subs_;  // last: ends first
 };
 
 }  // namespace hbirl::services

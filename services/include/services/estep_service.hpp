@@ -19,10 +19,12 @@
 // counted and ignored. Workers answer only when their digest equals the request's.
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -48,6 +50,12 @@ hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count
 ObservedTrajectory from_message(const hbirl::trajectory_t& m);
 
 std::int64_t wall_utime();  // for heartbeats and display only, never for results
+
+// A fingerprint of this build's floating-point results: the bits of a fixed small E-step
+// pass (gridworld, exact engine). Workers built or run differently (another compiler,
+// flags, CPU features, Eigen version) compute sums that differ in the last bits; their
+// fingerprints then differ, and theta is no longer bit-identical to a one-process run.
+std::uint64_t numerics_fingerprint();
 
 // A sampler worker: holds the optimiser's data set and answers E-step requests for the
 // blocks assigned to it. Call handle() from one thread; it also sends the heartbeat.
@@ -82,13 +90,24 @@ class SamplerWorker {
   std::atomic<std::int64_t> blocks_computed_{0};
   std::int64_t status_seq_ = 0;
   std::chrono::steady_clock::time_point next_status_{};
+  Subscriptions subs_;  // last: ends first
+};
+
+// Thrown by BusBlockExecutor::run when its `stop` says so: learning ends there.
+struct Stopped : std::runtime_error {
+  Stopped() : std::runtime_error("stopped") {}
 };
 
 struct BusExecutorOptions {
+  std::function<bool()> stop;  // checked while waiting for answers; true: run() throws Stopped
   int timeout_ms = 2000;       // wait this long for a block's answer before re-asking
   int max_attempts = 3;        // attempts over the bus; then the optimiser computes the rest
   double worker_silence_s = 3.0;  // workers not heard from for this long get no work
   int local_threads = 1;       // for blocks the optimiser computes itself
+  // Give work only to workers whose numerics_fingerprint() equals the optimiser's: theta
+  // bit-identical to a one-process run whatever machines join. Off: they all work, and
+  // stats().other_numerics counts the ones that may change the last bits.
+  bool same_numerics_only = false;
 };
 
 // The optimiser's side: a BlockExecutor that farms blocks out to the workers it hears
@@ -110,6 +129,7 @@ class BusBlockExecutor final : public BlockExecutor {
   struct Stats {
     std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
     std::int64_t stale = 0, duplicates = 0, foreign = 0;  // ignored answers
+    std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
     double round_trip_s = 0.0;                            // summed over requests
   };
   Stats stats() const;
@@ -119,6 +139,7 @@ class BusBlockExecutor final : public BlockExecutor {
     std::uint64_t digest = 0;
     int trajectories = 0;
     std::chrono::steady_clock::time_point last_seen;
+    std::uint64_t numerics = 0;
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
   };
   void on_status(const hbirl::service_status_t& m) const;
@@ -129,10 +150,12 @@ class BusBlockExecutor final : public BlockExecutor {
   std::vector<ObservedTrajectory> dataset_;
   std::uint64_t digest_;
   std::uint64_t merged_digest_ = 0;  // of the data set as ObservationEStep holds it
+  std::uint64_t numerics_ = 0;       // numerics_fingerprint() here
   Counters& counters_;
   BusExecutorOptions options_;
   mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held
   mutable std::map<std::string, Worker> workers_;
+  mutable std::set<std::string> other_numerics_;  // workers reported with another fingerprint
   mutable std::chrono::steady_clock::time_point last_dataset_sent_{};
   // The pass in flight.
   mutable std::int64_t request_id_ = 0;
@@ -140,6 +163,7 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable std::vector<std::optional<EStepStatistics>> received_;
   mutable std::set<std::string> answered_;  // workers that answered this request
   mutable Stats stats_;
+  Subscriptions subs_;  // last: ends first
 };
 
 }  // namespace hbirl::services

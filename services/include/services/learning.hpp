@@ -13,10 +13,17 @@
 
 namespace hbirl::services {
 
-// The MDP of a domain by name ("onion"); throws InputError("domain", ...) otherwise.
+// The domains the services know: "onion" (SPEC §3, from camera frames) and "gridworld"
+// (the paper's 5x5 Gridworld; its simulator publishes the observations itself).
+// Each throws InputError("domain", ...) for any other name.
 Mdp domain_mdp(const std::string& domain);
-// The true reward weights of a simulated domain's expert, when known.
-std::optional<Eigen::VectorXd> domain_true_weights(const std::string& domain);
+std::vector<std::string> domain_feature_names(const std::string& domain);
+// The informative prior for the subject's observation model from the controlled run's
+// observations and true steps: onion, the symbol counts per visit of (s, a) plus 1
+// (hbirl experiment onion); gridworld, the symbol counts plus 1 (hbirl experiment
+// gridworld, SPEC §3). Throws InputError for true steps outside the domain.
+Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
+                              const std::vector<ObservedTrajectory>& observed, int num_symbols);
 
 struct LearningOptions {
   double c = 0.5;                   // alpha refinement rate
@@ -30,7 +37,7 @@ struct LearningOptions {
 struct Learned {
   Eigen::VectorXd theta;
   double log_likelihood = 0.0;
-  std::optional<double> ile;         // when the domain's true reward is known
+  std::optional<double> ile;         // when the ground truth gave the expert's true weights
   int em_iterations = 0;
   int trajectories = 0;
   std::uint64_t digest = 0;          // of the demonstrations learned from

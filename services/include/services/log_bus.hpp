@@ -15,7 +15,8 @@ class LogBus final : public Bus {
   explicit LogBus(const std::string& path, const std::string& out_path = "");
   // Writes to the output log when there is one; otherwise drops the message.
   bool publish(const std::string& channel, const void* data, int size) override;
-  void subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
+  SubscriptionId subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
+  void unsubscribe(SubscriptionId id) override;
   // Delivers the next recorded event to its subscribers (events nobody subscribes to are
   // skipped); -1 at the end of the log.
   int handle(int timeout_ms) override;
@@ -24,6 +25,7 @@ class LogBus final : public Bus {
 
  private:
   struct Subscription {
+    SubscriptionId id;
     std::unique_ptr<ChannelPattern> channel;
     RawHandler handler;
   };
@@ -31,6 +33,7 @@ class LogBus final : public Bus {
   lcm::LogFile in_;
   std::unique_ptr<lcm::LogFile> out_;
   std::vector<Subscription> subscriptions_;
+  SubscriptionId next_id_ = 1;
   std::int64_t events_ = 0;
   std::int64_t last_utime_ = 0;
 };

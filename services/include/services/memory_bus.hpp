@@ -37,7 +37,8 @@ class MemoryBus final : public Bus {
   MemoryBus& operator=(const MemoryBus&) = delete;
 
   bool publish(const std::string& channel, const void* data, int size) override;
-  void subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
+  SubscriptionId subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
+  void unsubscribe(SubscriptionId id) override;
   int handle(int timeout_ms) override;
   std::string url() const override { return "memory"; }
   // Stops delivering to this endpoint (a "killed" service): its queues are dropped.
@@ -51,6 +52,7 @@ class MemoryBus final : public Bus {
     std::uint64_t order;  // across this endpoint's subscriptions
   };
   struct Subscription {
+    SubscriptionId id;
     std::string pattern;
     std::unique_ptr<ChannelPattern> channel;
     RawHandler handler;
@@ -62,8 +64,9 @@ class MemoryBus final : public Bus {
   std::shared_ptr<MemoryHub> hub_;
   std::mutex mutex_;  // guards subscriptions_' queues and connected_
   std::condition_variable ready_;
-  std::vector<std::unique_ptr<Subscription>> subscriptions_;
+  std::vector<std::shared_ptr<Subscription>> subscriptions_;  // shared: handle() dispatches outside the lock
   std::uint64_t order_ = 0;
+  SubscriptionId next_id_ = 1;
   bool connected_ = true;
 };
 

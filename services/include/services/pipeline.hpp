@@ -16,6 +16,7 @@
 #include "services/dataset.hpp"
 #include "services/estep_service.hpp"
 #include "services/learning.hpp"
+#include "sim_driver/gridworld_observations.hpp"
 #include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
@@ -29,17 +30,36 @@ inline const std::string kFrameRequest = "FRAME_REQUEST";
 }  // namespace channels
 
 // ---- sim_driver ----
+// The paper's Gridworld as a simulated sensor: it has no camera, so the simulator
+// publishes the observations with their eta itself (OBSERVATIONS, one message per step);
+// perception and the labeller are not needed.
+struct GridworldSimOptions {
+  int confounders = 3;           // |E|
+  int per_step = 40;             // observations per step, drawn equally from the subject and each element
+  int trajectories = 20;         // demonstrations
+  int controlled_trajectories = 20;  // controlled run: the subject alone, true states known
+  int length = 10;               // steps per trajectory
+  EtaKind eta = EtaKind::kPlausible;
+  double step_seconds = 1.0;     // sim time per step (utime of its messages)
+};
+
 struct SimDriverOptions {
+  std::string domain = "onion";  // or "gridworld"
+  // onion
   onion::SceneConfig scene;     // the demonstrations' scene
   int controlled_sorts = 20;    // first, in the controlled scene: the subject prior
   int sorts = 6;                // then the demonstrations
-  std::uint64_t seed = 1;       // demonstrations: plan_sorts(seed); controlled run: seed + 1
-  double max_frames_per_second = 300.0;  // pacing, wall clock (0: as fast as it renders)
   std::string encoding = "png";          // lossless: replay and live see the same pixels
+  // gridworld
+  GridworldSimOptions gridworld;
+  // both
+  std::uint64_t seed = 1;       // onion: demonstrations plan_sorts(seed), controlled run seed + 1
+  double max_frames_per_second = 300.0;  // pacing, wall clock (0: as fast as it renders)
 };
-// The simulator: publishes the whole run (EPISODE, GROUND_TRUTH, CAMERA), then END_RUN,
-// and afterwards answers FRAME_REQUEST by rendering the asked frames again (the scene is
-// deterministic: the same pixels) -- so frames lost on the way can be recovered.
+// The simulator: publishes the whole run (EPISODE, GROUND_TRUTH, and CAMERA frames for the
+// onion domain, OBSERVATIONS for the gridworld), then END_RUN, and afterwards answers
+// FRAME_REQUEST by publishing the asked frames again (the run is deterministic: the same
+// pixels, the same observations) -- so frames lost on the way can be recovered.
 class SimDriver {
  public:
   SimDriver(Bus& bus, const SimDriverOptions& options, Counters& counters);
@@ -50,19 +70,23 @@ class SimDriver {
   // Publishes every END_EPISODE marker and END_RUN again (receivers take repeats as one):
   // the learner must not wait forever for an end marker lost on the way.
   void republish_end_markers();
+  // Which services must listen before the run starts (perception and the labeller only
+  // for a camera).
+  std::vector<std::string> listeners() const;
+
+  struct Plan;  // the run: its episodes, and how a frame is published
 
  private:
-  struct Plan;
+  hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;
   hbirl::episode_marker_t end_marker(int episode);
-  std::int64_t marker_seq_ = 0;
-  void publish_frame(int episode, int step, int frame);
   void on_request(const hbirl::frame_request_t& m);
   Bus& bus_;
   SimDriverOptions options_;
   Counters& counters_;
   std::unique_ptr<Plan> plan_;
-  std::int64_t frame_seq_ = 0;
+  std::int64_t marker_seq_ = 0;
   std::int64_t resent_ = 0;
+  Subscriptions subs_;  // last: ends first
 };
 
 // Publishes the run with a SimDriver (the in-process tests' way).
@@ -81,6 +105,7 @@ class PerceptionService {
   perception::BlobDetector detector_;
   std::int64_t seq_ = 0;
   SequenceTracker frames_;
+  Subscriptions subs_;  // last: ends first
 };
 
 // ---- labeller: DETECTIONS -> OBSERVATIONS with eta (the paper's rules) ----
@@ -95,6 +120,7 @@ class LabellerService {
   bool uniform_eta_;
   std::int64_t seq_ = 0;
   SequenceTracker detections_;
+  Subscriptions subs_;  // last: ends first
 };
 
 // ---- optimiser: the data set off the bus, HiddenDataEM with the sampler workers ----
