@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # The main job: install what is missing, build, and run the onion-sorting demo as LCM
 # services -- simulator and camera, perception, labeller, two sampler workers, optimiser
-# (services/launch.sh; pass its options, e.g. --workers 4 or --config controlled) -- then
-# print the learned reward, its ILE, and where the logs and the recorded run are.
+# (services/launch.sh; pass its options, e.g. --workers 4 or --config controlled) -- with
+# the live dashboard on http://127.0.0.1:8765/; then print the learned reward, its ILE,
+# the static report and where the logs and the recorded run are. In a terminal, the
+# dashboard stays up after the run until Ctrl-C.
 set -euo pipefail
 cd "$(dirname "$0")"
 scripts/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build --target hbirl hbirl-services -j"$(nproc)" >/dev/null
-exec services/launch.sh --record "$@"
+cmake --build build --target hbirl hbirl-services hbirl-dashboard -j"$(nproc)" >/dev/null
+keep=()
+[ -t 0 ] && [ -t 1 ] && keep=(--keep-dashboard)
+exec services/launch.sh --record "${keep[@]}" "$@"

@@ -14,6 +14,7 @@ Command add_validate(CLI::App& app);
 Command add_generate(CLI::App& app);
 Command add_experiment(CLI::App& app);
 Command add_render(CLI::App& app);
+Command add_report(CLI::App& app);
 
 // Print a JSON result to stdout, or to `path` when it is not empty.
 void emit(const std::string& text, const std::string& path);

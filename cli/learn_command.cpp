@@ -135,7 +135,8 @@ int run_learn(const LearnArgs& args) {
   options.max_em_iterations = args.max_em_iterations;
   options.accelerate = args.engine.name != "mcmc";  // SQUAREM needs a deterministic E-step
   if (args.verbose) {
-    options.on_iteration = [](int restart, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e) {
+    options.on_iteration = [](int restart, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e,
+                              const ObservationPrior*) {
       std::ostringstream line;
       line << "hbirl: restart " << restart << " EM iteration " << iteration << ": log-likelihood " << ll
            << ", theta [" << theta.transpose() << "], observation-model updates " << e.alpha_iterations

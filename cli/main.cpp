@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   remember(hbirl::cli::add_generate(app));
   remember(hbirl::cli::add_experiment(app));
   remember(hbirl::cli::add_render(app));
+  remember(hbirl::cli::add_report(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

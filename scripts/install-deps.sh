@@ -9,6 +9,8 @@ packages=(
   libboost-dev gnuplot-nox
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   liblcm-dev liblcm-bin iproute2 util-linux
+  libcpp-httplib-dev libjs-chart.js ca-certificates
+  chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Starts hbirl's service set -- simulator, perception and labeller (onion), sampler
-# workers, optimiser -- waits for the optimiser to learn, prints the learned reward and shuts
-# everything down (also on Ctrl-C). Exits non-zero if any service failed.
+# workers, optimiser -- and the dashboard, waits for the optimiser to learn, prints the
+# learned reward, writes the report and shuts everything down (also on Ctrl-C). Exits
+# non-zero if any service failed.
 #
 # LCM talks UDP multicast. Where multicast to loopback is not routed (the usual case in
 # containers), the set runs in a private network namespace of its own (unshare -rn, lo
 # up, 224.0.0.0/4 routed to lo): nothing leaves the machine and other runs do not see
-# it. See --help.
+# it. The dashboard runs outside it, following the run's recording, so a browser on this
+# machine reaches it. See --help.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -28,6 +30,10 @@ fps=15
 max_fps=400
 kill_worker_after_blocks=""
 timeout=900
+dashboard_port=8765
+keep_dashboard=0
+report=1
+orig_args=("$@")
 
 usage() {
   cat <<USAGE
@@ -53,7 +59,11 @@ Runs a demo as separate processes over LCM and prints the learned reward.
   --eta K                plausible or uniform (default $eta)
  both:
   --record               record every message with lcm-logger to OUT/run.lcmlog
-                         (replay: build/hbirl learn --log OUT/run.lcmlog)
+                         (replay: build/hbirl learn --log OUT/run.lcmlog); on with the dashboard
+  --dashboard-port P     serve the live dashboard on http://127.0.0.1:P/ (default $dashboard_port)
+  --no-dashboard         no dashboard
+  --keep-dashboard       after the run, keep the dashboard up until Ctrl-C
+  --no-report            do not write the static report (OUT/report/index.html)
   --out DIR              where logs and results go (default runs/<date-time>)
   --build DIR            the build folder with hbirl-services (default build/)
   --url URL              an LCM URL to use instead of a private network namespace, e.g.
@@ -84,6 +94,10 @@ while [ $# -gt 0 ]; do
     --url) url="$2"; shift 2 ;;
     --kill-worker-after-blocks) kill_worker_after_blocks="$2"; shift 2 ;;
     --timeout) timeout="$2"; shift 2 ;;
+    --dashboard-port) dashboard_port="$2"; shift 2 ;;
+    --no-dashboard) dashboard_port=""; shift ;;
+    --keep-dashboard) keep_dashboard=1; shift ;;
+    --no-report) report=0; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "launch.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -102,6 +116,48 @@ fi
 mkdir -p "$out/logs"
 out="$(cd "$out" && pwd)"
 
+# The outer launch.sh (not the copy run inside a namespace) owns the dashboard and the report.
+inner="${HBIRL_LAUNCH_INNER:-}"
+[ -z "$dashboard_port" ] || record=1  # the dashboard follows the recording
+dashboard_pid=""
+if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
+  if [ -x "$build/hbirl-dashboard" ]; then
+    "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" >"$out/logs/dashboard.log" 2>&1 &
+    dashboard_pid=$!
+    sleep 0.3
+    if kill -0 "$dashboard_pid" 2>/dev/null; then
+      echo "launch.sh: dashboard: http://127.0.0.1:$dashboard_port/  (follows $out/run.lcmlog)"
+    else
+      echo "launch.sh: the dashboard did not start (see $out/logs/dashboard.log); going on without it" >&2
+      dashboard_pid=""
+    fi
+  else
+    echo "launch.sh: $build/hbirl-dashboard not built: no dashboard" >&2
+  fi
+fi
+stop_dashboard() {
+  if [ -n "$dashboard_pid" ]; then kill -TERM "$dashboard_pid" 2>/dev/null || true; wait "$dashboard_pid" 2>/dev/null || true; fi
+  dashboard_pid=""
+}
+# After the run (outer launch.sh): the report, and the dashboard kept up or stopped.
+finish() {
+  local status="$1"
+  if [ -z "$inner" ] && [ "$report" = 1 ] && [ "$record" = 1 ] && [ -f "$out/run.lcmlog" ] && [ -x "$build/hbirl" ]; then
+    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" >/dev/null 2>"$out/logs/report.log"; then
+      echo "launch.sh: report: $out/report/index.html"
+    else
+      echo "launch.sh: the report could not be written (see $out/logs/report.log)" >&2
+    fi
+  fi
+  if [ -n "$dashboard_pid" ] && [ "$keep_dashboard" = 1 ]; then
+    echo "launch.sh: the dashboard stays up at http://127.0.0.1:$dashboard_port/ -- Ctrl-C to stop it"
+    trap 'stop_dashboard' INT TERM
+    wait "$dashboard_pid" 2>/dev/null || true
+  fi
+  stop_dashboard
+  exit "$status"
+}
+
 # Where will multicast go? Only ever to loopback.
 if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
   if ip route get 239.255.76.67 2>/dev/null | grep -q " dev lo "; then
@@ -109,15 +165,19 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
   elif unshare -rn true 2>/dev/null; then
     echo "launch.sh: multicast is not routed to loopback here: running the set in a private network namespace"
     echo "           (unshare -rn; lo up; ip route add 224.0.0.0/4 dev lo)"
-    export HBIRL_IN_NETNS=1
-    exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-      "${BASH_SOURCE[0]}" --out "$out" --domain "$domain" --confounders "$confounders" --trajectories "$trajectories" \
-      --eta "$eta" --workers "$workers" --config "$config" --sorts "$sorts" \
-      --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-fps "$max_fps" --build "$build" --timeout "$timeout" \
-      $([ "$record" = 1 ] && echo --record) ${kill_worker_after_blocks:+--kill-worker-after-blocks "$kill_worker_after_blocks"}
+    trap 'stop_dashboard; exit 130' INT TERM
+    set +e
+    HBIRL_IN_NETNS=1 HBIRL_LAUNCH_INNER=1 unshare -rn -- bash -c \
+      'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
+      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record)
+    status=$?
+    set -e
+    trap - INT TERM
+    finish "$status"
   else
     echo "launch.sh: multicast is not routed to loopback and private network namespaces are not allowed here." >&2
     echo "           Route it (as root): ip route add 224.0.0.0/4 dev lo   -- or pass --url." >&2
+    stop_dashboard
     exit 1
   fi
 fi
@@ -131,16 +191,23 @@ start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log
   pids+=($!)
   names+=("$name")
 }
-stop_all() {
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+logger=""
+stop_all() {  # the services, then the logger (it records their last heartbeats)
+  for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || wait "$pid" 2>/dev/null || true; done
+  if [ -n "$logger" ]; then
+    sleep 0.2
+    kill -TERM "$logger" 2>/dev/null || true
+    wait "$logger" 2>/dev/null || true
+  fi
 }
-trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; exit 130' INT TERM
-trap 'stop_all' EXIT
+trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; stop_dashboard; exit 130' INT TERM
+trap 'stop_all; stop_dashboard' EXIT
 
 echo "launch.sh: logs and results in $out"
 if [ "$record" = 1 ]; then
   start lcm-logger lcm-logger --lcm-url="$url" -f "$out/run.lcmlog"
+  logger="${pids[-1]}"
 fi
 for i in $(seq 1 "$workers"); do
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
@@ -215,4 +282,4 @@ if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
   cat "$out/result.json"
   [ "$record" = 1 ] && echo "launch.sh: recorded $out/run.lcmlog; replay: $build/hbirl learn --log $out/run.lcmlog"
 fi
-exit "$failed"
+finish "$failed"

@@ -108,24 +108,29 @@ std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& s
     plot << "$m" << m << " using 1:2:3 with yerrorlines linestyle " << (m + 1) << " title '" << methods[m] << "'";
   }
   plot << "\n";
-  const std::string script_path = spec.path_stem + ".gp";
+  std::ostringstream settings;
+  settings << data.str()
+           << "set title '" << spec.title << "'\n"
+           << "set xlabel '" << spec.x_label << "'\nset ylabel '" << spec.y_label << "'\n"
+           << "set key right center box opaque\nset grid\nset yrange [0:*]\n"
+           << "set xrange [" << x_min - 0.5 << ":" << x_max + 0.5 << "]\n"
+           << "set style line 1 lc rgb '#1b9e77' lw 2 pt 7 ps 1.0\n"
+           << "set style line 2 lc rgb '#d95f02' lw 2 pt 5 ps 1.0\n"
+           << "set style line 3 lc rgb '#7570b3' lw 2 pt 9 ps 1.1\n"
+           << "set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1\n"
+           << "set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1\n"
+           << "set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0\n";
+  return run_gnuplot(spec.path_stem, settings.str(), plot.str(), 900, 600);
+}
+
+std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width, int height) {
+  const std::string script_path = path_stem + ".gp";
   std::ofstream script(script_path);
+  const std::string size = std::to_string(width) + "," + std::to_string(height);
   script << "# Written by hbirl; run `gnuplot " << script_path << "` to redraw.\n"
-         << data.str()
-         << "set title '" << spec.title << "'\n"
-         << "set xlabel '" << spec.x_label << "'\nset ylabel '" << spec.y_label << "'\n"
-         << "set key right center box opaque\nset grid\nset yrange [0:*]\n"
-         << "set xrange [" << x_min - 0.5 << ":" << x_max + 0.5 << "]\n"
-         << "set style line 1 lc rgb '#1b9e77' lw 2 pt 7 ps 1.0\n"
-         << "set style line 2 lc rgb '#d95f02' lw 2 pt 5 ps 1.0\n"
-         << "set style line 3 lc rgb '#7570b3' lw 2 pt 9 ps 1.1\n"
-         << "set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1\n"
-         << "set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1\n"
-         << "set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0\n"
-         << "set terminal pngcairo size 900,600 font 'sans,11'\nset output '" << spec.path_stem << ".png'\n"
-         << plot.str()
-         << "set terminal svg size 900,600 font 'sans,11' background rgb 'white'\nset output '" << spec.path_stem << ".svg'\n"
-         << "replot\nunset output\n";
+         << data << "set terminal pngcairo size " << size << " noenhanced font 'sans,11'\nset output '" << path_stem << ".png'\n"
+         << plot << "set terminal svg size " << size << " noenhanced font 'sans,11' background rgb 'white'\nset output '" << path_stem << ".svg'\n"
+         << plot << "unset output\n";
   script.close();
   if (!script) return "cannot write " + script_path;
   const std::string command = "gnuplot '" + script_path + "' 2>/dev/null";

@@ -116,7 +116,10 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
   EmMap map(mdp, estep, options, seed);
   EmMap::Point x = map.start(theta);
   auto report = [&](const EmMap::Step& step) {
-    if (options.on_iteration) options.on_iteration(index, map.evaluations(), step.log_likelihood, step.next.theta, step.e);
+    if (options.on_iteration) {
+      options.on_iteration(index, map.evaluations(), step.log_likelihood, step.next.theta, step.e,
+                           step.next.alpha ? &*step.next.alpha : nullptr);
+    }
     result.optimizer_status = step.m.status;
   };
   if (!estep.depends_on_policy()) {

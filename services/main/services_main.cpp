@@ -201,6 +201,7 @@ int sampler(int argc, char** argv) {
       std::raise(SIGKILL);
     }
   }
+  worker.publish_status("done");
   std::fprintf(stderr, "hbirl-sampler: stopped (%s); %lld blocks computed, %lld messages in, %lld bad\n", worker.id().c_str(),
                static_cast<long long>(worker.blocks_computed()), static_cast<long long>(counters.messages_in),
                static_cast<long long>(counters.bad_messages));
@@ -240,6 +241,7 @@ int optimiser(int argc, char** argv) {
   Counters counters;
   counters.service = "optimiser";
   Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
+  o.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };
   const auto result = run_optimiser(
       *bus, o, counters, stop_requested, [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
       [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start

@@ -132,13 +132,13 @@ int SamplerWorker::handle(int timeout_ms) {
   return bus_.handle(timeout_ms);
 }
 
-void SamplerWorker::publish_status() {
+void SamplerWorker::publish_status(const std::string& state) {
   hbirl::service_status_t s{};
   s.utime = wall_utime();
   s.service = "sampler";
   s.id = id_;
   s.seq = ++status_seq_;
-  s.state = trajectories_.empty() ? "starting" : "running";
+  s.state = !state.empty() ? state : trajectories_.empty() ? "starting" : "running";
   s.messages_in = counters_.messages_in;
   s.messages_out = counters_.messages_out;
   s.bad_messages = counters_.bad_messages;
@@ -291,6 +291,10 @@ void BusBlockExecutor::publish_dataset() const {
 void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   if (m.service != "sampler") return;
   if (m.id.empty()) throw InputError("status.id", "is empty");
+  if (m.state == "done") {  // a worker on its way out: no more work for it
+    workers_.erase(m.id);
+    return;
+  }
   Worker& w = workers_[m.id];
   w.digest = static_cast<std::uint64_t>(m.dataset_digest);
   w.trajectories = m.trajectories;

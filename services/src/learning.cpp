@@ -78,9 +78,8 @@ Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOp
   learn.theta_tolerance = options.theta_tolerance;
   learn.likelihood_tolerance = options.likelihood_tolerance;
   if (progress) {
-    learn.on_iteration = [&progress](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult&) {
-      progress(iteration, ll, theta);
-    };
+    learn.on_iteration = [&progress, &prior](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult&,
+                                             const ObservationPrior* alpha) { progress(iteration, ll, theta, alpha ? *alpha : prior); };
   }
   const LearnResult result = learn_reward(mdp, estep, learn);
   Learned out;

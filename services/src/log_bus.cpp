@@ -1,5 +1,9 @@
 #include "services/log_bus.hpp"
 
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
 #include "learner/input_error.hpp"
 
 namespace hbirl::services {
@@ -31,8 +35,22 @@ void LogBus::unsubscribe(SubscriptionId id) {
   std::erase_if(subscriptions_, [id](const Subscription& s) { return s.id == id; });
 }
 
-int LogBus::handle(int) {
-  while (const lcm::LogEvent* event = in_.readNextEvent()) {
+int LogBus::handle(int timeout_ms) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(std::max(0, timeout_ms));
+  for (;;) {
+    std::FILE* file = in_.getFilePtr();
+    const long at = follow_ ? std::ftell(file) : 0L;
+    const lcm::LogEvent* event = in_.readNextEvent();
+    if (!event) {
+      if (!follow_) return -1;
+      // The end, or an event the logger is still writing: read it again from its start
+      // once more has been written (clearerr: glibc's end-of-file flag is sticky).
+      std::clearerr(file);
+      std::fseek(file, at, SEEK_SET);
+      if (std::chrono::steady_clock::now() >= deadline) return 0;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
     ++events_;
     last_utime_ = event->timestamp;
     int delivered = 0;
@@ -43,7 +61,6 @@ int LogBus::handle(int) {
     }
     if (delivered > 0) return 1;
   }
-  return -1;
 }
 
 }  // namespace hbirl::services

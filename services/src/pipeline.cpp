@@ -7,7 +7,9 @@
 
 #include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
+#include "learner/estep_exact.hpp"
 #include "learner/metrics.hpp"
+#include "learner/soft_value_iteration.hpp"
 #include "perception/labeller.hpp"
 #include "services/log_bus.hpp"
 #include "sim_driver/onion.hpp"
@@ -114,6 +116,52 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
 
 // ---- optimiser ----
 
+namespace {
+
+// For the dashboard: the learned observation model, and the posterior of the newest
+// demonstration under it and theta.
+void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& data, std::int64_t utime, int iteration,
+                   const Eigen::VectorXd& theta, const ObservationPrior& alpha) {
+  const ObservationModel model = dirichlet_mean(alpha);
+  hbirl::observation_model_t o{};
+  o.utime = utime;
+  o.domain = data.domain;
+  o.iteration = iteration;
+  o.num_states = mdp.num_states;
+  o.num_actions = mdp.num_actions;
+  o.num_pairs = mdp.num_pairs();
+  o.num_symbols = model.num_symbols();
+  o.num_confounders = model.num_confounders();
+  for (int r = 0; r < o.num_pairs; ++r) {
+    std::vector<double>& row = o.subject.emplace_back(static_cast<size_t>(o.num_symbols));
+    for (int w = 0; w < o.num_symbols; ++w) row[static_cast<size_t>(w)] = model.subject(r, w);
+  }
+  for (int e = 0; e < o.num_confounders; ++e) {
+    std::vector<double>& row = o.confounders.emplace_back(static_cast<size_t>(o.num_symbols));
+    for (int w = 0; w < o.num_symbols; ++w) row[static_cast<size_t>(w)] = model.confounders(e, w);
+  }
+  publish(bus, channels::kObservationModel, o, counters);
+  if (data.observed.empty()) return;
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(theta));
+  const TrajectoryPosterior post = ExactEngine(mdp).posterior(policy, model, data.observed.back());
+  hbirl::posterior_t p{};
+  p.utime = utime;
+  p.domain = data.domain;
+  p.iteration = iteration;
+  p.episode = data.episodes.back();
+  p.num_steps = static_cast<std::int32_t>(post.marginals.rows());
+  p.num_states = mdp.num_states;
+  p.num_actions = mdp.num_actions;
+  p.num_pairs = mdp.num_pairs();
+  for (Eigen::Index t = 0; t < post.marginals.rows(); ++t) {
+    p.marginals.emplace_back(post.marginals.row(t).data(), post.marginals.row(t).data() + post.marginals.cols());
+  }
+  p.log_likelihood = post.log_likelihood;
+  publish(bus, channels::kPosterior, p, counters);
+}
+
+}  // namespace
+
 std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
                                              const std::function<bool()>& stop,
                                              const std::function<void(const std::string&)>& log,
@@ -131,6 +179,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   bool announced_end = false;
   while (!builder.complete()) {
     if (stop && stop()) return std::nullopt;
+    if (options.beat) options.beat("collecting");
     if (bus.handle(100) < 0) break;  // a log at its end
     if (builder.frames() != frames) {
       frames = builder.frames();
@@ -190,8 +239,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const std::int64_t utime = result.data.last_utime;
   try {
     result.learned = learn_from_dataset(mdp, result.data, options.learning, executor,
-                                        [&](int iteration, double ll, const Eigen::VectorXd& theta) {
+                                        [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha) {
                                           if (stop && stop()) throw Stopped();  // also when computing alone
+                                          if (options.beat) options.beat("learning");
+                                          publish_model(bus, counters, mdp, result.data, utime, iteration, theta, alpha);
                                           hbirl::em_progress_t p{};
                                           p.utime = utime;
                                           p.restart = 0;

@@ -92,7 +92,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, HelpForEveryCommand) {
   for (const char* args : {"--help", "learn --help", "validate --help", "generate --help",
-                           "generate gridworld --help"}) {
+                           "generate gridworld --help", "report --help"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 0) << args;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << args;
@@ -104,7 +104,8 @@ TEST_F(Cli, HelpForEveryCommand) {
 
 TEST_F(Cli, UsageErrors) {
   for (const char* args : {"", "frobnicate", "learn", "learn --problem x.json --from nowhere",
-                           "learn --problem x.json --restarts 0", "learn --bogus"}) {
+                           "learn --problem x.json --restarts 0", "learn --bogus", "report --out x",
+                           "report --log /nonexistent.lcmlog --out x"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 2) << args;
     EXPECT_EQ(r.out, "") << args;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <thread>
 
@@ -261,6 +262,48 @@ TEST(LcmBus, BadUrlIsAClearError) {
 
 // A recorded log replays event by event, in order, skipping channels nobody wants, and
 // ends; what a replaying service publishes can go to a log of its own.
+// Following a log as it is written (the dashboard on a recording): at its end handle()
+// waits and returns 0, an event written in two parts is read once it is whole, and
+// nothing is skipped or read twice.
+TEST(LogBus, FollowsALogAsItGrows) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_follow_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string one = (dir / "one.lcmlog").string(), path = (dir / "growing.lcmlog").string();
+  const auto event_bytes = [&](std::int64_t seq) {  // one event as lcm-logger writes it
+    {
+      lcm::LogFile log(one, "w");
+      const std::vector<std::uint8_t> bytes = encode(observations(seq, 2));
+      lcm::LogEvent e;
+      e.timestamp = seq;
+      e.channel = "OBSERVATIONS";
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = const_cast<std::uint8_t*>(bytes.data());
+      log.writeEvent(&e);
+    }
+    std::ifstream in(one, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::ofstream writer(path, std::ios::binary);
+  writer << event_bytes(1) << std::flush;
+  LogBus bus(path);
+  bus.follow(true);
+  Counters c = quiet_counters();
+  std::vector<std::int64_t> seen;
+  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+  EXPECT_EQ(bus.handle(0), 1);
+  EXPECT_EQ(bus.handle(30), 0);  // the end, for now
+  const std::string second = event_bytes(2);
+  writer << second.substr(0, 30) << std::flush;  // half written
+  EXPECT_EQ(bus.handle(30), 0);
+  writer << second.substr(30) << event_bytes(3) << std::flush;
+  EXPECT_EQ(bus.handle(30), 1);
+  EXPECT_EQ(bus.handle(30), 1);
+  EXPECT_EQ(bus.handle(0), 0);
+  EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 3}));
+  EXPECT_EQ(c.bad_messages, 0);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(LogBus, ReplaysARecordedLogDeterministically) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_logbus_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);

@@ -8,11 +8,7 @@ case="$1"; build="$2"; inject="$3"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(cd "$here/../.." && pwd)"
 
-if [ -z "${HBIRL_IN_NETNS:-}" ]; then
-  export HBIRL_IN_NETNS=1
-  exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-    "${BASH_SOURCE[0]}" "$@"
-fi
+source "$repo/tests/in_private_netns.sh"
 
 tmp="$(mktemp -d)"
 # HBIRL_KEEP=1 keeps the runs' logs and results for a look.
@@ -92,22 +88,25 @@ case "$case" in
       "$build/hbirl-$s" --url "$url" >"$tmp/$s.log" 2>&1 &
       eval "pid_$s=$!"
     done
+    "$build/hbirl-dashboard" --url "$url" --port 0 >"$tmp/dashboard.log" 2>&1 &
+    pid_dashboard=$!
     for i in 1 2 3 4; do  # again and again: a slow service may subscribe late
       sleep 1
-      "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH TRAJECTORY ESTEP_REQUEST ESTEP_RESULT STATUS >/dev/null
+      "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH TRAJECTORY ESTEP_REQUEST ESTEP_RESULT STATUS \
+        EM_PROGRESS REWARD OBSERVATION_MODEL POSTERIOR >/dev/null
     done
     sleep 1
-    for s in perception labeller sampler optimiser; do
+    for s in perception labeller sampler optimiser dashboard; do
       pid="pid_$s"
       kill -0 "${!pid}" 2>/dev/null || { cat "$tmp/$s.log"; fail "$s died on bad input"; }
       kill -TERM "${!pid}"
     done
-    for s in perception labeller sampler; do
+    for s in perception labeller sampler dashboard; do
       pid="pid_$s"
       wait "${!pid}" || { cat "$tmp/$s.log"; fail "$s exited non-zero"; }
     done
     wait "$pid_optimiser" || true  # stopped before learning: exit 1 by design
-    for s in perception labeller sampler optimiser; do
+    for s in perception labeller sampler optimiser dashboard; do
       bad="$(sed -n 's/.* \([0-9]*\) bad.*/\1/p' "$tmp/$s.log" | tail -n 1)"
       [ -n "$bad" ] && [ "$bad" -gt 0 ] || { cat "$tmp/$s.log"; fail "$s did not count the bad messages"; }
       echo "$s: $bad bad messages counted, kept running"

@@ -34,4 +34,9 @@ struct FigureSpec {
 // else why the figure was not drawn (gnuplot missing or failing); the script is kept.
 std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& spec);
 
+// Any figure: writes <stem>.gp -- `data` (e.g. inline data blocks and settings) once, then
+// `plot` drawn to <stem>.png and again to <stem>.svg -- and runs gnuplot on it. Returns
+// as draw_figure does.
+std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width, int height);
+
 }  // namespace hbirl

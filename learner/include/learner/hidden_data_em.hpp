@@ -39,8 +39,9 @@ struct LearnOptions {
   bool accelerate = true;
   SoftViOptions soft_vi;
   // Called after every EM iteration (from the restart's thread): restart index,
-  // iteration, log-likelihood, theta, and the E-step's report.
-  std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&)> on_iteration;
+  // iteration, log-likelihood, theta, the E-step's report, and the observation model's
+  // refined Dirichlet parameters (nullptr when O is not learned).
+  std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&, const ObservationPrior*)> on_iteration;
 };
 
 struct RestartResult {

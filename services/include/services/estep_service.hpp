@@ -65,7 +65,8 @@ class SamplerWorker {
   // Handles what the bus has (waiting up to timeout_ms) and publishes the heartbeat when
   // one is due. Returns the bus's answer (-1: the bus has ended).
   int handle(int timeout_ms);
-  void publish_status();
+  // The heartbeat; `state` overrides "starting"/"running" (e.g. "done" on the way out).
+  void publish_status(const std::string& state = "");
   const std::string& id() const { return id_; }
   std::uint64_t digest() const { return digest_; }
   std::int64_t blocks_computed() const { return blocks_computed_; }

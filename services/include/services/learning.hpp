@@ -43,8 +43,9 @@ struct Learned {
   std::uint64_t digest = 0;          // of the demonstrations learned from
 };
 
-// Called after every EM iteration: iteration, log-likelihood, theta.
-using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&)>;
+// Called after every EM iteration: iteration, log-likelihood, theta, and the observation
+// model's refined Dirichlet parameters.
+using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&)>;
 
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
 // controlled run).

@@ -13,12 +13,15 @@ class LogBus final : public Bus {
  public:
   // Throws InputError("bus", ...) if the log cannot be read (or `out_path` written).
   explicit LogBus(const std::string& path, const std::string& out_path = "");
+  // Follow mode (the dashboard on a run being recorded): at the end of the log, handle()
+  // waits up to its timeout for more to be written (returning 0, never -1).
+  void follow(bool on) { follow_ = on; }
   // Writes to the output log when there is one; otherwise drops the message.
   bool publish(const std::string& channel, const void* data, int size) override;
   SubscriptionId subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) override;
   void unsubscribe(SubscriptionId id) override;
   // Delivers the next recorded event to its subscribers (events nobody subscribes to are
-  // skipped); -1 at the end of the log.
+  // skipped); -1 at the end of the log (unless following it).
   int handle(int timeout_ms) override;
   std::string url() const override { return "log:" + path_; }
   std::int64_t events_read() const { return events_; }
@@ -36,6 +39,7 @@ class LogBus final : public Bus {
   SubscriptionId next_id_ = 1;
   std::int64_t events_ = 0;
   std::int64_t last_utime_ = 0;
+  bool follow_ = false;
 };
 
 }  // namespace hbirl::services

@@ -11,6 +11,8 @@
 #include "hbirl/detections_t.hpp"
 #include "hbirl/em_progress_t.hpp"
 #include "hbirl/frame_request_t.hpp"
+#include "hbirl/observation_model_t.hpp"
+#include "hbirl/posterior_t.hpp"
 #include "hbirl/reward_t.hpp"
 #include "perception/blobs.hpp"
 #include "services/dataset.hpp"
@@ -27,6 +29,8 @@ inline const std::string kDetections = "DETECTIONS";
 inline const std::string kEmProgress = "EM_PROGRESS";
 inline const std::string kReward = "REWARD";
 inline const std::string kFrameRequest = "FRAME_REQUEST";
+inline const std::string kObservationModel = "OBSERVATION_MODEL";
+inline const std::string kPosterior = "POSTERIOR";
 }  // namespace channels
 
 // ---- sim_driver ----
@@ -131,6 +135,10 @@ struct OptimiserOptions {
   int wait_workers_ms = 10000;
   int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
   int quiet_ms = 5000;          // ... and learn without them when still none came for this long
+  // Called often (every ~100 ms while collecting, every EM iteration) with what the
+  // optimiser is doing ("collecting", "learning"): the process beats its heartbeat there,
+  // so services that wait for it (the simulator) and the dashboard hear it throughout.
+  std::function<void(const std::string&)> beat;
 };
 struct OptimiserResult {
   Learned learned;

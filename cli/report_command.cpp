@@ -1,0 +1,32 @@
+// hbirl report: the dashboard's views of a finished run, as a static page.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "dashboard/report.hpp"
+
+namespace hbirl::cli {
+
+Command add_report(CLI::App& app) {
+  struct Args {
+    std::string log, out;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand(
+      "report",
+      "Write the dashboard's views of a recorded run (services/launch.sh --record) as a static page:\n"
+      "OUT/index.html with the figures as PNG and SVG (gnuplot; each with its script), the last\n"
+      "camera frame with its detections coloured by their most likely source, and OUT/state.json.");
+  cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
+  cmd->add_option("--out", args->out, "Folder to write the report to (created)")->required();
+  return [args] {
+    const dashboard::Report r = dashboard::write_report(args->log, args->out);
+    for (const auto& p : r.problems) std::cerr << "hbirl: warning: figure not drawn: " << p << "\n";
+    std::cout << r.page << "\n";
+    std::cerr << "hbirl: report of " << r.messages << " messages (" << r.bad_messages << " bad), " << r.figures.size()
+              << " figures: " << r.page << "\n";
+    return 0;
+  };
+}
+
+}  // namespace hbirl::cli

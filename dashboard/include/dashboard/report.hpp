@@ -1,0 +1,20 @@
+#pragma once
+// `hbirl report --log FILE --out DIR`: the dashboard's views of a finished run as a static
+// page for papers and lab notebooks -- DIR/index.html with the figures as PNG and SVG
+// (gnuplot), the last annotated camera frame, and DIR/state.json (the dashboard's data).
+#include <string>
+#include <vector>
+
+namespace hbirl::dashboard {
+
+struct Report {
+  std::string page;                   // DIR/index.html
+  std::vector<std::string> figures;   // stems drawn (each .png, .svg and its .gp script)
+  std::vector<std::string> problems;  // figures that could not be drawn, and why
+  long long messages = 0, bad_messages = 0;
+};
+
+// Throws InputError for a log that cannot be read or a folder that cannot be written.
+Report write_report(const std::string& log_path, const std::string& out_dir);
+
+}  // namespace hbirl::dashboard

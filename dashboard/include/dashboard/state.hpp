@@ -1,0 +1,117 @@
+#pragma once
+// What the dashboard shows, assembled from the bus (issue 6): the latest camera frame with
+// its detections coloured by their most likely source (the labeller's eta), the newest
+// demonstration's (s, a) posterior against ground truth, log-likelihood and ILE per EM
+// iteration, learned theta against the true weights, the learned observation model, and
+// every service's health. The web page (dashboard/web) and `hbirl report` read it as
+// JSON (json()); the annotated frame comes as PNG (frame_png()).
+//
+// Thread-safe: the bus thread feeds it, the web server's threads read it.
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "hbirl/camera_frame_t.hpp"
+#include "hbirl/detections_t.hpp"
+#include "hbirl/em_progress_t.hpp"
+#include "hbirl/episode_marker_t.hpp"
+#include "hbirl/ground_truth_t.hpp"
+#include "hbirl/observation_model_t.hpp"
+#include "hbirl/observations_t.hpp"
+#include "hbirl/posterior_t.hpp"
+#include "hbirl/reward_t.hpp"
+#include "hbirl/service_status_t.hpp"
+#include "services/bus.hpp"
+#include "services/typed.hpp"
+
+namespace hbirl::dashboard {
+
+// The names the page labels things with, per domain ("onion", "gridworld"). Onion
+// symbols: "R2C3" is the gripper seen in the field of view's region row 2, column 3 (of
+// 4 x 5); "bright onion", "dark onion".
+struct DomainNames {
+  std::vector<std::string> states, actions, features, symbols, sources;
+};
+// Throws InputError("domain", ...) for a domain hbirl does not know.
+DomainNames domain_names(const std::string& domain, int num_sources);
+
+class DashboardState {
+ public:
+  // Subscribes to every channel it shows; bad messages are counted in `counters`.
+  void subscribe(services::Bus& bus, services::Counters& counters);
+
+  // The handlers (each validates its message and throws InputError naming the field).
+  // `now_utime` is the wall clock when it arrived (for heartbeat ages).
+  void on_camera(const hbirl::camera_frame_t& m);
+  void on_detections(const hbirl::detections_t& m);
+  void on_observations(const hbirl::observations_t& m);
+  void on_marker(const hbirl::episode_marker_t& m);
+  void on_truth(const hbirl::ground_truth_t& m);
+  void on_progress(const hbirl::em_progress_t& m);
+  void on_reward(const hbirl::reward_t& m);
+  void on_status(const hbirl::service_status_t& m, std::int64_t now_utime);
+  void on_model(const hbirl::observation_model_t& m);
+  void on_posterior(const hbirl::posterior_t& m);
+
+  // Everything the page shows (the shape: docs/DASHBOARD.md). `now_utime`: wall clock,
+  // for heartbeat ages.
+  nlohmann::json json(std::int64_t now_utime) const;
+  // The latest frame that has its detections and observations, annotated, as PNG; empty
+  // when there is none yet.
+  std::vector<unsigned char> frame_png() const;
+  // Changes whenever anything shown changes.
+  std::int64_t version() const;
+
+ private:
+  using Key = std::tuple<int, int, int>;  // (episode, step, frame)
+  struct Pending {
+    std::vector<unsigned char> image;      // encoded, as sent
+    std::int64_t utime = 0;                // the camera's
+    std::optional<hbirl::detections_t> detections;
+  };
+  struct Frame {
+    Key key{};
+    std::int64_t utime = 0;
+    std::vector<unsigned char> image;
+    hbirl::detections_t detections;
+    hbirl::observations_t observations;
+  };
+  struct Service {
+    hbirl::service_status_t status;
+    std::int64_t heard_utime = 0;  // wall clock when it arrived
+  };
+  void changed() { ++version_; }
+  void set_domain(const std::string& domain);
+
+  mutable std::mutex mutex_;
+  std::int64_t version_ = 0;
+  std::string domain_;
+  int num_sources_ = 0;
+  // The run.
+  int episode_ = -1, step_ = -1;
+  bool controlled_ = false, run_ended_ = false;
+  std::int64_t sim_utime_ = 0, frames_ = 0;
+  int episodes_ended_ = 0;
+  std::map<int, std::map<int, std::pair<int, int>>> truth_;  // episode -> step -> (s, a)
+  std::optional<std::vector<double>> true_weights_;
+  // The camera.
+  std::map<Key, Pending> pending_;
+  std::optional<Frame> frame_;
+  mutable std::int64_t png_version_ = -1;
+  mutable std::vector<unsigned char> png_;
+  std::optional<hbirl::observations_t> last_observations_;
+  // Learning.
+  std::vector<hbirl::em_progress_t> progress_;
+  std::optional<hbirl::reward_t> reward_;
+  std::optional<hbirl::observation_model_t> model_;
+  std::optional<hbirl::posterior_t> posterior_;
+  std::map<std::string, Service> services_;
+  services::Subscriptions subs_;  // last: ends first
+};
+
+}  // namespace hbirl::dashboard

@@ -1,0 +1,93 @@
+// hbirl-dashboard: watch a run in the browser. Listens on the bus, or follows a log that
+// lcm-logger is writing (so it works from outside the private network namespace that
+// services/launch.sh runs the set in), and serves the page on localhost.
+#include <sys/resource.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "dashboard/server.hpp"
+#include "dashboard/state.hpp"
+#include "learner/input_error.hpp"
+#include "services/lcm_bus.hpp"
+#include "services/log_bus.hpp"
+#include "services/process.hpp"
+
+namespace {
+
+int run(int argc, char** argv) {
+  using namespace hbirl;
+  CLI::App app("hbirl-dashboard: a live view of a learning run in the browser -- the camera with the\n"
+               "detections coloured by their most likely source, the expert's (s, a) posterior against\n"
+               "ground truth, log-likelihood and ILE per EM iteration, learned against true weights, the\n"
+               "learned observation model, and every service's health.\n"
+               "Reads the bus (--url) or follows a log as lcm-logger writes it (--log, also a finished one).");
+  std::string url, log, host = "127.0.0.1", web = HBIRL_DASHBOARD_WEB_DIR;
+  int port = 8765;
+  double wait_log = 60.0;
+  app.add_option("--url", url, "LCM URL to listen on (default: LCM's default; not with --log)");
+  app.add_option("--log", log, "Follow this LCM log (services/launch.sh --record writes OUT/run.lcmlog)");
+  app.add_option("--wait-log", wait_log, "Wait this many seconds for the log to appear")->check(CLI::Range(0.0, 3600.0))->capture_default_str();
+  app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
+  app.add_option("--port", port, "Port to serve on (0: any free one)")->check(CLI::Range(0, 65535))->capture_default_str();
+  app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  if (!url.empty() && !log.empty()) throw InputError("--log", "give --url or --log, not both");
+
+  services::install_stop_handlers();
+  std::unique_ptr<services::Bus> bus;
+  if (!log.empty()) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                              std::chrono::duration<double>(wait_log));
+    while (!std::filesystem::exists(log) && std::chrono::steady_clock::now() < until && !services::stop_requested()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("bus", ...) if it cannot
+    follow->follow(true);
+    bus = std::move(follow);
+  } else {
+    bus = std::make_unique<services::LcmBus>(url);
+  }
+  services::Counters counters;
+  counters.service = "hbirl-dashboard";
+  dashboard::DashboardState state;
+  state.subscribe(*bus, counters);
+  dashboard::Server server(state, web);
+  const int bound = server.bind(host, port);
+  std::thread serving([&server] { server.run(); });
+  std::fprintf(stderr, "hbirl-dashboard: http://%s:%d/  (%s %s; Ctrl-C to stop)\n", host == "0.0.0.0" ? "localhost" : host.c_str(),
+               bound, log.empty() ? "listening on" : "following", log.empty() ? (url.empty() ? "LCM's default URL" : url.c_str()) : log.c_str());
+  std::unique_ptr<services::Heartbeat> heartbeat;
+  if (log.empty()) heartbeat = std::make_unique<services::Heartbeat>(*bus, counters, "dashboard", services::default_id("dashboard"));
+  while (!services::stop_requested()) {
+    if (bus->handle(100) < 0) break;
+    if (heartbeat) heartbeat->tick("running");
+  }
+  server.stop();
+  serving.join();
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const double cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                     1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  std::fprintf(stderr, "hbirl-dashboard: stopped; %lld messages shown, %lld bad, %.2f s CPU\n",
+               static_cast<long long>(counters.messages_in), static_cast<long long>(counters.bad_messages), cpu);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const hbirl::InputError& e) {
+    std::fprintf(stderr, "hbirl-dashboard: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hbirl-dashboard: internal error: %s\n", e.what());
+    return 1;
+  }
+}

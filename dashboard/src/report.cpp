@@ -1,0 +1,298 @@
+#include "dashboard/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "dashboard/state.hpp"
+#include "experiments/summary.hpp"
+#include "learner/input_error.hpp"
+#include "services/estep_service.hpp"
+#include "services/log_bus.hpp"
+
+namespace hbirl::dashboard {
+
+namespace {
+
+using nlohmann::json;
+
+// gnuplot single-quoted strings: a quote is written twice.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string html(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string number(const json& x, int digits = 4) {
+  if (x.is_null()) return "–";
+  std::ostringstream s;
+  s.precision(digits);
+  s << x.get<double>();
+  return s.str();
+}
+
+std::vector<std::string> names_or_numbers(const json& names, size_t n, const std::string& prefix) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < n; ++i) out.push_back(i < names.size() ? names[i].get<std::string>() : prefix + std::to_string(i));
+  return out;
+}
+
+// The upper end of a heat map's axis of n cells (cells centred on 0 .. n-1).
+double edge(size_t n) { return static_cast<double>(n) - 0.5; }
+
+// Tics for a heat map's axis: every `every`-th label, at its row or column.
+std::string tics(const std::string& axis, const std::vector<std::string>& labels, size_t every = 1, size_t offset = 0) {
+  std::ostringstream s;
+  s << "set " << axis << " (";
+  bool first = true;
+  for (size_t i = offset; i < labels.size(); i += every) {
+    s << (first ? "" : ", ") << quoted(labels[i]) << " " << i;
+    first = false;
+  }
+  s << ")\n";
+  return s.str();
+}
+
+void em_figure(const json& s, const std::string& stem, Report& r) {
+  const json& em = s["em"];
+  if (em.empty()) return;
+  std::ostringstream data;
+  bool ile = false;
+  data << "$em << EOD\n";
+  for (const auto& e : em) {
+    data << e["iteration"].get<int>() << " " << (e["log_likelihood"].is_null() ? "NaN" : number(e["log_likelihood"], 12)) << " "
+         << (e["ile"].is_null() ? "NaN" : number(e["ile"], 8)) << "\n";
+    ile = ile || !e["ile"].is_null();
+  }
+  data << "EOD\nset title 'Learning: log-likelihood" << (ile ? " and ILE" : "") << " per EM iteration'\n"
+       << "set xlabel 'EM iteration'\nset ylabel 'log Pr(observations | θ, O)'\nset grid\nset key bottom right box opaque\n";
+  if (ile) data << "set y2label 'ILE (true reward)'\nset y2tics\nset ytics nomirror\nset y2range [0:*]\n";
+  std::string plot = "plot $em using 1:2 with linespoints lw 2 pt 7 ps 0.6 lc rgb '#1565c0' title 'log-likelihood'";
+  if (ile) plot += ", $em using 1:3 axes x1y2 with linespoints lw 2 pt 5 ps 0.6 lc rgb '#d84315' title 'ILE'";
+  plot += "\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
+void theta_figure(const json& s, const std::string& stem, Report& r) {
+  const json& t = s["theta"];
+  if (t.is_null()) return;
+  const std::vector<double> learned = t["learned"];
+  const std::vector<std::string> names = names_or_numbers(s["names"]["features"], learned.size(), "feature ");
+  std::vector<double> truth;
+  if (!t["true"].is_null()) truth = t["true"].get<std::vector<double>>();
+  const auto scale = [](std::vector<double> w) {
+    double m = 0.0;
+    for (double x : w) m = std::max(m, std::abs(x));
+    if (m > 0.0) {
+      for (double& x : w) x /= m;
+    }
+    return w;
+  };
+  const std::vector<double> a = scale(learned), b = scale(truth);
+  std::ostringstream data;
+  data << "$theta << EOD\n";
+  for (size_t k = 0; k < a.size(); ++k) data << '"' << names[k] << "\" " << a[k] << " " << (k < b.size() ? b[k] : 0.0) << "\n";
+  data << "EOD\nset title 'Reward weights (each scaled to max |w| = 1)'\nset style data histograms\nset style histogram clustered gap 1\n"
+       << "set style fill solid 0.85 border -1\nset yrange [-1.1:1.1]\nset grid ytics\nset key top right box opaque\n"
+       << "set xtics rotate by -20\nset ylabel 'w / max |w|'\n";
+  std::string plot = "plot $theta using 2:xtic(1) lc rgb '#1565c0' title " + quoted(t["final"].get<bool>() ? "learned θ (final)" : "learned θ");
+  if (!b.empty()) plot += ", '' using 3 lc rgb '#ef6c00' title 'true weights'";
+  plot += "\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
+void posterior_figure(const json& s, const std::string& stem, Report& r) {
+  const json& p = s["posterior"];
+  if (p.is_null() || p["steps"].get<int>() == 0) return;
+  const json& m = p["state_marginals"];
+  const size_t steps = m.size(), states = m[0].size();
+  const std::vector<std::string> names = names_or_numbers(s["names"]["states"], states, "state ");
+  std::ostringstream data;
+  data << "$post << EOD\n";
+  for (size_t i = 0; i < states; ++i) {  // one row per state, one column per step
+    for (size_t t = 0; t < steps; ++t) data << (t ? " " : "") << m[t][i].get<double>();
+    data << "\n";
+  }
+  data << "EOD\n";
+  const bool truth = !p["truth"].is_null();
+  if (truth) {
+    data << "$truth << EOD\n";
+    for (size_t t = 0; t < steps; ++t) data << t << " " << p["truth"][t]["state"].get<int>() << "\n";
+    data << "EOD\n";
+  }
+  data << "set title " << quoted("Posterior of the expert's state, episode " + std::to_string(p["episode"].get<int>()) +
+                                 ", EM iteration " + std::to_string(p["iteration"].get<int>()))
+       << "\nset xlabel 'step'\nset cblabel 'Pr(state at step)'\nset cbrange [0:1]\n"
+       << "set palette defined (0 'white', 1 '#1565c0')\nset xrange [-0.5:" << edge(steps) << "]\nset yrange [-0.5:" << edge(states)
+       << "]\nset ytics font ',8'\n";
+  std::vector<std::string> step_names;
+  for (size_t t = 0; t < steps; ++t) step_names.push_back(std::to_string(t + 1));
+  data << tics("xtics", step_names) << tics("ytics", names);
+  std::string plot = "plot $post matrix with image notitle";
+  if (truth) plot += ", $truth using 1:2 with points pt 2 ps 2 lw 2 lc rgb '#d84315' title 'ground truth'";
+  plot += "\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot, 800, 640);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
+void model_figure(const json& s, const std::string& stem, Report& r) {
+  const json& m = s["model"];
+  if (m.is_null()) return;
+  const json& subject = m["subject"];
+  const json& confounders = m["confounders"];
+  const size_t pairs = subject.size(), symbols = subject[0].size();
+  const int actions = m["num_actions"];
+  const std::vector<std::string> symbol_names = names_or_numbers(s["names"]["symbols"], symbols, "symbol ");
+  const std::vector<std::string> state_names = names_or_numbers(s["names"]["states"], pairs / static_cast<size_t>(actions), "state ");
+  std::vector<std::string> pair_rows;  // a state's name on its first action's row
+  for (size_t p = 0; p < pairs; ++p) pair_rows.push_back(state_names[p / static_cast<size_t>(actions)]);
+  std::ostringstream data;
+  data << "$subject << EOD\n";
+  for (const auto& row : subject) {
+    for (size_t w = 0; w < symbols; ++w) data << (w ? " " : "") << row[w].get<double>();
+    data << "\n";
+  }
+  data << "EOD\n";
+  if (!confounders.empty()) {
+    data << "$elements << EOD\n";
+    for (const auto& row : confounders) {
+      for (size_t w = 0; w < symbols; ++w) data << (w ? " " : "") << row[w].get<double>();
+      data << "\n";
+    }
+    data << "EOD\n";
+  }
+  data << "set palette defined (0 'white', 1 '#1565c0')\nset cbrange [0:1]\nset cblabel 'Pr(symbol)'\n";
+  std::ostringstream plot;
+  plot << "set multiplot layout 1," << (confounders.empty() ? 1 : 2) << "\n"
+       << "set title " << quoted("Subject: O(symbol | state, action), EM iteration " + std::to_string(m["iteration"].get<int>())) << "\n"
+       << tics("xtics rotate by -60 font ',7'", symbol_names) << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions))
+       << "set xrange [-0.5:" << edge(symbols) << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
+       << "plot $subject matrix with image notitle\n";
+  if (!confounders.empty()) {
+    const std::vector<std::string> sources = names_or_numbers(s["names"]["sources"], confounders.size() + 1, "element ");
+    plot << "set title 'Confounding elements: O(symbol | element)'\n"
+         << tics("ytics font ',8'", std::vector<std::string>(sources.begin() + 1, sources.end()))
+         << "set yrange [-0.5:" << edge(confounders.size()) << "]\nplot $elements matrix with image notitle\n";
+  }
+  plot << "unset multiplot\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot.str(), 1200, 700);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
+}  // namespace
+
+Report write_report(const std::string& log_path, const std::string& out_dir) {
+  services::LogBus bus(log_path);  // throws InputError("bus", ...)
+  services::Counters counters;
+  counters.service = "hbirl report";
+  counters.quiet = true;
+  DashboardState state;
+  state.subscribe(bus, counters);
+  while (bus.handle(0) >= 0) {
+  }
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  if (error) throw InputError("--out", "cannot create '" + out_dir + "': " + error.message());
+  const std::filesystem::path dir(out_dir);
+  Report report;
+  report.messages = counters.messages_in;
+  report.bad_messages = counters.bad_messages;
+  const json s = state.json(services::wall_utime());
+  {
+    std::ofstream out(dir / "state.json");
+    out << s.dump(1) << "\n";
+    if (!out) throw InputError("--out", "cannot write " + (dir / "state.json").string());
+  }
+  const std::vector<unsigned char> frame = state.frame_png();
+  if (!frame.empty()) {
+    std::ofstream out(dir / "camera.png", std::ios::binary);
+    out.write(reinterpret_cast<const char*>(frame.data()), static_cast<std::streamsize>(frame.size()));
+  }
+  em_figure(s, (dir / "em").string(), report);
+  theta_figure(s, (dir / "theta").string(), report);
+  posterior_figure(s, (dir / "posterior").string(), report);
+  model_figure(s, (dir / "observation_model").string(), report);
+
+  std::ostringstream page;
+  page << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hbirl report</title>\n"
+       << "<style>body{font-family:system-ui,sans-serif;max-width:1250px;margin:1em auto;padding:0 1em;color:#222}"
+       << "img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}td,th{padding:.2em .7em;"
+       << "border-bottom:1px solid #eee;text-align:left}figure{margin:1.2em 0}figcaption{color:#555}</style></head><body>\n"
+       << "<h1>hbirl report</h1>\n<p>From <code>" << html(log_path) << "</code>: " << report.messages << " messages ("
+       << report.bad_messages << " that did not decode or validate). The data of every figure: <a href=\"state.json\">state.json</a>.</p>\n";
+  const json& run = s["run"];
+  page << "<table><tr><th>domain</th><td>" << html(s["domain"].get<std::string>()) << "</td></tr>"
+       << "<tr><th>episodes</th><td>" << run["episodes_ended"] << "</td></tr><tr><th>camera frames</th><td>" << run["frames"]
+       << "</td></tr><tr><th>EM iterations</th><td>" << s["em"].size() << "</td></tr>";
+  if (!s["reward"].is_null()) {
+    page << "<tr><th>final log-likelihood</th><td>" << number(s["reward"]["log_likelihood"], 10) << "</td></tr>"
+         << "<tr><th>ILE</th><td>" << number(s["reward"]["ile"]) << "</td></tr>";
+  }
+  if (!s["theta"].is_null()) {
+    page << "<tr><th>learned θ</th><td>";
+    const auto names = names_or_numbers(s["names"]["features"], s["theta"]["learned"].size(), "feature ");
+    for (size_t k = 0; k < names.size(); ++k) page << (k ? ", " : "") << html(names[k]) << " " << number(s["theta"]["learned"][k]);
+    page << "</td></tr>";
+  }
+  page << "</table>\n";
+  if (!frame.empty()) {
+    const json& c = s["camera"];
+    page << "<figure><img src=\"camera.png\" alt=\"the last camera frame\"><figcaption>The last camera frame (episode "
+         << c["episode"] << ", step " << c["step"] << ", frame " << c["frame"]
+         << "), each detection boxed in the colour of its most likely source by the labeller's η:";
+    const json& sources = s["names"]["sources"];
+    for (size_t z = 0; z < sources.size(); ++z) {
+      page << " <span style=\"color:" << s["source_colours"][z % s["source_colours"].size()].get<std::string>() << "\">■</span> "
+           << html(sources[z].get<std::string>());
+    }
+    page << ".</figcaption></figure>\n";
+  }
+  const std::vector<std::pair<std::string, std::string>> captions = {
+      {"em", "Log-likelihood of the observations (and the ILE under the true reward, when known) per EM iteration."},
+      {"theta", "Learned reward weights against the expert's true weights."},
+      {"posterior", "The expert's posterior state at each step of the newest demonstration (sources summed out), "
+                    "with the ground truth."},
+      {"observation_model", "The learned observation model: the subject's per (state, action), and each confounding element's."}};
+  for (const auto& [stem, caption] : captions) {
+    const std::string path = (dir / stem).string();
+    if (std::find(report.figures.begin(), report.figures.end(), path) == report.figures.end()) continue;
+    page << "<figure><a href=\"" << stem << ".png\"><img src=\"" << stem << ".svg\" alt=\"" << html(caption) << "\"></a><figcaption>"
+         << html(caption) << " (<a href=\"" << stem << ".png\">PNG</a>, <a href=\"" << stem << ".svg\">SVG</a>, <a href=\"" << stem
+         << ".gp\">gnuplot script</a>)</figcaption></figure>\n";
+  }
+  page << "<h2>Services</h2>\n<table><tr><th>service</th><th>id</th><th>last state</th><th>messages in</th><th>out</th>"
+       << "<th>bad messages</th><th>gaps</th><th>note</th></tr>\n";
+  for (const auto& x : s["services"]) {
+    page << "<tr><td>" << html(x["service"].get<std::string>()) << "</td><td>" << html(x["id"].get<std::string>()) << "</td><td>"
+         << html(x["state"].get<std::string>()) << "</td><td>" << x["messages_in"] << "</td><td>" << x["messages_out"] << "</td><td>"
+         << x["bad_messages"] << "</td><td>" << x["gaps"] << "</td><td>" << html(x["detail"].get<std::string>()) << "</td></tr>\n";
+  }
+  page << "</table>\n";
+  for (const auto& p : report.problems) page << "<p>Not drawn: " << html(p) << "</p>\n";
+  page << "</body></html>\n";
+  report.page = (dir / "index.html").string();
+  std::ofstream out(report.page);
+  out << page.str();
+  if (!out) throw InputError("--out", "cannot write " + report.page);
+  return report;
+}
+
+}  // namespace hbirl::dashboard

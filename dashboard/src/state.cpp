@@ -1,0 +1,441 @@
+#include "dashboard/state.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "learner/input_error.hpp"
+#include "perception/labeller.hpp"
+#include "services/dataset.hpp"
+#include "services/estep_service.hpp"
+#include "services/pipeline.hpp"
+#include "sim_driver/gridworld.hpp"
+#include "sim_driver/onion.hpp"
+
+namespace hbirl::dashboard {
+
+namespace {
+
+constexpr int kMaxSources = 64;
+constexpr int kMaxSymbols = 10000;
+constexpr int kMaxPairs = 1000000;
+constexpr int kMaxSteps = 100000;
+constexpr size_t kPendingFrames = 256;  // frames waiting for their detections and observations
+
+// One colour per source, the page's and the annotated frame's: subject first.
+const std::vector<cv::Scalar>& source_colours() {  // BGR
+  static const std::vector<cv::Scalar> c = {{119, 158, 27}, {179, 112, 117}, {2, 95, 217},  {138, 41, 231},
+                                            {30, 166, 102}, {2, 171, 230},   {29, 118, 166}, {102, 102, 102}};
+  return c;
+}
+
+int most_likely(const std::vector<double>& eta) {
+  return static_cast<int>(std::max_element(eta.begin(), eta.end()) - eta.begin());
+}
+
+template <class Rows>
+void check_rows(const Rows& rows, const std::string& field, double lo, double hi) {
+  for (const auto& row : rows) {
+    for (double x : row) {
+      if (!(x >= lo && x <= hi)) throw InputError(field, "has a value outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+  }
+}
+
+nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+DomainNames domain_names(const std::string& domain, int num_sources) {
+  DomainNames n;
+  if (domain == "onion") {
+    n.states = onion::state_names();
+    n.actions = onion::action_names();
+    n.features = onion::feature_names();
+    for (int r = 0; r < perception::kRegionRows; ++r) {
+      for (int c = 0; c < perception::kRegionColumns; ++c) n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
+    }
+    n.symbols.push_back("bright onion");
+    n.symbols.push_back("dark onion");
+    n.sources = {"subject (expert)", "blue-shirt person", "other onions", "foreground person"};
+  } else if (domain == "gridworld") {
+    n.states = gridworld_state_names(GridworldOptions{}.size);
+    n.actions = gridworld_action_names();
+    n.features = gridworld_feature_names();
+    for (const auto& f : n.features) n.symbols.push_back("near " + f);
+    n.sources = {"subject (expert)"};
+  } else {
+    throw InputError("domain", "'" + domain + "' is not a domain hbirl knows (onion, gridworld)");
+  }
+  for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e) n.sources.push_back("element " + std::to_string(e));
+  return n;
+}
+
+void DashboardState::subscribe(services::Bus& bus, services::Counters& counters) {
+  using services::Message;
+  namespace ch = services::channels;
+  // Frames and observations come at camera rate: only the newest matter, but a whole
+  // recorded run may be waiting when the dashboard follows a log.
+  constexpr int kQueue = 1 << 16;
+  subs_.add(bus, services::subscribe<hbirl::camera_frame_t>(bus, ch::kCamera, counters,
+                                                            [this](const auto& m, const Message&) { on_camera(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::detections_t>(bus, ch::kDetections, counters,
+                                                          [this](const auto& m, const Message&) { on_detections(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::observations_t>(bus, ch::kObservations, counters,
+                                                            [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::episode_marker_t>(bus, ch::kEpisode, counters,
+                                                              [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::ground_truth_t>(bus, ch::kGroundTruth, counters,
+                                                            [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
+  subs_.add(bus, services::subscribe<hbirl::em_progress_t>(bus, ch::kEmProgress, counters,
+                                                           [this](const auto& m, const Message&) { on_progress(m); }, 10000));
+  subs_.add(bus, services::subscribe<hbirl::reward_t>(bus, ch::kReward, counters,
+                                                      [this](const auto& m, const Message&) { on_reward(m); }, 100));
+  subs_.add(bus, services::subscribe<hbirl::observation_model_t>(bus, ch::kObservationModel, counters,
+                                                                 [this](const auto& m, const Message&) { on_model(m); }, 100));
+  subs_.add(bus, services::subscribe<hbirl::posterior_t>(bus, ch::kPosterior, counters,
+                                                         [this](const auto& m, const Message&) { on_posterior(m); }, 100));
+  subs_.add(bus, services::subscribe<hbirl::service_status_t>(
+                     bus, ch::kStatus, counters,
+                     [this](const auto& m, const Message&) { on_status(m, services::wall_utime()); }, 10000));
+}
+
+void DashboardState::set_domain(const std::string& domain) {
+  if (domain.empty() || domain == domain_) return;
+  domain_names(domain, 1);  // throws for an unknown one
+  domain_ = domain;
+}
+
+void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
+  if (m.episode < 0 || m.step < 0 || m.frame < 0) throw InputError("camera_frame.episode", "episode, step and frame must be >= 0");
+  if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
+  if (m.size <= 0 || m.size > static_cast<int>(m.data.size())) throw InputError("camera_frame.size", "does not match its data");
+  const std::lock_guard<std::mutex> lock(mutex_);
+  Pending& p = pending_[{m.episode, m.step, m.frame}];
+  p.image.assign(m.data.begin(), m.data.begin() + m.size);
+  p.utime = m.utime;
+  while (pending_.size() > kPendingFrames) pending_.erase(pending_.begin());
+  ++frames_;
+  sim_utime_ = std::max(sim_utime_, m.utime);
+  changed();
+}
+
+void DashboardState::on_detections(const hbirl::detections_t& m) {
+  if (m.n < 0) throw InputError("detections.n", "is negative");
+  for (int i = 0; i < m.n; ++i) {
+    const std::int8_t c = m.cls[static_cast<size_t>(i)];
+    if (c != hbirl::detections_t::CLASS_GRIPPER && c != hbirl::detections_t::CLASS_ONION) {
+      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
+    }
+  }
+  const std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = pending_.find({m.episode, m.step, m.frame});
+  if (it != pending_.end()) it->second.detections = m;  // else its frame was never seen (or is long gone)
+}
+
+void DashboardState::on_observations(const hbirl::observations_t& m) {
+  if (m.num_sources < 1 || m.num_sources > kMaxSources) throw InputError("observations.num_sources", "must be in [1, 64]");
+  if (m.num_symbols < 1 || m.num_symbols > kMaxSymbols) throw InputError("observations.num_symbols", "out of range");
+  for (int i = 0; i < m.n; ++i) {
+    const int s = m.symbol[static_cast<size_t>(i)];
+    if (s < 0 || s >= m.num_symbols) throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
+  }
+  check_rows(m.eta, "observations.eta", 0.0, 1e300);
+  const std::lock_guard<std::mutex> lock(mutex_);
+  num_sources_ = m.num_sources;
+  last_observations_ = m;
+  const Key key{m.episode, m.step, m.frame};
+  const auto it = pending_.find(key);
+  if (it != pending_.end() && !it->second.image.empty() && it->second.detections && it->second.detections->n == m.n) {
+    frame_ = Frame{key, it->second.utime, std::move(it->second.image), std::move(*it->second.detections), m};
+    pending_.erase(pending_.begin(), std::next(it));
+  }
+  changed();
+}
+
+void DashboardState::on_marker(const hbirl::episode_marker_t& m) {
+  if (m.episode < 0) throw InputError("episode_marker.episode", "is negative");
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  switch (m.kind) {
+    case hbirl::episode_marker_t::BEGIN_EPISODE:
+    case hbirl::episode_marker_t::BEGIN_STEP:
+      episode_ = m.episode;
+      step_ = m.kind == hbirl::episode_marker_t::BEGIN_STEP ? m.step : 0;
+      controlled_ = m.controlled;
+      break;
+    case hbirl::episode_marker_t::END_EPISODE:
+      episodes_ended_ = std::max(episodes_ended_, m.episode + 1);
+      break;
+    case hbirl::episode_marker_t::END_RUN:
+      run_ended_ = true;
+      break;
+    default:
+      throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
+  }
+  sim_utime_ = std::max(sim_utime_, m.utime);
+  changed();
+}
+
+void DashboardState::on_truth(const hbirl::ground_truth_t& m) {
+  if (m.episode < 0 || m.step < 0 || m.step >= kMaxSteps || m.state < 0 || m.action < 0) {
+    throw InputError("ground_truth.step", "episode, step, state and action must be >= 0");
+  }
+  if (m.num_features < 0 || m.num_features > kMaxSymbols) throw InputError("ground_truth.num_features", "out of range");
+  for (double w : m.true_weights) {
+    if (!std::isfinite(w)) throw InputError("ground_truth.true_weights", "must be finite");
+  }
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  truth_[m.episode][m.step] = {m.state, m.action};
+  if (m.num_features > 0) true_weights_ = m.true_weights;
+  changed();
+}
+
+void DashboardState::on_progress(const hbirl::em_progress_t& m) {
+  if (m.iteration < 0) throw InputError("em_progress.iteration", "is negative");
+  if (std::isnan(m.log_likelihood)) throw InputError("em_progress.log_likelihood", "is NaN");
+  for (double t : m.theta) {
+    if (!std::isfinite(t)) throw InputError("em_progress.theta", "must be finite");
+  }
+  const std::lock_guard<std::mutex> lock(mutex_);
+  // A new run of the optimiser starts again from iteration 1.
+  if (!progress_.empty() && m.iteration <= progress_.back().iteration) progress_.clear();
+  progress_.push_back(m);
+  changed();
+}
+
+void DashboardState::on_reward(const hbirl::reward_t& m) {
+  for (double t : m.theta) {
+    if (!std::isfinite(t)) throw InputError("reward.theta", "must be finite");
+  }
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  reward_ = m;
+  reward_->policy.clear();  // not shown
+  changed();
+}
+
+void DashboardState::on_status(const hbirl::service_status_t& m, std::int64_t now_utime) {
+  if (m.id.empty()) throw InputError("status.id", "is empty");
+  if (m.id.size() > 200 || m.service.size() > 100) throw InputError("status.id", "is too long");
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (services_.size() >= 1000 && !services_.count(m.id)) throw InputError("status.id", "too many services");
+  services_[m.id] = Service{m, now_utime};
+  changed();
+}
+
+void DashboardState::on_model(const hbirl::observation_model_t& m) {
+  if (m.num_pairs != m.num_states * m.num_actions || m.num_pairs < 1 || m.num_pairs > kMaxPairs) {
+    throw InputError("observation_model.num_pairs", "must be num_states * num_actions");
+  }
+  if (m.num_symbols < 1 || m.num_symbols > kMaxSymbols || m.num_confounders < 0 || m.num_confounders > kMaxSources) {
+    throw InputError("observation_model.num_symbols", "out of range");
+  }
+  check_rows(m.subject, "observation_model.subject", 0.0, 1.0);
+  check_rows(m.confounders, "observation_model.confounders", 0.0, 1.0);
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  model_ = m;
+  changed();
+}
+
+void DashboardState::on_posterior(const hbirl::posterior_t& m) {
+  if (m.num_pairs != m.num_states * m.num_actions || m.num_pairs < 1 || m.num_pairs > kMaxPairs) {
+    throw InputError("posterior.num_pairs", "must be num_states * num_actions");
+  }
+  if (m.num_steps < 0 || m.num_steps > kMaxSteps) throw InputError("posterior.num_steps", "out of range");
+  check_rows(m.marginals, "posterior.marginals", 0.0, 1.0 + 1e-9);
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  posterior_ = m;
+  changed();
+}
+
+std::int64_t DashboardState::version() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return version_;
+}
+
+std::vector<unsigned char> DashboardState::frame_png() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!frame_) return {};
+  const std::int64_t v = static_cast<std::int64_t>(std::get<0>(frame_->key)) * 1000003 + std::get<1>(frame_->key) * 1009 +
+                         std::get<2>(frame_->key) + frame_->utime;
+  if (v == png_version_) return png_;
+  cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(frame_->image.size()), CV_8UC1, const_cast<unsigned char*>(frame_->image.data())),
+                               cv::IMREAD_COLOR);
+  if (image.empty()) return {};
+  const auto& d = frame_->detections;
+  const auto& o = frame_->observations;
+  const auto& colours = source_colours();
+  for (int i = 0; i < d.n && i < o.n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const int source = most_likely(o.eta[k]);
+    const cv::Scalar colour = colours[static_cast<size_t>(source) % colours.size()];
+    const cv::Rect box(d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]);
+    cv::rectangle(image, box, colour, 2);
+    const std::string label = std::to_string(static_cast<int>(std::lround(100 * o.eta[k][static_cast<size_t>(source)]))) + "%";
+    cv::putText(image, label, cv::Point(box.x, std::max(10, box.y - 3)), cv::FONT_HERSHEY_PLAIN, 0.75, colour, 1, cv::LINE_AA);
+  }
+  png_.clear();
+  cv::imencode(".png", image, png_);
+  png_version_ = v;
+  return png_;
+}
+
+nlohmann::json DashboardState::json(std::int64_t now_utime) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  nlohmann::json j;
+  j["version"] = version_;
+  j["domain"] = domain_;
+  DomainNames names;
+  if (!domain_.empty()) names = domain_names(domain_, num_sources_);
+  j["names"] = {{"states", names.states},     {"actions", names.actions}, {"features", names.features},
+                {"symbols", names.symbols},   {"sources", names.sources}};
+  std::vector<std::string> colours;
+  for (const auto& c : source_colours()) {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<int>(c[2]), static_cast<int>(c[1]), static_cast<int>(c[0]));
+    colours.emplace_back(hex);
+  }
+  j["source_colours"] = colours;
+  j["run"] = {{"episode", episode_},        {"step", step_},
+              {"controlled", controlled_},  {"ended", run_ended_},
+              {"sim_seconds", static_cast<double>(sim_utime_) * 1e-6},
+              {"frames", frames_},          {"episodes_ended", episodes_ended_}};
+
+  // The camera: the latest annotated frame's detections.
+  if (frame_) {
+    nlohmann::json detections = nlohmann::json::array();
+    const auto& d = frame_->detections;
+    const auto& o = frame_->observations;
+    for (int i = 0; i < d.n && i < o.n; ++i) {
+      const auto k = static_cast<size_t>(i);
+      const int source = most_likely(o.eta[k]);
+      const int symbol = o.symbol[k];
+      detections.push_back({{"class", d.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? "gripper" : "onion"},
+                            {"box", {d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]}},
+                            {"symbol", symbol},
+                            {"symbol_name", symbol < static_cast<int>(names.symbols.size()) ? names.symbols[static_cast<size_t>(symbol)] : ""},
+                            {"eta", o.eta[k]},
+                            {"source", source}});
+    }
+    j["camera"] = {{"episode", std::get<0>(frame_->key)},
+                   {"step", std::get<1>(frame_->key)},
+                   {"frame", std::get<2>(frame_->key)},
+                   {"sim_seconds", static_cast<double>(frame_->utime) * 1e-6},
+                   {"width", d.width},
+                   {"height", d.height},
+                   {"detections", detections}};
+  } else {
+    j["camera"] = nullptr;
+  }
+  // The newest observations (any domain): how many by most likely source, by symbol.
+  if (last_observations_) {
+    const auto& o = *last_observations_;
+    std::vector<std::vector<int>> counts(static_cast<size_t>(o.num_sources), std::vector<int>(static_cast<size_t>(o.num_symbols)));
+    for (int i = 0; i < o.n; ++i) {
+      counts[static_cast<size_t>(most_likely(o.eta[static_cast<size_t>(i)]))][static_cast<size_t>(o.symbol[static_cast<size_t>(i)])]++;
+    }
+    j["observations"] = {{"episode", o.episode}, {"step", o.step}, {"frame", o.frame}, {"n", o.n}, {"by_source_symbol", counts}};
+  } else {
+    j["observations"] = nullptr;
+  }
+
+  // Learning: EM iterations, theta, the posterior and the observation model.
+  nlohmann::json em = nlohmann::json::array();
+  for (const auto& p : progress_) {
+    em.push_back({{"iteration", p.iteration},
+                  {"log_likelihood", finite_or_null(p.log_likelihood)},
+                  {"ile", p.ile >= 0.0 ? finite_or_null(p.ile) : nlohmann::json(nullptr)},
+                  {"seconds", p.seconds},
+                  {"retries", p.retries},
+                  {"local_blocks", p.local_blocks}});
+  }
+  j["em"] = em;
+  nlohmann::json theta = nullptr;
+  if (reward_) {
+    theta = {{"learned", reward_->theta}, {"final", reward_->final != 0}};
+  } else if (!progress_.empty()) {
+    theta = {{"learned", progress_.back().theta}, {"final", false}};
+  }
+  if (!theta.is_null()) {
+    if (true_weights_) {
+      theta["true"] = *true_weights_;
+    } else if (reward_ && reward_->num_true > 0) {
+      theta["true"] = reward_->true_theta;
+    } else {
+      theta["true"] = nullptr;
+    }
+  }
+  j["theta"] = theta;
+  j["reward"] = reward_ ? nlohmann::json{{"final", reward_->final != 0},
+                                         {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},
+                                         {"log_likelihood", finite_or_null(reward_->log_likelihood)}}
+                        : nlohmann::json(nullptr);
+
+  if (posterior_) {
+    const auto& p = *posterior_;
+    nlohmann::json marginals = nlohmann::json::array();
+    nlohmann::json best = nlohmann::json::array();
+    for (const auto& row : p.marginals) {
+      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0);
+      for (int r = 0; r < p.num_pairs; ++r) states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
+      marginals.push_back(states);
+      const int r = static_cast<int>(std::max_element(row.begin(), row.end()) - row.begin());
+      best.push_back({{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
+    }
+    nlohmann::json truth = nullptr;
+    const auto it = truth_.find(p.episode);
+    if (it != truth_.end() && static_cast<int>(it->second.size()) >= p.num_steps) {
+      truth = nlohmann::json::array();
+      for (int t = 0; t < p.num_steps; ++t) {
+        const auto step = it->second.find(t);
+        if (step == it->second.end()) {
+          truth = nullptr;
+          break;
+        }
+        truth.push_back({{"state", step->second.first}, {"action", step->second.second}});
+      }
+    }
+    j["posterior"] = {{"episode", p.episode},     {"iteration", p.iteration},
+                      {"steps", p.num_steps},     {"state_marginals", marginals},
+                      {"most_likely", best},      {"truth", truth},
+                      {"log_likelihood", finite_or_null(p.log_likelihood)}};
+  } else {
+    j["posterior"] = nullptr;
+  }
+  j["model"] = model_ ? nlohmann::json{{"iteration", model_->iteration},
+                                       {"num_states", model_->num_states},
+                                       {"num_actions", model_->num_actions},
+                                       {"subject", model_->subject},
+                                       {"confounders", model_->confounders}}
+                      : nlohmann::json(nullptr);
+
+  // Service health.
+  nlohmann::json services = nlohmann::json::array();
+  for (const auto& [id, s] : services_) {
+    const auto& m = s.status;
+    services.push_back({{"id", id},
+                        {"service", m.service},
+                        {"state", m.state},
+                        {"seconds_since_heartbeat", std::max<double>(0.0, static_cast<double>(now_utime - s.heard_utime) * 1e-6)},
+                        {"messages_in", m.messages_in},
+                        {"messages_out", m.messages_out},
+                        {"bad_messages", m.bad_messages},
+                        {"gaps", m.gaps},
+                        {"trajectories", m.trajectories},
+                        {"detail", m.detail}});
+  }
+  j["services"] = services;
+  if (!progress_.empty()) {
+    j["estep"] = {{"retried_blocks", progress_.back().retries}, {"local_blocks", progress_.back().local_blocks}};
+  } else {
+    j["estep"] = nullptr;
+  }
+  return j;
+}
+
+}  // namespace hbirl::dashboard

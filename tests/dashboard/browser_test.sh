@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# The dashboard in a browser (issue 6). Inside a private network namespace of its own, the
+# onion demo runs with its dashboard (services/launch.sh); headless Chromium opens the
+# page while the run goes on, waits until every panel shows data, fails on any console
+# error and saves a screenshot (BUILD_DIR/dashboard_screenshot.png). Then the run's static
+# report must be there with its figures.
+#   tests/dashboard/browser_test.sh BUILD_DIR
+set -euo pipefail
+build="$1"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+repo="$(cd "$here/../.." && pwd)"
+
+source "$repo/tests/in_private_netns.sh"
+
+tmp="$(mktemp -d)"
+launch=""
+trap '[ -n "$launch" ] && kill -TERM "$launch" 2>/dev/null; wait 2>/dev/null; if [ -n "${HBIRL_KEEP:-}" ]; then echo "kept $tmp" >&2; else rm -rf "$tmp"; fi' EXIT
+fail() { echo "FAIL: $*" >&2; cat "$tmp/launch.out" >&2 2>/dev/null || true; tail -n 20 "$tmp"/run/logs/* >&2 2>/dev/null || true; exit 1; }
+
+port=8765  # the namespace's own loopback: no other test sees it
+"$repo/services/launch.sh" --build "$build" --out "$tmp/run" --sorts 4 --controlled-sorts 6 --fps 5 --max-fps 250 \
+  --dashboard-port "$port" --keep-dashboard >"$tmp/launch.out" 2>&1 &
+launch=$!
+HOME="$tmp" python3 "$here/browser_check.py" "http://127.0.0.1:$port/" "$build/dashboard_screenshot.png" 240 || fail "the browser check"
+kill -TERM "$launch"
+wait "$launch" || fail "launch.sh exited non-zero"
+launch=""
+grep -q "learned (also in" "$tmp/launch.out" || fail "no learned reward"
+for f in index.html state.json camera.png em.svg em.png theta.svg posterior.svg observation_model.svg; do
+  [ -s "$tmp/run/report/$f" ] || fail "the report has no $f"
+done
+echo "report: $(ls "$tmp/run/report" | tr '\n' ' ')"

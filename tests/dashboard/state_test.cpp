@@ -1,0 +1,232 @@
+#include "dashboard/state.hpp"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "learner/input_error.hpp"
+#include "services/memory_bus.hpp"
+#include "services/pipeline.hpp"
+
+namespace hbirl::dashboard {
+namespace {
+
+TEST(DashboardNames, OfEachDomain) {
+  const DomainNames onion = domain_names("onion", 4);
+  EXPECT_EQ(onion.states.size(), 27u);
+  EXPECT_EQ(onion.actions.size(), 6u);
+  EXPECT_EQ(onion.symbols.size(), 22u);
+  EXPECT_EQ(onion.sources.size(), 4u);
+  EXPECT_EQ(onion.symbols[21], "dark onion");
+  const DomainNames grid = domain_names("gridworld", 4);
+  EXPECT_EQ(grid.states.size(), 25u);
+  EXPECT_EQ(grid.sources, (std::vector<std::string>{"subject (expert)", "element 1", "element 2", "element 3"}));
+  EXPECT_THROW(domain_names("chess", 1), InputError);
+}
+
+// A camera frame, its detections and its observations (in that order, as perception and
+// the labeller send them) make the annotated frame: each box drawn in the colour of its
+// most likely source by eta, and listed in the JSON with that source.
+TEST(DashboardState, FrameWithDetectionsColouredByMostLikelySource) {
+  DashboardState state;
+  cv::Mat image(240, 320, CV_8UC3, cv::Scalar(200, 200, 200));
+  std::vector<unsigned char> png;
+  cv::imencode(".png", image, png);
+  hbirl::camera_frame_t f{};
+  f.episode = 3;
+  f.step = 2;
+  f.frame = 1;
+  f.utime = 7'500'000;
+  f.width = 320;
+  f.height = 240;
+  f.encoding = "png";
+  f.size = static_cast<std::int32_t>(png.size());
+  f.data.assign(png.begin(), png.end());
+  state.on_camera(f);
+  EXPECT_TRUE(state.frame_png().empty());  // no detections yet
+  hbirl::detections_t d{};
+  d.episode = 3;
+  d.step = 2;
+  d.frame = 1;
+  d.width = 320;
+  d.height = 240;
+  d.n = 2;
+  d.cls = {hbirl::detections_t::CLASS_GRIPPER, hbirl::detections_t::CLASS_ONION};
+  d.x = {50, 200};
+  d.y = {60, 150};
+  d.area = {400, 100};
+  d.box_x = {40, 190};
+  d.box_y = {50, 140};
+  d.box_w = {20, 20};
+  d.box_h = {20, 20};
+  d.dark_share = {0, 0.2f};
+  state.on_detections(d);
+  hbirl::observations_t o{};
+  o.episode = 3;
+  o.step = 2;
+  o.frame = 1;
+  o.num_symbols = 22;
+  o.num_sources = 4;
+  o.n = 2;
+  o.symbol = {6, 21};
+  o.eta = {{0.7, 0.3, 0, 0}, {0.1, 0.05, 0.25, 0.6}};
+  const std::int64_t before = state.version();
+  state.on_observations(o);
+  EXPECT_GT(state.version(), before);
+  const nlohmann::json j = state.json(0);
+  ASSERT_FALSE(j["camera"].is_null());
+  EXPECT_EQ(j["camera"]["episode"], 3);
+  EXPECT_DOUBLE_EQ(j["camera"]["sim_seconds"].get<double>(), 7.5);
+  ASSERT_EQ(j["camera"]["detections"].size(), 2u);
+  EXPECT_EQ(j["camera"]["detections"][0]["source"], 0);  // 0.7: the subject
+  EXPECT_EQ(j["camera"]["detections"][1]["source"], 3);  // 0.6: the foreground person
+  EXPECT_EQ(j["camera"]["detections"][1]["class"], "onion");
+  EXPECT_EQ(j["observations"]["by_source_symbol"][3][21], 1);
+  // The drawn frame: the second box's left edge has the foreground person's colour.
+  const std::vector<unsigned char> out = state.frame_png();
+  const cv::Mat drawn = cv::imdecode(out, cv::IMREAD_COLOR);
+  ASSERT_EQ(drawn.cols, 320);
+  const std::string hex = j["source_colours"][3];
+  const cv::Vec3b px = drawn.at<cv::Vec3b>(150, 190);
+  char got[8];
+  std::snprintf(got, sizeof got, "#%02x%02x%02x", px[2], px[1], px[0]);
+  EXPECT_EQ(std::string(got), hex);
+  EXPECT_EQ(drawn.at<cv::Vec3b>(5, 5), cv::Vec3b(200, 200, 200));  // the rest as sent
+}
+
+// The posterior: state marginals are the pair marginals summed over actions; the most
+// likely pair per step; the ground truth of that episode next to it.
+TEST(DashboardState, PosteriorAgainstGroundTruth) {
+  DashboardState state;
+  hbirl::posterior_t p{};
+  p.domain = "gridworld";
+  p.episode = 4;
+  p.iteration = 9;
+  p.num_steps = 2;
+  p.num_states = 25;
+  p.num_actions = 4;
+  p.num_pairs = 100;
+  p.marginals.assign(2, std::vector<double>(100, 0.0));
+  p.marginals[0][4 * 7 + 1] = 0.6;  // state 7, action 1
+  p.marginals[0][4 * 7 + 2] = 0.1;
+  p.marginals[0][4 * 3 + 0] = 0.3;
+  p.marginals[1][4 * 8 + 3] = 1.0;
+  state.on_posterior(p);
+  EXPECT_TRUE(state.json(0)["posterior"]["truth"].is_null());
+  for (int t = 0; t < 2; ++t) {
+    hbirl::ground_truth_t g{};
+    g.domain = "gridworld";
+    g.episode = 4;
+    g.step = t;
+    g.state = t == 0 ? 7 : 9;
+    g.action = t == 0 ? 1 : 3;
+    g.num_features = 4;
+    g.true_weights = {0, 1, 0, 0};
+    state.on_truth(g);
+  }
+  const nlohmann::json j = state.json(0)["posterior"];
+  EXPECT_EQ(j["episode"], 4);
+  EXPECT_NEAR(j["state_marginals"][0][7].get<double>(), 0.7, 1e-15);
+  EXPECT_NEAR(j["state_marginals"][0][3].get<double>(), 0.3, 1e-15);
+  EXPECT_EQ(j["most_likely"][0]["state"], 7);
+  EXPECT_EQ(j["most_likely"][0]["action"], 1);
+  EXPECT_EQ(j["most_likely"][1]["state"], 8);
+  EXPECT_EQ(j["truth"][1]["state"], 9);
+  EXPECT_EQ(state.json(0)["names"]["states"].size(), 25u);
+  // Not a posterior: refused, and the shown one stays.
+  p.num_pairs = 99;
+  EXPECT_THROW(state.on_posterior(p), InputError);
+  p.num_pairs = 100;
+  p.marginals[1][0] = 1.5;
+  EXPECT_THROW(state.on_posterior(p), InputError);
+  EXPECT_EQ(state.json(0)["posterior"]["most_likely"][1]["state"], 8);
+}
+
+TEST(DashboardState, LearningProgressThetaAndServices) {
+  DashboardState state;
+  EXPECT_TRUE(state.json(0)["theta"].is_null());
+  for (int it = 1; it <= 3; ++it) {
+    hbirl::em_progress_t e{};
+    e.iteration = it;
+    e.log_likelihood = -100.0 + it;
+    e.ile = it == 3 ? 0.0 : -1.0;  // -1: unknown
+    e.num_features = 2;
+    e.theta = {0.1 * it, -0.1 * it};
+    e.retries = it - 1;
+    state.on_progress(e);
+  }
+  nlohmann::json j = state.json(0);
+  ASSERT_EQ(j["em"].size(), 3u);
+  EXPECT_TRUE(j["em"][0]["ile"].is_null());
+  EXPECT_EQ(j["em"][2]["ile"], 0.0);
+  EXPECT_EQ(j["theta"]["learned"][0], 0.1 * 3);
+  EXPECT_FALSE(j["theta"]["final"]);
+  EXPECT_EQ(j["estep"]["retried_blocks"], 2);
+  hbirl::reward_t r{};
+  r.domain = "onion";
+  r.final = true;
+  r.num_features = 2;
+  r.theta = {1.0, -1.0};
+  r.num_true = 2;
+  r.true_theta = {2.0, -2.0};
+  r.ile = 0.0;
+  state.on_reward(r);
+  j = state.json(0);
+  EXPECT_TRUE(j["theta"]["final"]);
+  EXPECT_EQ(j["theta"]["true"][1], -2.0);
+  EXPECT_EQ(j["reward"]["ile"], 0.0);
+  hbirl::em_progress_t again{};  // a new optimiser run starts over
+  again.iteration = 1;
+  state.on_progress(again);
+  EXPECT_EQ(state.json(0)["em"].size(), 1u);
+  hbirl::service_status_t s{};
+  s.service = "sampler";
+  s.id = "sampler-1";
+  s.state = "running";
+  s.bad_messages = 5;
+  state.on_status(s, 1'000'000);
+  j = state.json(3'500'000);
+  ASSERT_EQ(j["services"].size(), 1u);
+  EXPECT_DOUBLE_EQ(j["services"][0]["seconds_since_heartbeat"].get<double>(), 2.5);
+  EXPECT_EQ(j["services"][0]["bad_messages"], 5);
+  s.id = "";
+  EXPECT_THROW(state.on_status(s, 0), InputError);
+}
+
+// Off the bus: garbage and messages that do not validate are counted, and the rest shows.
+TEST(DashboardState, BadMessagesOnTheBusAreCounted) {
+  auto hub = std::make_shared<services::MemoryHub>();
+  services::MemoryBus bus(hub), sender(hub);
+  services::Counters counters, out;
+  counters.quiet = out.quiet = true;
+  DashboardState state;
+  state.subscribe(bus, counters);
+  const char garbage[] = "garbage garbage garbage";
+  for (const auto* channel : {&services::channels::kCamera, &services::channels::kPosterior, &services::channels::kStatus}) {
+    sender.publish(*channel, garbage, sizeof garbage);
+  }
+  hbirl::observation_model_t m{};
+  m.domain = "onion";
+  m.num_states = 2;
+  m.num_actions = 2;
+  m.num_pairs = 5;  // not 2 x 2
+  services::publish(sender, services::channels::kObservationModel, m, out);
+  hbirl::episode_marker_t e{};
+  e.domain = "onion";
+  e.episode = 2;
+  e.kind = hbirl::episode_marker_t::BEGIN_STEP;
+  e.step = 4;
+  services::publish(sender, services::channels::kEpisode, e, out);
+  while (bus.handle(0) > 0) {
+  }
+  EXPECT_EQ(counters.bad_messages, 4);
+  const nlohmann::json j = state.json(0);
+  EXPECT_EQ(j["domain"], "onion");
+  EXPECT_EQ(j["run"]["episode"], 2);
+  EXPECT_EQ(j["run"]["step"], 4);
+  EXPECT_TRUE(j["model"].is_null());
+}
+
+}  // namespace
+}  // namespace hbirl::dashboard
