@@ -1,4 +1,6 @@
 // hbirl experiment: reproduce the paper's figures.
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -58,24 +60,28 @@ std::vector<GridworldMethod> parse_methods(const std::string& text) {
   return methods;
 }
 
-// "\r[=======>     ] 123/2925 runs  0:42 elapsed  ETA 1:10" on stderr, at most 10 times a second.
+// "\r[=======>     ] 123/2925 runs  0:42 elapsed  ETA 1:10" on stderr, at most 10 times a
+// second; when stderr is not a terminal (a log file), one plain line every 10 seconds.
 class ProgressBar {
  public:
-  explicit ProgressBar(std::string what) : what_(std::move(what)), start_(std::chrono::steady_clock::now()) {}
+  explicit ProgressBar(std::string what)
+      : what_(std::move(what)), start_(std::chrono::steady_clock::now()), tty_(::isatty(STDERR_FILENO) == 1) {}
   void update(int done, int total) {
     const std::lock_guard<std::mutex> lock(mutex_);
     const auto now = std::chrono::steady_clock::now();
-    if (done < total && now - last_ < std::chrono::milliseconds(100)) return;
+    if (done < total && now - last_ < std::chrono::milliseconds(tty_ ? 100 : 10000)) return;
     last_ = now;
     const double elapsed = std::chrono::duration<double>(now - start_).count();
     const int width = 30;
     const int filled = total == 0 ? width : width * done / total;
     std::ostringstream line;
-    line << "\r[" << std::string(static_cast<size_t>(filled), '=') << (filled < width ? ">" : "")
-         << std::string(static_cast<size_t>(std::max(0, width - filled - 1)), ' ') << "] " << done << "/" << total << " "
-         << what_ << "  " << clock(elapsed) << " elapsed";
+    if (tty_) {
+      line << "\r[" << std::string(static_cast<size_t>(filled), '=') << (filled < width ? ">" : "")
+           << std::string(static_cast<size_t>(std::max(0, width - filled - 1)), ' ') << "] ";
+    }
+    line << done << "/" << total << " " << what_ << "  " << clock(elapsed) << " elapsed";
     if (done > 0 && done < total) line << "  ETA " << clock(elapsed * (total - done) / done);
-    if (done == total) line << "\n";
+    if (done == total || !tty_) line << "\n";
     std::cerr << line.str() << std::flush;
   }
 
@@ -88,6 +94,7 @@ class ProgressBar {
   }
   std::string what_;
   std::chrono::steady_clock::time_point start_;
+  bool tty_;
   std::chrono::steady_clock::time_point last_{};
   std::mutex mutex_;
 };

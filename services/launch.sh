@@ -121,6 +121,7 @@ inner="${HBIRL_LAUNCH_INNER:-}"
 [ -z "$dashboard_port" ] || record=1  # the dashboard follows the recording
 dashboard_pid=""
 if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
+  rm -f "$out/run.lcmlog"  # an earlier run's recording is not this one's
   if [ -x "$build/hbirl-dashboard" ]; then
     "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" >"$out/logs/dashboard.log" 2>&1 &
     dashboard_pid=$!
@@ -142,6 +143,7 @@ stop_dashboard() {
 # After the run (outer launch.sh): the report, and the dashboard kept up or stopped.
 finish() {
   local status="$1"
+  trap 'stop_dashboard; exit 130' INT TERM
   if [ -z "$inner" ] && [ "$report" = 1 ] && [ "$record" = 1 ] && [ -f "$out/run.lcmlog" ] && [ -x "$build/hbirl" ]; then
     if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" >/dev/null 2>"$out/logs/report.log"; then
       echo "launch.sh: report: $out/report/index.html"
@@ -165,11 +167,15 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
   elif unshare -rn true 2>/dev/null; then
     echo "launch.sh: multicast is not routed to loopback here: running the set in a private network namespace"
     echo "           (unshare -rn; lo up; ip route add 224.0.0.0/4 dev lo)"
-    trap 'stop_dashboard; exit 130' INT TERM
-    set +e
+    # In the background, so that a signal to this script reaches its trap at once, which
+    # passes it on (the set's own launch.sh then stops its services).
     HBIRL_IN_NETNS=1 HBIRL_LAUNCH_INNER=1 unshare -rn -- bash -c \
       'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record)
+      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record) &
+    set_pid=$!
+    trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; stop_dashboard; exit 130' INT TERM
+    set +e
+    wait "$set_pid"
     status=$?
     set -e
     trap - INT TERM
@@ -181,7 +187,10 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     exit 1
   fi
 fi
-[ -n "$url" ] || url="udpm://239.255.76.67:7667?ttl=0"
+# A 2 MB receive buffer per socket (capped by net.core.rmem_max) rides out bursts and
+# busy moments: a receiver that loses a message (lcm-logger above all: it cannot ask for
+# it again) makes the recording differ from what the optimiser learned from.
+[ -n "$url" ] || url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152"
 
 pids=()
 names=()

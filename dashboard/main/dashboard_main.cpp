@@ -39,36 +39,45 @@ int run(int argc, char** argv) {
   if (!url.empty() && !log.empty()) throw InputError("--log", "give --url or --log, not both");
 
   services::install_stop_handlers();
+  // Listen first (a port in use fails at once), then wait for the log to appear. The bus
+  // outlives the state that subscribes to it; the server thread ends first of all.
   std::unique_ptr<services::Bus> bus;
+  services::Counters counters;
+  counters.service = "hbirl-dashboard";
+  dashboard::DashboardState state;
+  dashboard::Server server(state, web);
+  const int bound = server.bind(host, port);
+  std::thread serving([&server] { server.run(); });
+  struct StopServer {  // whatever happens below, the server thread ends before `server` does
+    dashboard::Server& server;
+    std::thread& thread;
+    ~StopServer() {
+      server.stop();
+      if (thread.joinable()) thread.join();
+    }
+  } stop_server{server, serving};
+  std::fprintf(stderr, "hbirl-dashboard: http://%s:%d/  (%s %s; Ctrl-C to stop)\n", host == "0.0.0.0" ? "localhost" : host.c_str(),
+               bound, log.empty() ? "listening on" : "following", log.empty() ? (url.empty() ? "LCM's default URL" : url.c_str()) : log.c_str());
   if (!log.empty()) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                               std::chrono::duration<double>(wait_log));
     while (!std::filesystem::exists(log) && std::chrono::steady_clock::now() < until && !services::stop_requested()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
+    if (services::stop_requested()) return 0;
     auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("bus", ...) if it cannot
     follow->follow(true);
     bus = std::move(follow);
   } else {
     bus = std::make_unique<services::LcmBus>(url);
   }
-  services::Counters counters;
-  counters.service = "hbirl-dashboard";
-  dashboard::DashboardState state;
   state.subscribe(*bus, counters);
-  dashboard::Server server(state, web);
-  const int bound = server.bind(host, port);
-  std::thread serving([&server] { server.run(); });
-  std::fprintf(stderr, "hbirl-dashboard: http://%s:%d/  (%s %s; Ctrl-C to stop)\n", host == "0.0.0.0" ? "localhost" : host.c_str(),
-               bound, log.empty() ? "listening on" : "following", log.empty() ? (url.empty() ? "LCM's default URL" : url.c_str()) : log.c_str());
   std::unique_ptr<services::Heartbeat> heartbeat;
   if (log.empty()) heartbeat = std::make_unique<services::Heartbeat>(*bus, counters, "dashboard", services::default_id("dashboard"));
   while (!services::stop_requested()) {
     if (bus->handle(100) < 0) break;
     if (heartbeat) heartbeat->tick("running");
   }
-  server.stop();
-  serving.join();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   const double cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +

@@ -218,7 +218,7 @@ Report write_report(const std::string& log_path, const std::string& out_dir) {
   const json s = state.json(services::wall_utime());
   {
     std::ofstream out(dir / "state.json");
-    out << s.dump(1) << "\n";
+    out << s.dump(1, ' ', false, json::error_handler_t::replace) << "\n";
     if (!out) throw InputError("--out", "cannot write " + (dir / "state.json").string());
   }
   const std::vector<unsigned char> frame = state.frame_png();

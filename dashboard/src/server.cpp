@@ -23,7 +23,9 @@ Server::Server(const DashboardState& state, const std::string& web_dir) : impl_(
   if (!http.set_mount_point("/", web_dir)) throw InputError("--web", "cannot serve '" + web_dir + "'");
   http.Get("/api/state", [&state](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
-    res.set_content(state.json(services::wall_utime()).dump(), "application/json");
+    // Strings from the network may not be UTF-8: replaced, never a failed page.
+    res.set_content(state.json(services::wall_utime()).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+                    "application/json");
   });
   http.Get("/api/frame.png", [&state](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");

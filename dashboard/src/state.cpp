@@ -22,6 +22,19 @@ constexpr int kMaxSymbols = 10000;
 constexpr int kMaxPairs = 1000000;
 constexpr int kMaxSteps = 100000;
 constexpr size_t kPendingFrames = 256;  // frames waiting for their detections and observations
+constexpr size_t kMaxEpisodes = 10000;   // ground truth kept for the newest episodes
+constexpr size_t kMaxIterations = 100000;
+constexpr size_t kMaxServices = 1000;
+constexpr double kServiceForgotten_s = 600.0;  // a service not heard from for this long is dropped
+constexpr size_t kMaxText = 300;
+
+std::string clipped(const std::string& s) { return s.size() > kMaxText ? s.substr(0, kMaxText) + "…" : s; }
+
+// Both dimensions at least 1 and their product num_pairs, without overflow.
+bool pairs_fit(int states, int actions, int pairs) {
+  return states >= 1 && actions >= 1 && pairs >= 1 && pairs <= kMaxPairs &&
+         static_cast<std::int64_t>(states) * actions == static_cast<std::int64_t>(pairs);
+}
 
 // One colour per source, the page's and the annotated frame's: subject first.
 const std::vector<cv::Scalar>& source_colours() {  // BGR
@@ -115,7 +128,14 @@ void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
   Pending& p = pending_[{m.episode, m.step, m.frame}];
   p.image.assign(m.data.begin(), m.data.begin() + m.size);
   p.utime = m.utime;
-  while (pending_.size() > kPendingFrames) pending_.erase(pending_.begin());
+  p.order = ++pending_order_;
+  if (pending_.size() > kPendingFrames) {  // drop the one that came first (not the smallest key)
+    auto oldest = pending_.begin();
+    for (auto it = pending_.begin(); it != pending_.end(); ++it) {
+      if (it->second.order < oldest->second.order) oldest = it;
+    }
+    pending_.erase(oldest);
+  }
   ++frames_;
   sim_utime_ = std::max(sim_utime_, m.utime);
   changed();
@@ -149,7 +169,9 @@ void DashboardState::on_observations(const hbirl::observations_t& m) {
   const auto it = pending_.find(key);
   if (it != pending_.end() && !it->second.image.empty() && it->second.detections && it->second.detections->n == m.n) {
     frame_ = Frame{key, it->second.utime, std::move(it->second.image), std::move(*it->second.detections), m};
-    pending_.erase(pending_.begin(), std::next(it));
+    ++frame_serial_;
+    const std::uint64_t shown = it->second.order;
+    std::erase_if(pending_, [shown](const auto& entry) { return entry.second.order <= shown; });  // older frames: never shown now
   }
   changed();
 }
@@ -189,6 +211,7 @@ void DashboardState::on_truth(const hbirl::ground_truth_t& m) {
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   truth_[m.episode][m.step] = {m.state, m.action};
+  while (truth_.size() > kMaxEpisodes) truth_.erase(truth_.begin());
   if (m.num_features > 0) true_weights_ = m.true_weights;
   changed();
 }
@@ -202,6 +225,7 @@ void DashboardState::on_progress(const hbirl::em_progress_t& m) {
   const std::lock_guard<std::mutex> lock(mutex_);
   // A new run of the optimiser starts again from iteration 1.
   if (!progress_.empty() && m.iteration <= progress_.back().iteration) progress_.clear();
+  if (progress_.size() >= kMaxIterations) throw InputError("em_progress.iteration", "more iterations than the dashboard keeps");
   progress_.push_back(m);
   changed();
 }
@@ -221,14 +245,21 @@ void DashboardState::on_status(const hbirl::service_status_t& m, std::int64_t no
   if (m.id.empty()) throw InputError("status.id", "is empty");
   if (m.id.size() > 200 || m.service.size() > 100) throw InputError("status.id", "is too long");
   const std::lock_guard<std::mutex> lock(mutex_);
-  if (services_.size() >= 1000 && !services_.count(m.id)) throw InputError("status.id", "too many services");
-  services_[m.id] = Service{m, now_utime};
+  std::erase_if(services_, [now_utime](const auto& s) {
+    return static_cast<double>(now_utime - s.second.heard_utime) * 1e-6 > kServiceForgotten_s;
+  });
+  if (services_.size() >= kMaxServices && !services_.count(m.id)) throw InputError("status.id", "too many services");
+  Service& s = services_[m.id];
+  s.status = m;
+  s.status.state = clipped(m.state);
+  s.status.detail = clipped(m.detail);
+  s.heard_utime = now_utime;
   changed();
 }
 
 void DashboardState::on_model(const hbirl::observation_model_t& m) {
-  if (m.num_pairs != m.num_states * m.num_actions || m.num_pairs < 1 || m.num_pairs > kMaxPairs) {
-    throw InputError("observation_model.num_pairs", "must be num_states * num_actions");
+  if (!pairs_fit(m.num_states, m.num_actions, m.num_pairs)) {
+    throw InputError("observation_model.num_pairs", "must be num_states * num_actions, both at least 1");
   }
   if (m.num_symbols < 1 || m.num_symbols > kMaxSymbols || m.num_confounders < 0 || m.num_confounders > kMaxSources) {
     throw InputError("observation_model.num_symbols", "out of range");
@@ -242,8 +273,8 @@ void DashboardState::on_model(const hbirl::observation_model_t& m) {
 }
 
 void DashboardState::on_posterior(const hbirl::posterior_t& m) {
-  if (m.num_pairs != m.num_states * m.num_actions || m.num_pairs < 1 || m.num_pairs > kMaxPairs) {
-    throw InputError("posterior.num_pairs", "must be num_states * num_actions");
+  if (!pairs_fit(m.num_states, m.num_actions, m.num_pairs)) {
+    throw InputError("posterior.num_pairs", "must be num_states * num_actions, both at least 1");
   }
   if (m.num_steps < 0 || m.num_steps > kMaxSteps) throw InputError("posterior.num_steps", "out of range");
   check_rows(m.marginals, "posterior.marginals", 0.0, 1.0 + 1e-9);
@@ -261,8 +292,7 @@ std::int64_t DashboardState::version() const {
 std::vector<unsigned char> DashboardState::frame_png() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   if (!frame_) return {};
-  const std::int64_t v = static_cast<std::int64_t>(std::get<0>(frame_->key)) * 1000003 + std::get<1>(frame_->key) * 1009 +
-                         std::get<2>(frame_->key) + frame_->utime;
+  const std::int64_t v = frame_serial_;
   if (v == png_version_) return png_;
   cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(frame_->image.size()), CV_8UC1, const_cast<unsigned char*>(frame_->image.data())),
                                cv::IMREAD_COLOR);

@@ -73,7 +73,8 @@ function showRun(s) {
 
 function showCamera(s) {
   const names = s.names;
-  $('legend').innerHTML = names.sources.map((n, i) => `<span style="--c:${s.source_colours[i % s.source_colours.length]}">${n}</span>`).join('');
+  $('legend').innerHTML = names.sources.map((n, i) =>
+    `<span style="--c:${escapeHtml(s.source_colours[i % s.source_colours.length])}">${escapeHtml(n)}</span>`).join('');
   if (s.camera) {
     const c = s.camera;
     const key = `${c.episode}/${c.step}/${c.frame}/${c.sim_seconds}`;
@@ -107,7 +108,7 @@ function showCamera(s) {
 
 function showPosterior(s) {
   const p = s.posterior;
-  if (!p) return;
+  if (!p || !p.steps) return;
   const steps = Array.from({ length: p.steps }, (_, t) => `${t + 1}`);
   const states = s.names.states.length ? s.names.states : p.state_marginals[0].map((_, i) => `${i}`);
   const cells = [];
@@ -188,7 +189,7 @@ function showServices(s) {
   $('services').querySelector('tbody').innerHTML = s.services.map((x) => {
     const age = x.seconds_since_heartbeat;
     const done = x.state === 'done' || x.state === 'stopped';
-    return `<tr><td>${x.service}</td><td>${x.id}</td><td>${x.state}</td>` +
+    return `<tr><td>${escapeHtml(x.service)}</td><td>${escapeHtml(x.id)}</td><td>${escapeHtml(x.state)}</td>` +
       `<td class="${age > 3 && !done ? 'stale' : ''}">${age.toFixed(1)} s ago</td><td>${x.messages_in}</td><td>${x.messages_out}</td>` +
       `<td class="${x.bad_messages > 0 ? 'bad' : ''}">${x.bad_messages}</td><td>${x.gaps}</td><td>${escapeHtml(x.detail)}</td></tr>`;
   }).join('');
@@ -201,6 +202,15 @@ function escapeHtml(t) {
   return String(t).replace(/[&<>"]/g, (ch) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[ch]));
 }
 
+// One panel's failure (data it cannot draw) must not stop the others.
+function draw(show, s) {
+  try {
+    show(s);
+  } catch (e) {
+    console.error(`${show.name}: ${e}`);
+  }
+}
+
 async function poll() {
   try {
     const response = await fetch('api/state', { cache: 'no-store' });
@@ -208,14 +218,9 @@ async function poll() {
     $('connection').textContent = '';
     if (s.version !== shownVersion) {
       shownVersion = s.version;
-      showRun(s);
-      showCamera(s);
-      showPosterior(s);
-      showEm(s);
-      showTheta(s);
-      showModel(s);
+      for (const show of [showRun, showCamera, showPosterior, showEm, showTheta, showModel]) draw(show, s);
     }
-    showServices(s);  // heartbeat ages change with the clock
+    draw(showServices, s);  // heartbeat ages change with the clock
   } catch (e) {
     $('connection').textContent = 'not connected to hbirl-dashboard';
   }

@@ -134,14 +134,24 @@ std::int64_t DatasetBuilder::missing_frames() const {
   return missing;
 }
 
+std::int64_t DatasetBuilder::missing_truth() const {
+  std::int64_t missing = 0;
+  for (const auto& [id, e] : episodes_) {
+    if (!e.ended || !e.controlled) continue;
+    for (int t = 0; t < e.num_steps; ++t) missing += !e.truth.count(t);
+  }
+  return missing;
+}
+
 std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t limit) const {
   std::vector<std::tuple<int, int, int>> out;
   for (const auto& [id, e] : episodes_) {
     if (!e.ended) continue;
     for (int t = 0; t < e.num_steps; ++t) {
+      const bool no_truth = e.controlled && !e.truth.count(t);
       for (int k = 0; k < e.frames_per_step; ++k) {
         if (out.size() >= limit) return out;
-        if (!e.frames.count({t, k})) out.emplace_back(id, t, k);
+        if (!e.frames.count({t, k}) || (k == 0 && no_truth)) out.emplace_back(id, t, k);
       }
     }
   }
@@ -153,7 +163,7 @@ bool DatasetBuilder::complete() const {
   for (const auto& [id, e] : episodes_) {
     if (!e.ended) return false;
   }
-  return missing_frames() == 0;
+  return missing_frames() == 0 && missing_truth() == 0;
 }
 
 Dataset DatasetBuilder::build() const {

@@ -1,5 +1,7 @@
 #include "services/log_bus.hpp"
 
+#include <sys/stat.h>
+
 #include <chrono>
 #include <cstdio>
 #include <thread>
@@ -46,7 +48,9 @@ int LogBus::handle(int timeout_ms) {
       // The end, or an event the logger is still writing: read it again from its start
       // once more has been written (clearerr: glibc's end-of-file flag is sticky).
       std::clearerr(file);
-      std::fseek(file, at, SEEK_SET);
+      struct stat st {};
+      const bool truncated = ::fstat(::fileno(file), &st) == 0 && st.st_size < at;  // rewritten from the start (lcm-logger -f)
+      std::fseek(file, truncated ? 0L : at, SEEK_SET);
       if (std::chrono::steady_clock::now() >= deadline) return 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;

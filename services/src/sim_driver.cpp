@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <thread>
 
 #include "experiments/onion_data.hpp"
@@ -224,16 +225,34 @@ void SimDriver::on_request(const hbirl::frame_request_t& m) {
       throw InputError("frame_request[" + std::to_string(i) + "]", "is not a frame of this run");
     }
   }
+  std::set<std::pair<int, int>> steps;  // their ground truth again too (it may be what was lost)
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
+    if (steps.emplace(m.episode[k], m.step[k]).second) publish_truth(m.episode[k], m.step[k]);
     p.publish_frame(m.episode[k], m.step[k], m.frame[k]);
     ++resent_;
   }
 }
 
+void SimDriver::publish_truth(int id, int t) {
+  const Plan& p = *plan_;
+  const Plan::Episode& e = p.episodes[static_cast<size_t>(id)];
+  hbirl::ground_truth_t truth{};
+  truth.utime = micros(e.start_time + t * p.step_seconds);
+  truth.seq = ++truth_seq_;
+  truth.domain = p.domain;
+  truth.episode = id;
+  truth.step = t;
+  truth.state = e.steps[static_cast<size_t>(t)].state;
+  truth.action = e.steps[static_cast<size_t>(t)].action;
+  truth.blemished = e.blemished;
+  truth.num_features = static_cast<std::int32_t>(p.true_weights.size());
+  truth.true_weights.assign(p.true_weights.data(), p.true_weights.data() + p.true_weights.size());
+  publish(bus_, channels::kGroundTruth, truth, counters_);
+}
+
 bool SimDriver::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
   const Plan& p = *plan_;
-  std::int64_t truth_seq = 0;
   const auto started = Clock::now();
   std::int64_t frames_sent = 0;
   for (int id = 0; id < static_cast<int>(p.episodes.size()); ++id) {
@@ -243,18 +262,7 @@ bool SimDriver::publish_run(const std::function<bool()>& stop, const std::functi
       auto m = marker(id, hbirl::episode_marker_t::BEGIN_STEP, e.start_time + t * p.step_seconds);
       m.step = t;
       publish(bus_, channels::kEpisode, m, counters_);
-      hbirl::ground_truth_t truth{};
-      truth.utime = m.utime;
-      truth.seq = ++truth_seq;
-      truth.domain = p.domain;
-      truth.episode = id;
-      truth.step = t;
-      truth.state = e.steps[static_cast<size_t>(t)].state;
-      truth.action = e.steps[static_cast<size_t>(t)].action;
-      truth.blemished = e.blemished;
-      truth.num_features = static_cast<std::int32_t>(p.true_weights.size());
-      truth.true_weights.assign(p.true_weights.data(), p.true_weights.data() + p.true_weights.size());
-      publish(bus_, channels::kGroundTruth, truth, counters_);
+      publish_truth(id, t);
       for (int k = 0; k < p.frames_per_step; ++k) {
         if (stop && stop()) return false;
         p.publish_frame(id, t, k);

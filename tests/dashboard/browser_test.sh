@@ -22,6 +22,14 @@ port=8765  # the namespace's own loopback: no other test sees it
   --dashboard-port "$port" --keep-dashboard >"$tmp/launch.out" 2>&1 &
 launch=$!
 HOME="$tmp" python3 "$here/browser_check.py" "http://127.0.0.1:$port/" "$build/dashboard_screenshot.png" 240 || fail "the browser check"
+# The panels fill at the first EM iteration: let the run finish (and write its report)
+# before stopping the dashboard it keeps up.
+for _ in $(seq 1 600); do
+  grep -q "the dashboard stays up" "$tmp/launch.out" && break
+  kill -0 "$launch" 2>/dev/null || break
+  sleep 0.5
+done
+grep -q "the dashboard stays up" "$tmp/launch.out" || fail "the run did not finish"
 kill -TERM "$launch"
 wait "$launch" || fail "launch.sh exited non-zero"
 launch=""

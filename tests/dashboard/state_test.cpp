@@ -194,6 +194,66 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
   EXPECT_THROW(state.on_status(s, 0), InputError);
 }
 
+// Hostile or stale input: dimensions whose product fools a naive check, frames that are
+// never completed (dropped in arrival order, whatever their numbers), text that is not
+// UTF-8 (replaced when sent, never a failed page).
+TEST(DashboardState, HostileInputCannotBreakThePage) {
+  DashboardState state;
+  hbirl::posterior_t p{};
+  p.num_states = -1;
+  p.num_actions = -1;
+  p.num_pairs = 1;
+  p.num_steps = 0;
+  EXPECT_THROW(state.on_posterior(p), InputError);
+  hbirl::observation_model_t m{};
+  m.num_states = 65536;
+  m.num_actions = 65536;  // overflows int
+  m.num_pairs = 0;
+  m.num_symbols = 1;
+  EXPECT_THROW(state.on_model(m), InputError);
+  cv::Mat image(240, 320, CV_8UC3, cv::Scalar(10, 20, 30));
+  std::vector<unsigned char> png;
+  cv::imencode(".png", image, png);
+  const auto frame = [&](int episode, int step) {
+    hbirl::camera_frame_t f{};
+    f.episode = episode;
+    f.step = step;
+    f.width = 320;
+    f.height = 240;
+    f.encoding = "png";
+    f.size = static_cast<std::int32_t>(png.size());
+    f.data.assign(png.begin(), png.end());
+    state.on_camera(f);
+    hbirl::detections_t d{};
+    d.episode = episode;
+    d.step = step;
+    state.on_detections(d);
+  };
+  const auto observe = [&](int episode, int step) {
+    hbirl::observations_t o{};
+    o.episode = episode;
+    o.step = step;
+    o.num_symbols = 22;
+    o.num_sources = 4;
+    state.on_observations(o);
+  };
+  frame(1000000, 0);  // a huge episode number first: it must not stay forever
+  for (int t = 0; t < 300; ++t) frame(1, t);
+  observe(1000000, 0);
+  EXPECT_TRUE(state.json(0)["camera"].is_null());  // dropped: it came first
+  observe(1, 299);
+  EXPECT_EQ(state.json(0)["camera"]["step"], 299);
+  EXPECT_FALSE(state.frame_png().empty());
+  hbirl::service_status_t s{};
+  s.service = "sampler";
+  s.id = "sampler-\xff\xfe";
+  s.detail = std::string(5000, 'x') + "\xc3";
+  state.on_status(s, 0);
+  const nlohmann::json j = state.json(0);
+  EXPECT_NO_THROW(j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  EXPECT_LT(j["services"][0]["detail"].get<std::string>().size(), 400u);
+}
+
 // Off the bus: garbage and messages that do not validate are counted, and the rest shows.
 TEST(DashboardState, BadMessagesOnTheBusAreCounted) {
   auto hub = std::make_shared<services::MemoryHub>();

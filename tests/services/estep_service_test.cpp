@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "learner/hidden_data_em.hpp"
+#include "learner/soft_value_iteration.hpp"
 #include "services/memory_bus.hpp"
 #include "service_threads.hpp"
 #include "sim_driver/gridworld.hpp"
@@ -218,7 +219,17 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
     }
   });
   ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
-  expect_identical(learn(opt.executor), local());
+  // One E-step pass (every block) through the executor, against the same pass here.
+  const Task& t = task();
+  ObservationEStepOptions remote;
+  remote.executor = opt.executor;
+  const SoftSolution policy = soft_value_iteration(t.task.mdp, t.task.mdp.reward(Eigen::Vector4d(0.4, -0.1, 0.2, 0.9)));
+  const ObservationModel model = dirichlet_mean(t.prior);
+  const EStepStatistics there = ObservationEStep(t.task.mdp, t.observed, t.prior, remote).statistics(policy, model, 5);
+  const EStepStatistics here = ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5);
+  EXPECT_EQ(there.log_likelihood, here.log_likelihood);
+  EXPECT_EQ(there.counts, here.counts);
+  EXPECT_EQ(there.alpha_dot.subject, here.alpha_dot.subject);
   stop = true;
   beating.join();
   const auto stats = opt.executor->stats();

@@ -14,7 +14,7 @@ tmp="$(mktemp -d)"
 # HBIRL_KEEP=1 keeps the runs' logs and results for a look.
 # On the way out, whatever happened: stop what this test started.
 trap 'kill $(jobs -p) 2>/dev/null || true; if [ -n "${HBIRL_KEEP:-}" ]; then echo "kept $tmp" >&2; else rm -rf "$tmp"; fi' EXIT
-url="udpm://239.255.76.67:7667?ttl=0"
+url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152"
 # Paced at 250 frames/s; frames UDP loses on a busy machine are asked for again.
 small=(--sorts 4 --controlled-sorts 6 --fps 5 --max-fps 250)
 
@@ -22,6 +22,8 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # The learned theta, exactly as printed (shortest round-trip doubles: equal text = equal bits).
 theta() { awk '/"theta": \[/{on=1; next} on && /\]/{exit} on{gsub(/[ ,]/, ""); printf "%s ", $0}' "$1"; }
 ile() { sed -n 's/^ *"ile": \([^,]*\),*$/\1/p' "$1"; }
+# What a result learned from, for failure messages.
+data_summary() { grep -E '"(dataset_digest|missing_frames|controlled_episodes|demonstrations)"' "$1" | tr -d ' \n'; }
 launch() {  # launch NAME ARGS...: the demo into $tmp/NAME
   local name="$1"; shift
   "$repo/services/launch.sh" --build "$build" --out "$tmp/$name" "${small[@]}" "$@" >"$tmp/$name.out" 2>&1 ||
@@ -40,7 +42,8 @@ case "$case" in
     [ -n "$(ile "$tmp/live/result.json")" ] || fail "no ILE in the result"
     awk -v x="$(ile "$tmp/live/result.json")" 'BEGIN { exit !(x + 0 < 1e-6) }' || fail "ILE $(ile "$tmp/live/result.json") >= 1e-6"
     "$build/hbirl" learn --log "$tmp/live/run.lcmlog" --out "$tmp/offline.json"
-    [ "$(theta "$tmp/offline.json")" = "$live_theta" ] || fail "hbirl learn --log: theta $(theta "$tmp/offline.json") != live $live_theta"
+    [ "$(theta "$tmp/offline.json")" = "$live_theta" ] ||
+      fail "hbirl learn --log: theta $(theta "$tmp/offline.json") != live $live_theta; offline: $(data_summary "$tmp/offline.json"); live: $(data_summary "$tmp/live/result.json")"
     "$build/hbirl-optimiser" --url "$url" --workers 0 --out "$tmp/replay.json" >/dev/null 2>"$tmp/replay.err" &
     optimiser=$!
     sleep 0.5
@@ -60,7 +63,7 @@ case "$case" in
     awk -v x="$(ile "$tmp/gw/result.json")" 'BEGIN { exit !(x != "" && x + 0 < 1) }' || fail "ILE '$(ile "$tmp/gw/result.json")' >= 1"
     "$build/hbirl" learn --log "$tmp/gw/run.lcmlog" --out "$tmp/gw_offline.json"
     [ "$(theta "$tmp/gw_offline.json")" = "$(theta "$tmp/gw/result.json")" ] ||
-      fail "hbirl learn --log: theta $(theta "$tmp/gw_offline.json") != live $(theta "$tmp/gw/result.json")"
+      fail "hbirl learn --log: theta $(theta "$tmp/gw_offline.json") != live $(theta "$tmp/gw/result.json"); offline: $(data_summary "$tmp/gw_offline.json"); live: $(data_summary "$tmp/gw/result.json")"
     echo "gridworld over LCM: theta $(theta "$tmp/gw/result.json"); ILE $(ile "$tmp/gw/result.json")"
     ;;
   workers_1_vs_4)

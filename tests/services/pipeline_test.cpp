@@ -35,6 +35,32 @@ SimDriverOptions small_run() {
   return o;
 }
 
+// The simulator publishes the run once the optimiser listens, then serves FRAME_REQUEST
+// until the optimiser is done; returns what the optimiser learned (and how many frames
+// the simulator sent again).
+std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const SimDriverOptions& run,
+                                                    int resend_after_ms, std::int64_t* resent = nullptr) {
+  MemoryBus sim_bus(hub);
+  Counters sim_counters = quiet("sim_driver");
+  SimDriver driver(sim_bus, run, sim_counters);
+  std::atomic<bool> done{false};
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    driver.publish_run(nullptr);
+    while (!done) sim_bus.handle(20);  // serving FRAME_REQUEST
+  });
+  MemoryBus opt_bus(hub);
+  Counters opt_counters = quiet("optimiser");
+  OptimiserOptions options;
+  options.resend_after_ms = resend_after_ms;
+  auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  done = true;
+  sim.join();
+  if (resent) *resent = driver.frames_resent();
+  return result;
+}
+
 // The whole onion pipeline in one process, each service on its own endpoint and thread:
 // camera frames (PNG) -> perception -> labeller -> optimiser with two sampler workers.
 // Everything the live run records also comes back from the log.
@@ -137,27 +163,12 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   });
   ServiceThread<PerceptionService> perception(hub, "perception");
   ServiceThread<LabellerService> labeller(hub, "labeller");
-  MemoryBus sim_bus(hub);
-  Counters sim_counters = quiet("sim_driver");
-  SimDriver driver(sim_bus, run, sim_counters);
-  std::atomic<bool> done{false};
-  std::promise<void> listening;
-  std::thread sim([&] {
-    listening.get_future().wait();
-    driver.publish_run(nullptr);
-    while (!done) sim_bus.handle(20);  // serving FRAME_REQUEST
-  });
-  MemoryBus opt_bus(hub);
-  Counters opt_counters = quiet("optimiser");
-  OptimiserOptions options;
-  options.resend_after_ms = 200;
-  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
-  done = true;
-  sim.join();
+  std::int64_t resent = 0;
+  const auto live = run_serving_requests(hub, run, 200, &resent);
   ASSERT_TRUE(live.has_value());
   EXPECT_GT(hub->dropped(), 0);
   EXPECT_GT(live->frame_requests, 0);
-  EXPECT_GT(driver.frames_resent(), 0);
+  EXPECT_GT(resent, 0);
   EXPECT_EQ(live->missing_frames, 0);
   onion::DemonstrationOptions demo_sorts;
   demo_sorts.sorts = run.sorts;
@@ -240,6 +251,32 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   EXPECT_EQ(best, goal);
   ASSERT_TRUE(live->learned.ile.has_value());
   EXPECT_LT(*live->learned.ile, 0.5) << "theta " << live->learned.theta.transpose();
+}
+
+// Ground truth lost on the way (every 5th message, and again when sent again): the
+// controlled run's prior needs every step's, so the optimiser asks for those steps again
+// and learns exactly what it learns without loss.
+TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
+  const Mdp mdp = domain_mdp("gridworld");
+  const auto run_with = [&](bool lossy) {
+    auto hub = std::make_shared<MemoryHub>();
+    if (lossy) {
+      hub->set_loss([](const std::string& channel, const std::uint8_t* data, int size) {
+        if (channel != channels::kGroundTruth) return false;
+        hbirl::ground_truth_t t;
+        return t.decode(data, 0, size) > 0 && t.seq % 5 == 0;
+      });
+    }
+    auto result = run_serving_requests(hub, gridworld_run(11, 6, 5), 100);
+    EXPECT_EQ(hub->dropped() > 0, lossy);
+    EXPECT_EQ(result->frame_requests > 0, lossy);
+    return *result;
+  };
+  const OptimiserResult clean = run_with(false), lossy = run_with(true);
+  EXPECT_EQ(lossy.data.skipped_controlled, 0);
+  ASSERT_EQ(lossy.data.controlled_truth.size(), 5u);
+  EXPECT_EQ(lossy.data.controlled_truth, clean.data.controlled_truth);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(lossy.learned.theta[k], clean.learned.theta[k]) << k;
 }
 
 // Asked to stop while it learns (SIGTERM in hbirl-optimiser), the optimiser stops at the

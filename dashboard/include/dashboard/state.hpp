@@ -58,8 +58,22 @@ class DashboardState {
   void on_model(const hbirl::observation_model_t& m);
   void on_posterior(const hbirl::posterior_t& m);
 
-  // Everything the page shows (the shape: docs/DASHBOARD.md). `now_utime`: wall clock,
-  // for heartbeat ages.
+  // Everything the page shows. `now_utime`: wall clock, for heartbeat ages. Keys:
+  //   version, domain, names {states, actions, features, symbols, sources}, source_colours,
+  //   run {episode, step, controlled, ended, sim_seconds, frames, episodes_ended},
+  //   camera {episode, step, frame, sim_seconds, width, height, detections [{class, box,
+  //     symbol, symbol_name, eta, source}]} | null,
+  //   observations {episode, step, frame, n, by_source_symbol [source][symbol]} | null,
+  //   em [{iteration, log_likelihood, ile, seconds, retries, local_blocks}],
+  //   theta {learned, true, final} | null, reward {final, ile, log_likelihood} | null,
+  //   posterior {episode, iteration, steps, state_marginals [t][state], most_likely
+  //     [{state, action, probability}], truth [{state, action}] | null, log_likelihood} | null,
+  //   model {iteration, num_states, num_actions, subject [pair][symbol], confounders
+  //     [element][symbol]} | null,
+  //   services [{id, service, state, seconds_since_heartbeat, messages_in, messages_out,
+  //     bad_messages, gaps, trajectories, detail}], estep {retried_blocks, local_blocks} | null.
+  // Unknown values are null (never NaN); strings from the network may hold invalid UTF-8:
+  // dump with error_handler_t::replace.
   nlohmann::json json(std::int64_t now_utime) const;
   // The latest frame that has its detections and observations, annotated, as PNG; empty
   // when there is none yet.
@@ -70,6 +84,7 @@ class DashboardState {
  private:
   using Key = std::tuple<int, int, int>;  // (episode, step, frame)
   struct Pending {
+    std::uint64_t order = 0;               // arrival: the oldest are dropped first
     std::vector<unsigned char> image;      // encoded, as sent
     std::int64_t utime = 0;                // the camera's
     std::optional<hbirl::detections_t> detections;
@@ -101,7 +116,9 @@ class DashboardState {
   std::optional<std::vector<double>> true_weights_;
   // The camera.
   std::map<Key, Pending> pending_;
+  std::uint64_t pending_order_ = 0;
   std::optional<Frame> frame_;
+  std::int64_t frame_serial_ = 0;  // counts frame_ changes
   mutable std::int64_t png_version_ = -1;
   mutable std::vector<unsigned char> png_;
   std::optional<hbirl::observations_t> last_observations_;

@@ -51,9 +51,13 @@ class DatasetBuilder {
 
   bool run_ended() const { return run_ended_; }
   // The run has ended and every episode has every frame's observations.
+  // ... and every controlled episode has every step's ground truth (its prior needs them).
   bool complete() const;
   std::int64_t missing_frames() const;   // of episodes that ended
-  // Up to `limit` missing (episode, step, frame), in order.
+  std::int64_t missing_truth() const;    // steps of controlled episodes that ended
+  // Up to `limit` missing (episode, step, frame), in order; a controlled step without its
+  // ground truth is asked for as its frame 0 (the simulator sends the truth of every step
+  // it sends frames of).
   std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
   std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }

@@ -14,7 +14,8 @@ class LogBus final : public Bus {
   // Throws InputError("bus", ...) if the log cannot be read (or `out_path` written).
   explicit LogBus(const std::string& path, const std::string& out_path = "");
   // Follow mode (the dashboard on a run being recorded): at the end of the log, handle()
-  // waits up to its timeout for more to be written (returning 0, never -1).
+  // waits up to its timeout for more to be written (returning 0, never -1); a log
+  // rewritten from the start is read again from its start.
   void follow(bool on) { follow_ = on; }
   // Writes to the output log when there is one; otherwise drops the message.
   bool publish(const std::string& channel, const void* data, int size) override;

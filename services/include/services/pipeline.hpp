@@ -62,8 +62,9 @@ struct SimDriverOptions {
 };
 // The simulator: publishes the whole run (EPISODE, GROUND_TRUTH, and CAMERA frames for the
 // onion domain, OBSERVATIONS for the gridworld), then END_RUN, and afterwards answers
-// FRAME_REQUEST by publishing the asked frames again (the run is deterministic: the same
-// pixels, the same observations) -- so frames lost on the way can be recovered.
+// FRAME_REQUEST by publishing the asked frames again, with their steps' ground truth (the
+// run is deterministic: the same pixels, the same observations) -- so frames and ground
+// truth lost on the way can be recovered.
 class SimDriver {
  public:
   SimDriver(Bus& bus, const SimDriverOptions& options, Counters& counters);
@@ -84,11 +85,12 @@ class SimDriver {
   hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;
   hbirl::episode_marker_t end_marker(int episode);
   void on_request(const hbirl::frame_request_t& m);
+  void publish_truth(int episode, int step);
   Bus& bus_;
   SimDriverOptions options_;
   Counters& counters_;
   std::unique_ptr<Plan> plan_;
-  std::int64_t marker_seq_ = 0;
+  std::int64_t marker_seq_ = 0, truth_seq_ = 0;
   std::int64_t resent_ = 0;
   Subscriptions subs_;  // last: ends first
 };
