@@ -408,12 +408,16 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
 
   if (posterior_) {
     const auto& p = *posterior_;
-    nlohmann::json marginals = nlohmann::json::array();
+    nlohmann::json marginals = nlohmann::json::array(), action_marginals = nlohmann::json::array();
     nlohmann::json best = nlohmann::json::array();
     for (const auto& row : p.marginals) {
-      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0);
-      for (int r = 0; r < p.num_pairs; ++r) states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
+      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0), actions(static_cast<size_t>(p.num_actions), 0.0);
+      for (int r = 0; r < p.num_pairs; ++r) {
+        states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
+        actions[static_cast<size_t>(r % p.num_actions)] += row[static_cast<size_t>(r)];
+      }
       marginals.push_back(states);
+      action_marginals.push_back(actions);
       const int r = static_cast<int>(std::max_element(row.begin(), row.end()) - row.begin());
       best.push_back({{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
     }
@@ -432,6 +436,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
     }
     j["posterior"] = {{"episode", p.episode},     {"iteration", p.iteration},
                       {"steps", p.num_steps},     {"state_marginals", marginals},
+                      {"action_marginals", action_marginals},
                       {"most_likely", best},      {"truth", truth},
                       {"log_likelihood", finite_or_null(p.log_likelihood)}};
   } else {

@@ -34,7 +34,8 @@ function matrix(id, xLabels, yLabels, cells, max, tooltip, extra = []) {
   };
   const scales = {
     x: { type: 'category', labels: xLabels, offset: true, grid: { display: false }, ticks: { maxRotation: 60, autoSkip: true } },
-    y: { type: 'category', labels: yLabels, offset: true, reverse: false, grid: { display: false }, ticks: { autoSkip: true, font: { size: 10 } } },
+    y: { type: 'category', labels: yLabels, offset: true, reverse: false, grid: { display: false },
+      ticks: { autoSkip: yLabels.length > 40, font: { size: 10 } } },
   };
   if (charts[id]) {
     charts[id].data = data;
@@ -126,6 +127,15 @@ function showPosterior(s) {
   $('posterior-caption').textContent = caption;
   matrix('posterior-chart', steps, states, cells, 1,
     (c) => (c.raw.v === undefined ? `truth: ${c.raw.y} at step ${c.raw.x}` : `step ${c.raw.x}, ${c.raw.y}: ${fmt(c.raw.v)}`), extra);
+  // The actions: Pr(action at step t | ...), the true one marked likewise.
+  const actions = s.names.actions.length ? s.names.actions : p.action_marginals[0].map((_, a) => `action ${a}`);
+  const acells = [];
+  p.action_marginals.forEach((row, t) => row.forEach((v, a) => acells.push({ x: steps[t], y: actions[a], v })));
+  const aextra = p.truth ? [{ type: 'line', label: 'true action', order: -1, showLine: false, pointStyle: 'crossRot', pointRadius: 6,
+    borderWidth: 2, borderColor: '#d84315', backgroundColor: '#d84315',
+    data: p.truth.map((x, t) => ({ x: steps[t], y: actions[x.action] })) }] : [];
+  matrix('posterior-actions-chart', steps, actions, acells, 1,
+    (c) => (c.raw.v === undefined ? `true action at step ${c.raw.x}: ${c.raw.y}` : `step ${c.raw.x}, ${c.raw.y}: ${fmt(c.raw.v)}`), aextra);
   filled('panel-posterior');
 }
 

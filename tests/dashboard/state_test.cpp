@@ -129,6 +129,9 @@ TEST(DashboardState, PosteriorAgainstGroundTruth) {
   EXPECT_EQ(j["episode"], 4);
   EXPECT_NEAR(j["state_marginals"][0][7].get<double>(), 0.7, 1e-15);
   EXPECT_NEAR(j["state_marginals"][0][3].get<double>(), 0.3, 1e-15);
+  EXPECT_NEAR(j["action_marginals"][0][1].get<double>(), 0.6, 1e-15);
+  EXPECT_NEAR(j["action_marginals"][0][0].get<double>(), 0.3, 1e-15);
+  EXPECT_NEAR(j["action_marginals"][1][3].get<double>(), 1.0, 1e-15);
   EXPECT_EQ(j["most_likely"][0]["state"], 7);
   EXPECT_EQ(j["most_likely"][0]["action"], 1);
   EXPECT_EQ(j["most_likely"][1]["state"], 8);

@@ -66,7 +66,8 @@ class DashboardState {
   //   observations {episode, step, frame, n, by_source_symbol [source][symbol]} | null,
   //   em [{iteration, log_likelihood, ile, seconds, retries, local_blocks}],
   //   theta {learned, true, final} | null, reward {final, ile, log_likelihood} | null,
-  //   posterior {episode, iteration, steps, state_marginals [t][state], most_likely
+  //   posterior {episode, iteration, steps, state_marginals [t][state], action_marginals
+  //     [t][action], most_likely
   //     [{state, action, probability}], truth [{state, action}] | null, log_likelihood} | null,
   //   model {iteration, num_states, num_actions, subject [pair][symbol], confounders
   //     [element][symbol]} | null,
