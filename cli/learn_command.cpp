@@ -83,7 +83,7 @@ int run_learn_from_log(const LearnArgs& args) {
   nlohmann::ordered_json out;
   out["log"] = args.log;
   out["domain"] = r.data.domain;
-  out["feature_names"] = services::domain_feature_names(r.data.domain);
+  out["feature_names"] = services::domain_names(r.data.domain).features;
   out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
   if (r.data.true_weights) {
     out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());

@@ -9,7 +9,6 @@
 #include "dashboard/state.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
-#include "services/estep_service.hpp"
 #include "services/log_bus.hpp"
 
 namespace hbirl::dashboard {
@@ -17,13 +16,6 @@ namespace hbirl::dashboard {
 namespace {
 
 using nlohmann::json;
-
-// gnuplot single-quoted strings: a quote is written twice.
-std::string quoted(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
 
 std::string html(const std::string& s) {
   std::string out;
@@ -62,7 +54,7 @@ std::string tics(const std::string& axis, const std::vector<std::string>& labels
   s << "set " << axis << " (";
   bool first = true;
   for (size_t i = offset; i < labels.size(); i += every) {
-    s << (first ? "" : ", ") << quoted(labels[i]) << " " << i;
+    s << (first ? "" : ", ") << gnuplot_quoted(labels[i]) << " " << i;
     first = false;
   }
   s << ")\n";
@@ -112,7 +104,7 @@ void theta_figure(const json& s, const std::string& stem, Report& r) {
   data << "EOD\nset title 'Reward weights (each scaled to max |w| = 1)'\nset style data histograms\nset style histogram clustered gap 1\n"
        << "set style fill solid 0.85 border -1\nset yrange [-1.1:1.1]\nset grid ytics\nset key top right box opaque\n"
        << "set xtics rotate by -20\nset ylabel 'w / max |w|'\n";
-  std::string plot = "plot $theta using 2:xtic(1) lc rgb '#1565c0' title " + quoted(t["final"].get<bool>() ? "learned θ (final)" : "learned θ");
+  std::string plot = "plot $theta using 2:xtic(1) lc rgb '#1565c0' title " + gnuplot_quoted(t["final"].get<bool>() ? "learned θ (final)" : "learned θ");
   if (!b.empty()) plot += ", '' using 3 lc rgb '#ef6c00' title 'true weights'";
   plot += "\n";
   const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);
@@ -138,7 +130,7 @@ void posterior_figure(const json& s, const std::string& stem, Report& r) {
     for (size_t t = 0; t < steps; ++t) data << t << " " << p["truth"][t]["state"].get<int>() << "\n";
     data << "EOD\n";
   }
-  data << "set title " << quoted("Posterior of the expert's state, episode " + std::to_string(p["episode"].get<int>()) +
+  data << "set title " << gnuplot_quoted("Posterior of the expert's state, episode " + std::to_string(p["episode"].get<int>()) +
                                  ", EM iteration " + std::to_string(p["iteration"].get<int>()))
        << "\nset xlabel 'step'\nset cblabel 'Pr(state at step)'\nset cbrange [0:1]\n"
        << "set palette defined (0 'white', 1 '#1565c0')\nset xrange [-0.5:" << edge(steps) << "]\nset yrange [-0.5:" << edge(states)
@@ -182,7 +174,7 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
   data << "set palette defined (0 'white', 1 '#1565c0')\nset cbrange [0:1]\nset cblabel 'Pr(symbol)'\n";
   std::ostringstream plot;
   plot << "set multiplot layout 1," << (confounders.empty() ? 1 : 2) << "\n"
-       << "set title " << quoted("Subject: O(symbol | state, action), EM iteration " + std::to_string(m["iteration"].get<int>())) << "\n"
+       << "set title " << gnuplot_quoted("Subject: O(symbol | state, action), EM iteration " + std::to_string(m["iteration"].get<int>())) << "\n"
        << tics("xtics rotate by -60 font ',7'", symbol_names) << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions))
        << "set xrange [-0.5:" << edge(symbols) << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
        << "plot $subject matrix with image notitle\n";

@@ -5,7 +5,6 @@
 #include <thread>
 
 #include "learner/input_error.hpp"
-#include "services/estep_service.hpp"
 // Last: it brings glibc's <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
 

@@ -6,12 +6,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
-#include "perception/labeller.hpp"
 #include "services/dataset.hpp"
-#include "services/estep_service.hpp"
 #include "services/pipeline.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/onion.hpp"
 
 namespace hbirl::dashboard {
 
@@ -60,30 +56,6 @@ nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 
 }  // namespace
 
-DomainNames domain_names(const std::string& domain, int num_sources) {
-  DomainNames n;
-  if (domain == "onion") {
-    n.states = onion::state_names();
-    n.actions = onion::action_names();
-    n.features = onion::feature_names();
-    for (int r = 0; r < perception::kRegionRows; ++r) {
-      for (int c = 0; c < perception::kRegionColumns; ++c) n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
-    }
-    n.symbols.push_back("bright onion");
-    n.symbols.push_back("dark onion");
-    n.sources = {"subject (expert)", "blue-shirt person", "other onions", "foreground person"};
-  } else if (domain == "gridworld") {
-    n.states = gridworld_state_names(GridworldOptions{}.size);
-    n.actions = gridworld_action_names();
-    n.features = gridworld_feature_names();
-    for (const auto& f : n.features) n.symbols.push_back("near " + f);
-    n.sources = {"subject (expert)"};
-  } else {
-    throw InputError("domain", "'" + domain + "' is not a domain hbirl knows (onion, gridworld)");
-  }
-  for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e) n.sources.push_back("element " + std::to_string(e));
-  return n;
-}
 
 void DashboardState::subscribe(services::Bus& bus, services::Counters& counters) {
   using services::Message;

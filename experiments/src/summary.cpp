@@ -129,14 +129,11 @@ std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& s
   return run_gnuplot(spec.path_stem, settings.str(), plot.str(), 900, 600);
 }
 
-namespace {
-// A gnuplot single-quoted string: a quote inside is written twice.
 std::string gnuplot_quoted(const std::string& s) {
   std::string out = "'";
   for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
   return out + "'";
 }
-}  // namespace
 
 std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width, int height) {
   const std::string script_path = path_stem + ".gp";

@@ -255,7 +255,7 @@ int optimiser(int argc, char** argv) {
   nlohmann::json j;
   j["theta"] = std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
   j["domain"] = result->data.domain;
-  j["feature_names"] = domain_feature_names(result->data.domain);
+  j["feature_names"] = domain_names(result->data.domain).features;
   if (const auto& w = result->data.true_weights) j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
   if (result->learned.ile) j["ile"] = *result->learned.ile;
   j["log_likelihood"] = result->learned.log_likelihood;

@@ -2,6 +2,7 @@
 
 #include <regex.h>
 
+#include <chrono>
 #include <cstdio>
 
 #include "learner/input_error.hpp"
@@ -10,6 +11,10 @@
 #include "services/typed.hpp"
 
 namespace hbirl::services {
+
+std::int64_t wall_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
 
 struct ChannelPattern::Compiled {
   regex_t regex;

@@ -20,10 +20,6 @@ bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
 }  // namespace
 
-std::int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
 std::uint64_t numerics_fingerprint() {
   static const std::uint64_t fingerprint = [] {
     Rng rng(20211);

@@ -3,6 +3,7 @@
 #include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "perception/labeller.hpp"
 #include "sim_driver/gridworld.hpp"
 #include "sim_driver/onion.hpp"
 
@@ -20,10 +21,29 @@ Mdp domain_mdp(const std::string& domain) {
   unknown_domain(domain);
 }
 
-std::vector<std::string> domain_feature_names(const std::string& domain) {
-  if (domain == "onion") return onion::feature_names();
-  if (domain == "gridworld") return gridworld_feature_names();
-  unknown_domain(domain);
+DomainNames domain_names(const std::string& domain, int num_sources) {
+  DomainNames n;
+  if (domain == "onion") {
+    n.states = onion::state_names();
+    n.actions = onion::action_names();
+    n.features = onion::feature_names();
+    for (int r = 0; r < perception::kRegionRows; ++r) {
+      for (int c = 0; c < perception::kRegionColumns; ++c) n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
+    }
+    n.symbols.push_back("bright onion");
+    n.symbols.push_back("dark onion");
+    n.sources = {"subject (expert)", "blue-shirt person", "other onions", "foreground person"};
+  } else if (domain == "gridworld") {
+    n.states = gridworld_state_names(GridworldOptions{}.size);
+    n.actions = gridworld_action_names();
+    n.features = gridworld_feature_names();
+    for (const auto& f : n.features) n.symbols.push_back("near " + f);
+    n.sources = {"subject (expert)"};
+  } else {
+    unknown_domain(domain);
+  }
+  for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e) n.sources.push_back("element " + std::to_string(e));
+  return n;
 }
 
 Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,

@@ -5,12 +5,6 @@
 
 namespace hbirl::services {
 
-namespace {
-std::int64_t now_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-}  // namespace
-
 std::int64_t MemoryHub::published() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   return published_;
@@ -47,7 +41,7 @@ void MemoryBus::disconnect() {
 
 bool MemoryBus::publish(const std::string& channel, const void* data, int size) {
   if (size < 0) return false;
-  const std::int64_t now = now_utime();
+  const std::int64_t now = wall_utime();
   const std::lock_guard<std::mutex> lock(hub_->mutex_);  // one order of delivery for everyone
   ++hub_->published_;
   if (hub_->lose_ && hub_->lose_(channel, static_cast<const std::uint8_t*>(data), size)) {

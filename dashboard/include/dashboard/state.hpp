@@ -27,18 +27,13 @@
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
 #include "services/bus.hpp"
+#include "services/learning.hpp"
 #include "services/typed.hpp"
 
 namespace hbirl::dashboard {
 
-// The names the page labels things with, per domain ("onion", "gridworld"). Onion
-// symbols: "R2C3" is the gripper seen in the field of view's region row 2, column 3 (of
-// 4 x 5); "bright onion", "dark onion".
-struct DomainNames {
-  std::vector<std::string> states, actions, features, symbols, sources;
-};
-// Throws InputError("domain", ...) for a domain hbirl does not know.
-DomainNames domain_names(const std::string& domain, int num_sources);
+using services::domain_names;  // the names the page labels things with
+using services::DomainNames;
 
 class DashboardState {
  public:

@@ -34,6 +34,9 @@ struct FigureSpec {
 // else why the figure was not drawn (gnuplot missing or failing); the script is kept.
 std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& spec);
 
+// A gnuplot single-quoted string (a quote inside is written twice).
+std::string gnuplot_quoted(const std::string& s);
+
 // Any figure: writes <stem>.gp -- `data` (e.g. inline data blocks and settings) once, then
 // `plot` drawn to <stem>.png and again to <stem>.svg -- and runs gnuplot on it. Returns
 // as draw_figure does.

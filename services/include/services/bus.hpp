@@ -26,6 +26,10 @@ struct Message {
   std::int64_t recv_utime;
 };
 using RawHandler = std::function<void(const Message&)>;
+
+// The wall clock in microseconds: for heartbeats, arrival stamps and display only, never
+// for results (services act on the messages' utime).
+std::int64_t wall_utime();
 using SubscriptionId = std::uint64_t;
 
 class Bus {

@@ -49,7 +49,6 @@ inline const std::string kEStepResult = "ESTEP_RESULT";
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest);
 ObservedTrajectory from_message(const hbirl::trajectory_t& m);
 
-std::int64_t wall_utime();  // for heartbeats and display only, never for results
 
 // A fingerprint of this build's floating-point results: the bits of a fixed small E-step
 // pass (gridworld, exact engine). Workers built or run differently (another compiler,

@@ -17,7 +17,14 @@ namespace hbirl::services {
 // (the paper's 5x5 Gridworld; its simulator publishes the observations itself).
 // Each throws InputError("domain", ...) for any other name.
 Mdp domain_mdp(const std::string& domain);
-std::vector<std::string> domain_feature_names(const std::string& domain);
+// The names of a domain's states, actions, reward features, observation symbols and
+// sources (the subject, then `num_sources` - 1 confounding elements in all). Onion
+// symbols: "R2C3" is the gripper seen in the field of view's region row 2, column 3 (of
+// 4 x 5); "bright onion", "dark onion".
+struct DomainNames {
+  std::vector<std::string> states, actions, features, symbols, sources;
+};
+DomainNames domain_names(const std::string& domain, int num_sources = 1);
 // The informative prior for the subject's observation model from the controlled run's
 // observations and true steps: onion, the symbol counts per visit of (s, a) plus 1
 // (hbirl experiment onion); gridworld, the symbol counts plus 1 (hbirl experiment
