@@ -93,5 +93,31 @@ BENCHMARK(BM_EStepLength)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicros
 void BM_EStepTrajectories(benchmark::State& state) { estep_pass(state, static_cast<int>(state.range(0)), 10, 40); }
 BENCHMARK(BM_EStepTrajectories)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
+// The observation model's refinement on the paper's Gridworld data (20 trajectories x 10
+// steps x 40 observations, plausible eta), range(0) = 0: one E-step refinement with the
+// stated eta (one pass), 1: the same with learned eta (one pass with each context's eta),
+// 2: choosing the subject prior's strength by held-out likelihood (one pass for the
+// counts, then a forward pass per trajectory and grid point). EM pays 0 or 1 every
+// iteration and 2 once per convergence.
+void BM_ObservationModelRefinement(benchmark::State& state) {
+  Setup s = setup(20, 10, 40);
+  s.prior.subject_alpha = 1.0 + 40.0 * s.prior.subject_alpha.array();  // a prior with counts
+  s.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
+  s.prior.learn_eta = state.range(0) != 0;
+  ObservationEStepOptions options;
+  options.max_alpha_iterations = 1;
+  const ObservationEStep estep(s.task.mdp, s.observations.trajectories, s.prior, options);
+  const EStepState start = estep.initial_state(1);
+  for (auto _ : state) {
+    EStepState work = start;
+    if (state.range(0) == 2) {
+      benchmark::DoNotOptimize(estep.choose_strength(s.policy, work)->best_strength);
+    } else {
+      benchmark::DoNotOptimize(estep.expect(s.policy, work).objective);
+    }
+  }
+}
+BENCHMARK(BM_ObservationModelRefinement)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace hbirl

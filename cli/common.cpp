@@ -67,3 +67,18 @@ EngineFactory engine_factory(const EngineArgs& args) {
 }
 
 }  // namespace hbirl::cli
+
+namespace hbirl::cli {
+
+CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
+  const std::map<std::string, AlphaUpdate> names{{"posterior", AlphaUpdate::kPosterior}, {"paper", AlphaUpdate::kPaper}};
+  return cmd
+      ->add_option("--alpha-update", update,
+                   "How the observation model is learned: 'posterior' (the Dirichlet posterior of the prior and the "
+                   "data, the prior's weight chosen from the data; docs/MODEL.md) or 'paper' (alpha = c alpha_dot + "
+                   "(1 - c) alpha, which forgets the prior at its fixed point)")
+      ->transform(CLI::CheckedTransformer(names))
+      ->default_str("posterior");
+}
+
+}  // namespace hbirl::cli

@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "experiments/gridworld_experiment.hpp"
 #include "experiments/onion_experiment.hpp"
+#include "experiments/random_tasks_experiment.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
 #include "learner/parallel.hpp"
@@ -169,10 +170,12 @@ std::string failed_note(int failed) {
 }
 
 // Options every experiment has.
-void add_shared_options(CLI::App* cmd, std::string& out, int& runs, double& c, int& restarts, std::uint64_t& seed, int& threads) {
+void add_shared_options(CLI::App* cmd, std::string& out, int& runs, AlphaUpdate& update, double& c, int& restarts,
+                        std::uint64_t& seed, int& threads) {
   cmd->add_option("--out,-o", out, "Output folder")->capture_default_str();
   cmd->add_option("--runs", runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
-  cmd->add_option("--c", c, "Rate of the observation-model refinement alpha = c alpha_dot + (1 - c) alpha")
+  add_alpha_update_option(cmd, update);
+  cmd->add_option("--c", c, "Damping of each observation-model refinement, alpha = c target + (1 - c) alpha")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
   cmd->add_option("--restarts", restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
@@ -180,16 +183,23 @@ void add_shared_options(CLI::App* cmd, std::string& out, int& runs, double& c, i
   cmd->add_option("--threads", threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
 }
 
+// Runs an experiment with a progress bar on stderr; its runs and the seconds it took.
+template <typename Options, typename Runner>
+auto run_with_progress(const std::string& what, Options& o, Runner runner) {
+  ProgressBar bar(what);
+  o.progress = [&bar](int done, int total) { bar.update(done, total); };
+  const auto start = std::chrono::steady_clock::now();
+  auto runs = runner(o);
+  o.progress = nullptr;
+  return std::make_pair(std::move(runs), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
 int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   GridworldExperimentOptions& o = args.options;
   o.confounders = parse_int_list(args.confounders, "--confounders");
   o.methods = parse_methods(args.methods);
   make_folder(args.out);
-  ProgressBar bar("runs");
-  o.progress = [&bar](int done, int total) { bar.update(done, total); };
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<GridworldRun> runs = run_gridworld_experiment(o);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto [runs, seconds] = run_with_progress("runs", o, run_gridworld_experiment);
 
   const Collected c = collect(
       runs, [](const GridworldRun& r) { return method_label(r.method); }, [](const GridworldRun& r) { return r.confounders; },
@@ -201,7 +211,7 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   spec.x_header = "|E|";
   std::ostringstream footer;
   footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
-         << " observations per step, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
+         << " observations per step, " << alpha_update_name(o.update) << " update, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
          << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
          << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
@@ -246,11 +256,7 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
     }
   }
   make_folder(args.out);
-  ProgressBar bar("learning runs");
-  o.progress = [&bar](int done, int total) { bar.update(done, total); };
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<onion::OnionRun> runs = onion::run_onion_experiment(o);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto [runs, seconds] = run_with_progress("learning runs", o, onion::run_onion_experiment);
   const Collected c = collect(
       runs, [](const onion::OnionRun& r) { return onion::method_label(r.method); },
       [](const onion::OnionRun& r) { return r.trajectories; },
@@ -263,7 +269,7 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   spec.x_header = "trajectories";
   std::ostringstream footer;
   footer << o.runs << " runs per point, from frames rendered at " << o.scene.width << " px, " << o.scene.fps
-         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; c = " << o.c << ", seed " << o.seed
+         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; " << alpha_update_name(o.update) << " update, c = " << o.c << ", seed " << o.seed
          << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
          << failed_note(c.failed) << ".";
@@ -272,6 +278,52 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   spec.figure.x_label = "Number of trajectories";
   spec.figure.y_label = "ILE";
   write_experiment(args.out, spec, onion::onion_runs_csv(runs), c.methods, c.xs, c.ile);
+  return 0;
+}
+
+struct RandomTasksArgs {
+  std::string out = "results";
+  std::string methods = "all";
+  std::string runs_csv;  // summarise these runs instead of running
+  RandomTasksOptions options;
+};
+
+int run_random_tasks_command(RandomTasksArgs& args) {
+  RandomTasksOptions& o = args.options;
+  o.methods = parse_random_task_methods(args.methods);
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  std::vector<RandomTaskRun> runs;
+  std::ostringstream footer;
+  if (!args.runs_csv.empty()) {
+    std::ifstream in(args.runs_csv, std::ios::binary);
+    if (!in) throw InputError("--summarise", "cannot open " + args.runs_csv);
+    std::ostringstream text;
+    text << in.rdbuf();
+    try {
+      runs = random_task_runs_from_csv(text.str());
+    } catch (const InputError& e) {
+      throw InputError(args.runs_csv + ": " + e.field(), e.message());
+    }
+    footer << runs.size() << " learning runs from " << std::filesystem::path(args.runs_csv).filename().string() << ".";
+  } else {
+    const auto [ran, seconds] = run_with_progress("learning runs", o, run_random_tasks);
+    runs = ran;
+    write_file(dir / "random_tasks_runs.csv", random_task_runs_csv(runs));
+    footer << o.tasks << " tasks (seeds " << o.first_seed << "-" << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1
+           << ") x " << o.draws << " data sets each; " << runs.size() << " learning runs in "
+           << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
+           << " threads.";
+  }
+  footer << " Reproduce one: `hbirl generate random-task --seed S --draw D > task.json`, then `hbirl learn --problem "
+         << "task.json`.";
+  const std::string summary = random_tasks_summary(runs, footer.str());
+  write_file(dir / "random_tasks_summary.md", summary);
+  const std::string problem = draw_random_tasks_figure(runs, (dir / "random_tasks").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote " << (args.runs_csv.empty() ? "random_tasks_runs.csv, " : "") << "random_tasks_summary.md"
+            << (problem.empty() ? ", random_tasks.png, random_tasks.svg" : "") << " in " << args.out << "\n";
   return 0;
 }
 
@@ -288,7 +340,7 @@ Command add_experiment(CLI::App& app) {
       "elements. Writes gridworld_runs.csv (one row per run), gridworld_summary.csv and .md\n"
       "(mean and 95% CI) and gridworld.png/.svg (needs gnuplot) to --out, and prints the\n"
       "summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(grid, g->out, g->options.runs, g->options.c, g->options.restarts, g->options.seed, g->options.threads);
+  add_shared_options(grid, g->out, g->options.runs, g->options.update, g->options.c, g->options.restarts, g->options.seed, g->options.threads);
   grid->add_option("--confounders", g->confounders, "Numbers of confounding elements, comma-separated")->capture_default_str();
   grid->add_option("--methods", g->methods,
                    "Comma-separated: true_trajectories, true_observation_function, uniform_eta, plausible_eta, ignore_ce; or all")
@@ -318,7 +370,7 @@ Command add_experiment(CLI::App& app) {
       "number of demonstrated sorts, in a scene with three confounding elements and a\n"
       "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
       "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.c, n->options.restarts, n->options.seed, n->options.threads);
+  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.update, n->options.c, n->options.restarts, n->options.seed, n->options.threads);
   onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")->capture_default_str();
   onion_cmd->add_option("--methods", n->methods,
                         "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
@@ -332,9 +384,30 @@ Command add_experiment(CLI::App& app) {
       ->capture_default_str();
   onion_cmd->add_option("--width", n->options.scene.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
   onion_cmd->add_option("--fps", n->options.scene.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
-  return [g, grid, n, onion_cmd] {
+  auto t = std::make_shared<RandomTasksArgs>();
+  CLI::App* tasks_cmd = cmd->add_subcommand(
+      "random-tasks",
+      "hbirl on random tasks nobody tuned it for (hbirl generate random-task): each task learned from its\n"
+      "true trajectories, with O fixed at the controlled run's prior, with the paper's update (c = 0.5, 0.1) and\n"
+      "with the default posterior update (c = 0.1, and 1, 0.5, 0.02; 4 restarts). Writes random_tasks_runs.csv (one row\n"
+      "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
+      "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
+      "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");
+  tasks_cmd->add_option("--out,-o", t->out, "Output folder")->capture_default_str();
+  tasks_cmd->add_option("--tasks", t->options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
+  tasks_cmd->add_option("--draws", t->options.draws, "Data sets per task")->check(CLI::Range(1, 1000))->capture_default_str();
+  tasks_cmd->add_option("--first-seed", t->options.first_seed, "Seed of the first task")->capture_default_str();
+  tasks_cmd->add_option("--methods", t->methods,
+                        "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
+                        "posterior_c1, posterior_c0.5, posterior_c0.02, posterior_r4; or all")
+      ->capture_default_str();
+  tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  tasks_cmd->add_option("--summarise", t->runs_csv,
+                        "Do not run: summarise and draw the runs of this random_tasks_runs.csv into --out");
+  return [g, grid, n, onion_cmd, t, tasks_cmd] {
     if (grid->parsed()) return run_gridworld_experiment_command(*g);
     if (onion_cmd->parsed()) return run_onion_experiment_command(*n);
+    if (tasks_cmd->parsed()) return run_random_tasks_command(*t);
     return 2;
   };
 }

@@ -1,8 +1,11 @@
 // hbirl generate: write problem files for the built-in domains.
+#include <sstream>
+
 #include "commands.hpp"
 #include "learner/input_error.hpp"
 #include "problem/json_format.hpp"
 #include "sim_driver/gridworld.hpp"
+#include "sim_driver/random_task.hpp"
 
 namespace hbirl::cli {
 
@@ -48,6 +51,49 @@ int run_gridworld(const GridworldArgs& args) {
   return 0;
 }
 
+struct RandomTaskArgs {
+  std::uint64_t seed = 1;
+  int draw = 0;
+  RandomTaskOverrides overrides;
+  std::string out;
+};
+
+// The task as a problem file: the demonstration's observations and true steps, the
+// subject prior from the controlled run, the true weights, and a comment that says what
+// was drawn.
+int run_random_task(const RandomTaskArgs& args) {
+  const RandomTask task = make_random_task(args.seed, args.draw, args.overrides);
+  Problem problem;
+  problem.mdp = task.mdp;
+  problem.state_names = task.state_names;
+  problem.action_names = task.action_names;
+  problem.feature_names = task.feature_names;
+  problem.observation_model = task.prior;
+  for (size_t i = 0; i < task.demonstrations.size(); ++i) {
+    DemonstratedTrajectory item;
+    item.steps = task.observed.trajectories[i];
+    item.truth = task.demonstrations[i];
+    item.ends_in_terminal = task.observed.trajectories[i].ends_in_terminal;
+    problem.demonstration.push_back(std::move(item));
+  }
+  problem.true_weights = task.true_weights;
+  nlohmann::ordered_json doc;
+  std::ostringstream comment;
+  comment << "hbirl generate random-task --seed " << args.seed << " --draw " << args.draw << ": a " << task.layout << " of "
+          << task.mdp.num_states << " states and " << task.mdp.num_actions << " actions, " << task.goals << " goal(s), "
+          << task.traps << " trap(s), discount " << task.mdp.discount << ", expert decisiveness " << task.decisiveness << "; " << task.num_symbols << " symbols, "
+          << task.num_confounders << " confounding elements, subject informativeness " << task.informativeness
+          << ", subject share " << task.subject_share << ", " << eta_kind_name(task.eta) << " eta, " << task.per_step
+          << " observations per step, " << task.occlusion << " of steps occluded; " << task.demonstrations.size()
+          << " demonstrations of at most " << task.length << " steps; subject prior from a controlled run of "
+          << task.controlled.size() << " trajectories (symbol counts per (s, a) plus 1).";
+  doc["comment"] = comment.str();
+  const nlohmann::ordered_json body = problem_to_json(problem);
+  doc.update(body);
+  emit(format_json(doc), args.out);
+  return 0;
+}
+
 }  // namespace
 
 Command add_generate(CLI::App& app) {
@@ -82,8 +128,30 @@ Command add_generate(CLI::App& app) {
       ->capture_default_str();
   grid->add_option("--seed", g->seed, "Seed of the goal and the demonstrations")->capture_default_str();
   grid->add_option("--out,-o", g->out, "Write the problem file here instead of stdout");
-  return [g, grid] {
+  auto t = std::make_shared<RandomTaskArgs>();
+  CLI::App* task = cmd->add_subcommand(
+      "random-task",
+      "A random task from its seed, as `hbirl experiment random-tasks` draws it: a grid or sparse graph MDP\n"
+      "(9-100 states, 2-6 actions, goals and traps), a step cost and other features, a true reward whose optimal\n"
+      "policy is not trivial, a random sensor (4-24 symbols, 0-7 confounding elements, occlusion), demonstrations\n"
+      "watched through it, and the subject prior from a controlled run (sim_driver/random_task.hpp). Learn it with\n"
+      "`hbirl learn --problem FILE` (or --from truth); set observation_model.learn to false for O fixed at the prior.");
+  task->add_option("--seed", t->seed, "The task")->capture_default_str();
+  task->add_option("--draw", t->draw, "Which of the task's data sets (the same task watched again)")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  task->add_option("--informativeness", t->overrides.informativeness,
+                   "Fix the subject sensor's informativeness (0: symbols say nothing of the state, 1: the most)")
+      ->check(CLI::Range(0.0, 1.0));
+  task->add_option("--confounders", t->overrides.confounders, "Fix the number of confounding elements")->check(CLI::Range(0, 64));
+  task->add_option("--occlusion", t->overrides.occlusion, "Fix the share of occluded steps")->check(CLI::Range(0.0, 1.0));
+  task->add_option("--demonstrations", t->overrides.demonstrations, "Fix the number of demonstrations")
+      ->check(CLI::Range(1, 100000));
+  task->add_option("--eta", t->overrides.eta, "Fix eta: plausible or uniform")->check(CLI::IsMember({"plausible", "uniform"}));
+  task->add_option("--out,-o", t->out, "Write the problem file here instead of stdout");
+  return [g, grid, t, task] {
     if (grid->parsed()) return run_gridworld(*g);
+    if (task->parsed()) return run_random_task(*t);
     return 2;
   };
 }

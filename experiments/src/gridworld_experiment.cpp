@@ -85,6 +85,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
     ObservationPrior prior;
     prior.num_symbols = 4;
     prior.learn = true;
+    use_alpha_update(prior, o.update);
     prior.c = o.c;
     prior.subject_alpha = s.controlled_alpha;
     Rng eta_rng = Rng(o.seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
@@ -115,6 +116,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
     const ObservationEStep estep(mdp, observations.trajectories, prior, estep_options);
     learned = learn_reward(mdp, estep, learn);
     const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
+    if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) result.strength = best.alpha->strength;
     if (method != GridworldMethod::kIgnoreCE && confounders > 0) {
       const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
       result.source_accuracy = source_accuracy(mdp, policy, dirichlet_mean(best.alpha ? *best.alpha : prior), observations);
@@ -210,11 +212,13 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,seconds,error\n";
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,strength,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
         << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << "," << r.log_likelihood << ",";
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
+    out << ",";
+    if (r.strength >= 0.0) out << r.strength;
     std::string error = r.error;
     std::replace(error.begin(), error.end(), ',', ';');
     std::replace(error.begin(), error.end(), '\n', ' ');

@@ -160,6 +160,7 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
           ObservationPrior prior;
           prior.num_symbols = perception::kNumSymbols;
           prior.subject_alpha = subject_alpha;
+          use_alpha_update(prior, o.update);
           prior.c = o.c;
           ObservationEStepOptions estep_options;
           estep_options.max_alpha_iterations = o.max_alpha_iterations;

@@ -71,16 +71,22 @@ bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::
 
 }  // namespace
 
-EStepStatistics EStepStatistics::zero(int pairs, int confounders, int symbols) {
+EStepStatistics EStepStatistics::zero(int pairs, int confounders, int symbols, int contexts) {
   EStepStatistics s;
   s.counts = Eigen::VectorXd::Zero(pairs);
   s.alpha_dot = AlphaCounts::zero(pairs, confounders, symbols);
+  s.source_counts = RowMatrix::Zero(contexts, 1 + confounders);
   return s;
 }
 
 EStepStatistics& EStepStatistics::operator+=(const EStepStatistics& other) {
   counts += other.counts;
   alpha_dot += other.alpha_dot;
+  if (source_counts.size() == 0) {
+    source_counts = other.source_counts;
+  } else if (other.source_counts.size() > 0) {
+    source_counts += other.source_counts;
+  }
   log_likelihood += other.log_likelihood;
   impossible += other.impossible;
   return *this;
@@ -267,8 +273,13 @@ void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel&
     const double weight = trajectory.weight(n);
     out.alpha_dot.subject.col(w).array() += (weight * trajectory.eta(n, 0)) * ratio_ * model.subject.col(w).array();
     const double total = weight * ratio_.sum();
+    const int context = trajectory.context(n);
+    const bool by_context = context >= 0 && out.source_counts.rows() > 0;
+    if (by_context) out.source_counts(context, 0) += weight * trajectory.eta(n, 0) * (ratio_ * model.subject.col(w).array()).sum();
     for (int e = 0; e < model.num_confounders(); ++e) {
-      out.alpha_dot.confounders(e, w) += trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
+      const double share = trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
+      out.alpha_dot.confounders(e, w) += share;
+      if (by_context) out.source_counts(context, e + 1) += share;
     }
   });
 }
@@ -304,16 +315,23 @@ KindEmissions kind_emissions(const ObservationModel& model, const ObservationKin
 }
 
 void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& kinds, const KindEmissions& emissions,
-                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out) {
+                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out,
+                        RowMatrix& source_counts) {
   for (int k : touched) {
     const int w = kinds.symbols[static_cast<size_t>(k)];
     // G / p, with 0 where G = 0 (p may be 0 there).
     const Eigen::ArrayXd ratio =
         (kind_gamma.row(k).array() > 0.0).select(kind_gamma.row(k).array() / emissions.p.row(k).array(), 0.0).transpose();
-    out.subject.col(w).array() += kinds.eta(k, 0) * ratio * model.subject.col(w).array();
+    const Eigen::ArrayXd subject = kinds.eta(k, 0) * ratio * model.subject.col(w).array();
+    out.subject.col(w).array() += subject;
     const double total = ratio.sum();
+    const int context = kinds.contexts.empty() ? -1 : kinds.contexts[static_cast<size_t>(k)];
+    const bool by_context = context >= 0 && source_counts.rows() > 0;
+    if (by_context) source_counts(context, 0) += subject.sum();
     for (int e = 0; e < model.num_confounders(); ++e) {
-      out.confounders(e, w) += kinds.eta(k, e + 1) * model.confounders(e, w) * total;
+      const double share = kinds.eta(k, e + 1) * model.confounders(e, w) * total;
+      out.confounders(e, w) += share;
+      if (by_context) source_counts(context, e + 1) += share;
     }
   }
 }

@@ -309,6 +309,11 @@ void McmcEngine::accumulate(const SoftSolution& policy, const ObservationModel& 
   out.log_likelihood += ll;
   out.counts += marginals.colwise().sum().transpose();
   out.alpha_dot += alpha_dot;
+  if (out.source_counts.rows() > 0) {
+    for (int n = 0; n < trajectory.num_observations(); ++n) {
+      if (trajectory.context(n) >= 0) out.source_counts.row(trajectory.context(n)) += trajectory.weight(n) * sources.row(n);
+    }
+  }
 }
 
 EngineFactory mcmc_engine_factory(McmcOptions options) {

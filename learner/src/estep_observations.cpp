@@ -1,5 +1,9 @@
 #include "learner/estep_observations.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "learner/input_error.hpp"
@@ -27,6 +31,7 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
     }
   }
+  if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();
   if (options_.max_kinds > 0) {
@@ -35,10 +40,68 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
   }
 }
 
+void ObservationEStep::assign_contexts() {
+  if (options_.executor) {
+    throw InputError("observation_model.learn_eta", "is not supported with remote E-step workers (the bus carries stated eta)");
+  }
+  if (!(prior_.eta_strength > 0.0)) throw InputError("observation_model.eta_prior_strength", "must be positive");
+  // Explicit contexts are numbered from 0; without them each distinct eta is one. A
+  // context's stated eta is the weighted mean of its observations' eta.
+  const bool given = std::any_of(trajectories_.begin(), trajectories_.end(), [](const ObservedTrajectory& t) {
+    return !t.contexts.empty();
+  });
+  std::map<std::vector<double>, int> index;
+  int contexts = 0;
+  for (auto& t : trajectories_) {
+    if (given) {
+      if (t.num_observations() > 0 && t.contexts.size() != static_cast<size_t>(t.num_observations())) {
+        throw InputError("demonstration", "some observations have a context and others not");
+      }
+      for (int c : t.contexts) contexts = std::max(contexts, c + 1);
+      continue;
+    }
+    t.contexts.resize(static_cast<size_t>(t.num_observations()));
+    for (int n = 0; n < t.num_observations(); ++n) {
+      std::vector<double> key(t.eta.row(n).data(), t.eta.row(n).data() + t.eta.cols());
+      const auto [it, inserted] = index.emplace(std::move(key), static_cast<int>(index.size()));
+      t.contexts[static_cast<size_t>(n)] = it->second;
+    }
+    contexts = static_cast<int>(index.size());
+  }
+  context_eta_ = RowMatrix::Zero(contexts, 1 + prior_.num_confounders);
+  if (!given) {
+    for (const auto& [key, c] : index) context_eta_.row(c) = Eigen::Map<const Eigen::RowVectorXd>(key.data(), context_eta_.cols());
+    return;
+  }
+  Eigen::VectorXd weight = Eigen::VectorXd::Zero(contexts);
+  for (const auto& t : trajectories_) {
+    for (int n = 0; n < t.num_observations(); ++n) {
+      context_eta_.row(t.context(n)) += t.weight(n) * t.eta.row(n);
+      weight[t.context(n)] += t.weight(n);
+    }
+  }
+  for (int c = 0; c < contexts; ++c) {
+    if (weight[c] > 0.0) context_eta_.row(c) /= weight[c];
+    else context_eta_.row(c).setConstant(1.0 / static_cast<double>(context_eta_.cols()));
+  }
+}
+
+std::optional<RowMatrix> ObservationEStep::learned_eta(const ObservationPrior& alpha) const {
+  if (num_contexts() == 0 || !alpha.learn || !alpha.learn_eta) return std::nullopt;
+  const RowMatrix& parameters = alpha.eta_alpha.rows() == num_contexts() ? alpha.eta_alpha : context_eta_;
+  RowMatrix eta = parameters;
+  for (Eigen::Index c = 0; c < eta.rows(); ++c) {
+    const double total = eta.row(c).sum();
+    if (total > 0.0) eta.row(c) /= total;
+  }
+  return eta;
+}
+
 EStepState ObservationEStep::initial_state(std::uint64_t seed) const {
   EStepState state;
   state.seed = seed;
   state.alpha = prior_;
+  if (num_contexts() > 0) state.alpha->eta_alpha = prior_.eta_strength * context_eta_;
   return state;
 }
 
@@ -54,7 +117,7 @@ int ObservationEStep::num_blocks() const {
 
 std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSolution& policy, const ObservationModel& model,
                                                                 std::uint64_t seed, const std::vector<int>& blocks,
-                                                                int threads) const {
+                                                                int threads, const RowMatrix* eta) const {
   const int n = static_cast<int>(trajectories_.size());
   const int P = mdp_.num_pairs();
   const int E = model.num_confounders();
@@ -64,35 +127,46 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
   }
   std::vector<EStepStatistics> partial(blocks.size());
   const Rng root(seed);
+  // Learned eta: each observation's eta is its context's row.
+  std::optional<ObservationKinds> calibrated_kinds;
+  if (eta && kinds_) {
+    calibrated_kinds = *kinds_;
+    for (int k = 0; k < kinds_->num_kinds(); ++k) calibrated_kinds->eta.row(k) = eta->row(kinds_->contexts[static_cast<size_t>(k)]);
+  }
+  const ObservationKinds* kinds = calibrated_kinds ? &*calibrated_kinds : (kinds_ ? &*kinds_ : nullptr);
   std::optional<KindEmissions> table;
-  if (kinds_) table = kind_emissions(model, *kinds_);
+  if (kinds) table = kind_emissions(model, *kinds);
   parallel_for(static_cast<int>(blocks.size()), threads, [&](int k) {
     const int b = blocks[static_cast<size_t>(k)];
     std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
     EStepStatistics& out = partial[static_cast<size_t>(k)];
-    out = EStepStatistics::zero(P, E, W);
+    out = EStepStatistics::zero(P, E, W, num_contexts());
     ExactEngine* exact = table ? engine->exact() : nullptr;
     if (exact) {
       RowMatrix kind_gamma = RowMatrix::Zero(kinds_->num_kinds(), P);
       std::vector<char> seen(static_cast<size_t>(kinds_->num_kinds()), 0);
       std::vector<int> touched;
       for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
-        exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds_->of[static_cast<size_t>(i)], *table, out,
+        exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds->of[static_cast<size_t>(i)], *table, out,
                           kind_gamma, seen, touched);
       }
-      add_kind_alpha_dot(model, *kinds_, *table, kind_gamma, touched, out.alpha_dot);
+      add_kind_alpha_dot(model, *kinds, *table, kind_gamma, touched, out.alpha_dot, out.source_counts);
       return;
     }
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
-      engine->accumulate(policy, model, trajectories_[static_cast<size_t>(i)], rng, out);
+      if (eta) {
+        engine->accumulate(policy, model, with_eta(trajectories_[static_cast<size_t>(i)], *eta), rng, out);
+      } else {
+        engine->accumulate(policy, model, trajectories_[static_cast<size_t>(i)], rng, out);
+      }
     }
   });
   return partial;
 }
 
 EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const ObservationModel& model,
-                                             std::uint64_t seed) const {
+                                             std::uint64_t seed, const RowMatrix* eta) const {
   std::vector<EStepStatistics> partial;
   if (options_.executor) {
     partial = options_.executor->run(*this, policy, model, seed);
@@ -103,9 +177,9 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
   } else {
     std::vector<int> all(static_cast<size_t>(num_blocks()));
     for (int b = 0; b < num_blocks(); ++b) all[static_cast<size_t>(b)] = b;
-    partial = block_statistics(policy, model, seed, all, options_.threads);
+    partial = block_statistics(policy, model, seed, all, options_.threads, eta);
   }
-  EStepStatistics total = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
+  EStepStatistics total = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols(), num_contexts());
   for (const auto& part : partial) total += part;
   return total;
 }
@@ -114,22 +188,39 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
   if (!state.alpha) state.alpha = prior_;
   ObservationPrior& alpha = *state.alpha;
   ObservationModel model = dirichlet_mean(alpha);
+  std::optional<RowMatrix> eta = learned_eta(alpha);
   EStepResult result;
   result.alpha_converged = !alpha.learn;
   EStepStatistics stats;
   for (int it = 0; it < std::max(1, options_.max_alpha_iterations); ++it) {
     const std::uint64_t call_seed = Rng(state.seed, state.calls++).next_u64();
-    stats = statistics(policy, model, call_seed);
+    stats = statistics(policy, model, call_seed, eta ? &*eta : nullptr);
+    if (it == 0) {
+      // The objective at the input point (theta, alpha): what EM's convergence test, its
+      // acceleration and the choice of restart compare.
+      result.log_likelihood = stats.log_likelihood;
+      result.objective = stats.log_likelihood + log_prior_term(model, prior_, alpha);
+      if (eta) result.objective += log_eta_prior_term(*eta);
+    }
     if (!alpha.learn) break;
-    update_alpha(alpha, stats.alpha_dot, alpha.c);
+    update_alpha(alpha, prior_, stats.alpha_dot);
+    double eta_change = 0.0;
+    if (eta) {
+      // The same damped step towards the Dirichlet posterior of each context.
+      alpha.eta_alpha = alpha.c * (prior_.eta_strength * context_eta_ + stats.source_counts) + (1.0 - alpha.c) * alpha.eta_alpha;
+      std::optional<RowMatrix> next_eta = learned_eta(alpha);
+      eta_change = (*next_eta - *eta).cwiseAbs().maxCoeff();
+      eta = std::move(next_eta);
+    }
     ObservationModel next = dirichlet_mean(alpha);
     // How much O moved where the data can see it: a pair's row counts in proportion to
     // its expected visits (up to one), since rows of pairs the posterior never visits do
-    // not change any posterior while they slowly forget their prior.
+    // not change any posterior.
     const Eigen::VectorXd seen = stats.counts.cwiseMin(1.0);
     const Eigen::VectorXd row_change = (next.subject - model.subject).cwiseAbs().rowwise().maxCoeff();
     double change = seen.cwiseProduct(row_change).maxCoeff();
     if (model.num_confounders() > 0) change = std::max(change, (next.confounders - model.confounders).cwiseAbs().maxCoeff());
+    change = std::max(change, eta_change);
     model = std::move(next);
     ++result.alpha_iterations;
     if (change <= options_.alpha_tolerance) {
@@ -138,9 +229,82 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
     }
   }
   result.counts = std::move(stats.counts);
-  result.log_likelihood = stats.log_likelihood;
   result.impossible_trajectories = stats.impossible;
   return result;
+}
+
+ObservedTrajectory ObservationEStep::with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta) {
+  ObservedTrajectory copy = trajectory;
+  for (int n = 0; n < trajectory.num_observations(); ++n) copy.eta.row(n) = eta.row(trajectory.context(n));
+  return copy;
+}
+
+double ObservationEStep::log_eta_prior_term(const RowMatrix& eta) const {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < eta.size(); ++i) {
+    const double beta = prior_.eta_strength * context_eta_.data()[i];
+    if (beta > 0.0) sum += beta * std::log(eta.data()[i]);
+  }
+  return sum;
+}
+
+double ObservationEStep::data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
+  const ObservationPrior& alpha = state.alpha ? *state.alpha : prior_;
+  const std::optional<RowMatrix> eta = learned_eta(alpha);
+  return statistics(policy, dirichlet_mean(alpha), Rng(state.seed, state.calls).next_u64(), eta ? &*eta : nullptr).log_likelihood;
+}
+
+std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSolution& policy, const EStepState& state) const {
+  const ObservationPrior& alpha = state.alpha ? *state.alpha : prior_;
+  if (!alpha.learn || alpha.update != AlphaUpdate::kPosterior || !alpha.automatic_strength) return std::nullopt;
+  std::vector<double> strengths = prior_strength_grid();
+  if (std::find(strengths.begin(), strengths.end(), alpha.strength) == strengths.end()) strengths.push_back(alpha.strength);
+  const ObservationModel model = dirichlet_mean(alpha);
+  const std::optional<RowMatrix> eta = learned_eta(alpha);
+  const std::uint64_t seed = Rng(state.seed, state.calls).next_u64();
+  const AlphaCounts all = statistics(policy, model, seed, eta ? &*eta : nullptr).alpha_dot;
+  // Per trajectory, its own expected counts at the current posterior, then its
+  // log-likelihood under each strength's posterior without them. Each trajectory's
+  // numbers land in its own row; the sums run in trajectory order (same bits for any
+  // thread count).
+  const int n = static_cast<int>(trajectories_.size());
+  Eigen::MatrixXd held_out(n, static_cast<Eigen::Index>(strengths.size()));
+  const Rng root(seed);
+  parallel_for(n, options_.threads, [&](int i) {
+    std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
+    ExactEngine exact(mdp_);
+    const ObservedTrajectory trajectory =
+        eta ? with_eta(trajectories_[static_cast<size_t>(i)], *eta) : trajectories_[static_cast<size_t>(i)];
+    EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
+    Rng rng = root.split(static_cast<std::uint64_t>(i));
+    engine->accumulate(policy, model, trajectory, rng, own);
+    AlphaCounts others = all;
+    others.subject = (others.subject - own.alpha_dot.subject).cwiseMax(0.0);
+    others.confounders = (others.confounders - own.alpha_dot.confounders).cwiseMax(0.0);
+    for (size_t k = 0; k < strengths.size(); ++k) {
+      const AlphaCounts posterior = dirichlet_posterior(prior_, strengths[k], others);
+      const ObservationModel without{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)};
+      held_out(i, static_cast<Eigen::Index>(k)) = exact.log_likelihood(policy, without, trajectory);
+    }
+  });
+  StrengthChoice choice;
+  double best = -std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < strengths.size(); ++k) {
+    double total = 0.0;
+    for (int i = 0; i < n; ++i) total += held_out(i, static_cast<Eigen::Index>(k));
+    if (strengths[k] == alpha.strength) choice.current_score = total;
+    if (total > best) {
+      best = total;
+      choice.best_strength = strengths[k];
+    }
+  }
+  choice.best_score = best;
+  // Ties (and changes below rounding) keep the current strength.
+  if (!(best > choice.current_score + 1e-9 * std::max(1.0, std::abs(best)))) {
+    choice.best_strength = alpha.strength;
+    choice.best_score = choice.current_score;
+  }
+  return choice;
 }
 
 }  // namespace hbirl

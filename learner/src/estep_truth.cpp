@@ -13,6 +13,7 @@ EStepResult TruthEStep::expect(const SoftSolution& policy, EStepState& /*state*/
     if (counts_[r] > 0.0) ll += counts_[r] * policy.log_policy[r];
   }
   result.log_likelihood = ll;
+  result.objective = ll;
   return result;
 }
 

@@ -25,7 +25,7 @@ class EmMap {
   };
   struct Step {
     Point next;
-    double log_likelihood = 0.0;  // at the input point
+    double objective = 0.0;  // EM's objective at the input point (EStepResult::objective)
     EStepResult e;
     OptimizeResult m;
   };
@@ -46,12 +46,12 @@ class EmMap {
   Step operator()(const Point& x) {
     Step step;
     step.e = expect(x, step.next.alpha);
-    step.log_likelihood = step.e.log_likelihood;
+    step.objective = step.e.objective;
     ++evaluations_;
-    if (!std::isfinite(step.log_likelihood) || !(step.e.counts.sum() > 0.0)) {
+    if (!std::isfinite(step.objective) || !(step.e.counts.sum() > 0.0)) {
       // Nowhere to go from a point where the data are impossible (an extrapolation that
       // overshot): report it and stay put; callers reject it.
-      step.log_likelihood = -std::numeric_limits<double>::infinity();
+      step.objective = -std::numeric_limits<double>::infinity();
       step.next = x;
       step.m.x = x.theta;
       step.m.status = "E-step found the data impossible at this point";
@@ -63,6 +63,17 @@ class EmMap {
     step.next.theta = step.m.x;
     optimizer_iterations_ += step.m.iterations;
     return step;
+  }
+
+  // log Pr(data | theta, mean of alpha) at x, for the report.
+  double data_log_likelihood(const Point& x) {
+    state_.alpha = x.alpha;
+    return estep_.data_log_likelihood(solver_.solve(mdp_.reward(x.theta)), state_);
+  }
+
+  std::optional<StrengthChoice> choose_strength(const Point& x) {
+    state_.alpha = x.alpha;
+    return estep_.choose_strength(solver_.solve(mdp_.reward(x.theta)), state_);
   }
 
   int evaluations() const { return evaluations_; }
@@ -102,12 +113,75 @@ EmMap::Point unpack(const Eigen::VectorXd& v, const EmMap::Point& like) {
   return x;
 }
 
-bool converged(const LearnOptions& o, const EmMap::Step& step, const EmMap::Point& from, double previous_ll) {
+bool converged(const LearnOptions& o, const EmMap::Step& step, const EmMap::Point& from, double previous) {
   const double theta_change = (step.next.theta - from.theta).lpNorm<Eigen::Infinity>();
   return step.e.alpha_converged &&
          theta_change <= o.theta_tolerance * std::max(1.0, step.next.theta.lpNorm<Eigen::Infinity>()) &&
-         std::abs(step.log_likelihood - previous_ll) <= o.likelihood_tolerance * std::max(1.0, std::abs(step.log_likelihood));
+         std::abs(step.objective - previous) <= o.likelihood_tolerance * std::max(1.0, std::abs(step.objective));
 }
+
+using Report = std::function<void(const EmMap::Step&)>;
+
+// Plain EM from x until it converges (true) or the evaluation budget runs out (false).
+bool plain_em(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Report& report) {
+  double previous = -std::numeric_limits<double>::infinity();
+  while (map.evaluations() < options.max_em_iterations) {
+    const EmMap::Step step = map(x);
+    report(step);
+    const bool done = converged(options, step, x, previous);
+    previous = step.objective;
+    x = step.next;
+    if (done) return true;
+  }
+  return false;
+}
+
+// SQUAREM (Varadhan & Roland 2008, scheme S3) with its monotone safeguard: two EM steps
+// x1 = F(x0), x2 = F(x1) give r = x1 - x0 and v = x2 - 2 x1 + x0; the point
+// x0 - 2a r + a^2 v with a = -|r|/|v| (clamped to [-step_max, -1]) is stabilised by one
+// more EM step and kept only if its objective is no worse than x2's.
+bool squarem(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Report& report) {
+  double step_max = 4.0;
+  double previous = -std::numeric_limits<double>::infinity();
+  while (map.evaluations() < options.max_em_iterations) {
+    const EmMap::Step s1 = map(x);
+    report(s1);
+    if (converged(options, s1, x, previous)) {
+      x = s1.next;
+      return true;
+    }
+    const EmMap::Step s2 = map(s1.next);
+    report(s2);
+    if (converged(options, s2, s1.next, s1.objective)) {
+      x = s2.next;
+      return true;
+    }
+    const Eigen::VectorXd p0 = pack(x);
+    const Eigen::VectorXd r = pack(s1.next) - p0;
+    const Eigen::VectorXd v = pack(s2.next) - 2.0 * pack(s1.next) + p0;
+    previous = s2.objective;
+    if (v.norm() == 0.0 || !r.allFinite() || !v.allFinite() || map.evaluations() + 1 >= options.max_em_iterations) {
+      x = s2.next;
+      continue;
+    }
+    const double a = std::clamp(-r.norm() / v.norm(), -step_max, -1.0);
+    const EmMap::Point jump = unpack(p0 - 2.0 * a * r + a * a * v, x);
+    const EmMap::Step s3 = map(jump);
+    report(s3);
+    if (std::isfinite(s3.objective) && s3.objective >= s2.objective - 1e-9 * std::max(1.0, std::abs(s2.objective))) {
+      x = s3.next;
+      previous = s3.objective;
+      if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
+    } else {
+      x = s2.next;  // the extrapolation overshot: keep the plain EM step
+      step_max = std::max(1.0, step_max / 4.0);
+    }
+  }
+  return false;
+}
+
+// How many times EM is resumed with a newly chosen prior strength at most.
+constexpr int kMaxStrengthChoices = 4;
 
 RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
                           Eigen::VectorXd theta, std::uint64_t seed, int index) {
@@ -115,84 +189,45 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
   result.initial_theta = theta;
   EmMap map(mdp, estep, options, seed);
   EmMap::Point x = map.start(theta);
-  auto report = [&](const EmMap::Step& step) {
+  const Report report = [&](const EmMap::Step& step) {
     if (options.on_iteration) {
-      options.on_iteration(index, map.evaluations(), step.log_likelihood, step.next.theta, step.e,
+      options.on_iteration(index, map.evaluations(), step.objective, step.next.theta, step.e,
                            step.next.alpha ? &*step.next.alpha : nullptr);
     }
     result.optimizer_status = step.m.status;
   };
+  std::optional<StrengthChoice> choice;
   if (!estep.depends_on_policy()) {
     // Known trajectories: one M-step is all of MaxCausalEnt.
     const EmMap::Step step = map(x);
     report(step);
     x = step.next;
     result.converged = step.m.converged;
-  } else if (!options.accelerate) {
-    double previous_ll = -std::numeric_limits<double>::infinity();
-    while (map.evaluations() < options.max_em_iterations) {
-      const EmMap::Step step = map(x);
-      report(step);
-      const bool done = converged(options, step, x, previous_ll);
-      previous_ll = step.log_likelihood;
-      x = step.next;
-      if (done) {
-        result.converged = true;
-        break;
-      }
-    }
   } else {
-    // SQUAREM (Varadhan & Roland 2008, scheme S3) with its monotone safeguard: two EM
-    // steps x1 = F(x0), x2 = F(x1) give r = x1 - x0 and v = x2 - 2 x1 + x0; the point
-    // x0 - 2a r + a^2 v with a = -|r|/|v| (clamped to [-step_max, -1]) is stabilised by
-    // one more EM step and kept only if its likelihood is no worse than x1's.
-    double step_max = 4.0;
-    double previous_ll = -std::numeric_limits<double>::infinity();
-    while (map.evaluations() < options.max_em_iterations) {
-      const EmMap::Step s1 = map(x);
-      report(s1);
-      if (converged(options, s1, x, previous_ll)) {
-        x = s1.next;
-        result.converged = true;
-        break;
-      }
-      const EmMap::Step s2 = map(s1.next);
-      report(s2);
-      if (converged(options, s2, s1.next, s1.log_likelihood)) {
-        x = s2.next;
-        result.converged = true;
-        break;
-      }
-      const Eigen::VectorXd p0 = pack(x);
-      const Eigen::VectorXd r = pack(s1.next) - p0;
-      const Eigen::VectorXd v = pack(s2.next) - 2.0 * pack(s1.next) + p0;
-      previous_ll = s2.log_likelihood;
-      if (v.norm() == 0.0 || !r.allFinite() || !v.allFinite() || map.evaluations() + 1 >= options.max_em_iterations) {
-        x = s2.next;
-        continue;
-      }
-      const double a = std::clamp(-r.norm() / v.norm(), -step_max, -1.0);
-      const EmMap::Point jump = unpack(p0 - 2.0 * a * r + a * a * v, x);
-      const EmMap::Step s3 = map(jump);
-      report(s3);
-      if (std::isfinite(s3.log_likelihood) &&
-          s3.log_likelihood >= s2.log_likelihood - 1e-9 * std::max(1.0, std::abs(s2.log_likelihood))) {
-        x = s3.next;
-        previous_ll = s3.log_likelihood;
-        if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
-      } else {
-        x = s2.next;  // the extrapolation overshot: keep the plain EM step
-        step_max = std::max(1.0, step_max / 4.0);
-      }
+    // EM to convergence; then, when the E-step has a prior strength to choose, choose it
+    // from the data there and resume EM with it until the choice stands.
+    for (int round = 0;; ++round) {
+      result.converged = options.accelerate ? squarem(map, x, options, report) : plain_em(map, x, options, report);
+      if (!result.converged) break;
+      choice = map.choose_strength(x);
+      if (!choice || choice->best_strength == x.alpha->strength || round == kMaxStrengthChoices) break;
+      x.alpha->strength = choice->best_strength;
+      result.converged = false;
+      choice.reset();
     }
   }
-  // The likelihood at the returned point (on a copy of the state: alpha stays as learned).
+  // The objective and the likelihood at the returned point (alpha stays as learned).
   std::optional<ObservationPrior> refined;
   const EStepResult final_e = map.expect(x, refined);
   result.theta = x.theta;
   result.alpha = x.alpha;
-  result.log_likelihood = final_e.log_likelihood;
-  result.score = final_e.log_likelihood - 0.5 * options.l2 * final_e.counts.sum() * x.theta.squaredNorm();
+  result.objective = final_e.objective;
+  result.log_likelihood = map.data_log_likelihood(x);
+  const double penalty = 0.5 * options.l2 * final_e.counts.sum() * x.theta.squaredNorm();
+  // Restarts are compared by the held-out likelihood when a strength was chosen from it
+  // (objectives at different strengths are not comparable), else by the objective.
+  if (choice) result.held_out_log_likelihood = choice->current_score;
+  result.score = (choice ? choice->current_score : final_e.objective) - penalty;
   result.em_iterations = map.evaluations();
   result.optimizer_iterations = map.optimizer_iterations();
   return result;
@@ -230,6 +265,7 @@ LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions&
   const RestartResult& best = result.restarts[static_cast<size_t>(result.selected_restart)];
   result.theta = best.theta;
   result.log_likelihood = best.log_likelihood;
+  result.objective = best.objective;
   return result;
 }
 

@@ -1,5 +1,7 @@
 #include "learner/observation_model.hpp"
 
+#include <cmath>
+
 namespace hbirl {
 
 AlphaCounts AlphaCounts::zero(int pairs, int confounders, int symbols) {
@@ -29,9 +31,64 @@ ObservationModel dirichlet_mean(const ObservationPrior& prior) {
   return {dirichlet_mean(prior.subject_alpha), dirichlet_mean(prior.confounder_alpha)};
 }
 
-void update_alpha(ObservationPrior& prior, const AlphaCounts& alpha_dot, double c) {
-  prior.subject_alpha = c * alpha_dot.subject + (1.0 - c) * prior.subject_alpha;
-  prior.confounder_alpha = c * alpha_dot.confounders + (1.0 - c) * prior.confounder_alpha;
+Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
+  const double base = prior.subject_alpha_base;
+  Eigen::MatrixXd out = prior.subject_alpha.array().min(base) + s * (prior.subject_alpha.array() - base).max(0.0);
+  // Pairs the prior has no counts for keep its mean (docs/MODEL.md, "The observation
+  // model"): a pair whose O the demonstration alone could set would explain observations
+  // by the expert doing what it did not do. Unless no pair has counts (no controlled run:
+  // then O can only come from the demonstration).
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = (prior.subject_alpha.array() > base).rowwise().any();
+  if (counted.any()) {
+    for (Eigen::Index r = 0; r < out.rows(); ++r) {
+      if (!counted[r]) out.row(r) *= ObservationPrior::kMaxStrength;
+    }
+  }
+  return out;
+}
+
+AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const AlphaCounts& counts) {
+  return {weighed_subject_prior(prior, s) + counts.subject, prior.confounder_alpha + counts.confounders};
+}
+
+namespace {
+// sum beta log(O / mean of beta): the prior's term, 0 at the prior's mean (so its size is
+// that of the data's log-likelihood, whatever the prior's strength).
+double weighted_log(const Eigen::MatrixXd& o, const Eigen::MatrixXd& beta) {
+  const Eigen::MatrixXd mean = dirichlet_mean(beta);
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < beta.size(); ++i) {
+    if (beta.data()[i] > 0.0) sum += beta.data()[i] * std::log(o.data()[i] / mean.data()[i]);
+  }
+  return sum;
+}
+}  // namespace
+
+double log_prior_term(const ObservationModel& model, const ObservationPrior& prior, const ObservationPrior& alpha) {
+  if (!alpha.learn || alpha.update != AlphaUpdate::kPosterior) return 0.0;
+  return weighted_log(model.subject, weighed_subject_prior(prior, alpha.strength)) +
+         weighted_log(model.confounders, prior.confounder_alpha);
+}
+
+const std::vector<double>& prior_strength_grid() {
+  static const std::vector<double> grid = [] {
+    std::vector<double> g;
+    for (int k = -6; k <= 6; ++k) g.push_back(std::pow(10.0, k / 2.0));
+    return g;
+  }();
+  return grid;
+}
+
+void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const AlphaCounts& alpha_dot) {
+  const double c = alpha.c;
+  if (alpha.update == AlphaUpdate::kPaper) {
+    alpha.subject_alpha = c * alpha_dot.subject + (1.0 - c) * alpha.subject_alpha;
+    alpha.confounder_alpha = c * alpha_dot.confounders + (1.0 - c) * alpha.confounder_alpha;
+    return;
+  }
+  const AlphaCounts target = dirichlet_posterior(prior, alpha.strength, alpha_dot);
+  alpha.subject_alpha = c * target.subject + (1.0 - c) * alpha.subject_alpha;
+  alpha.confounder_alpha = c * target.confounders + (1.0 - c) * alpha.confounder_alpha;
 }
 
 }  // namespace hbirl

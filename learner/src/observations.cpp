@@ -38,6 +38,10 @@ std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories
     h.add(static_cast<std::uint64_t>(t.weights.size()));
     h.add(t.weights.data(), t.weights.size() * sizeof(double));
     h.add(static_cast<unsigned char>(t.ends_in_terminal));
+    if (!t.contexts.empty()) {
+      h.add(static_cast<std::uint64_t>(t.contexts.size()));
+      h.add(t.contexts.data(), t.contexts.size() * sizeof(int));
+    }
   }
   return h.value();
 }
@@ -52,6 +56,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
     if (trajectory.symbols[static_cast<size_t>(x)] != trajectory.symbols[static_cast<size_t>(y)]) {
       return trajectory.symbols[static_cast<size_t>(x)] < trajectory.symbols[static_cast<size_t>(y)];
     }
+    if (trajectory.context(x) != trajectory.context(y)) return trajectory.context(x) < trajectory.context(y);
     for (Eigen::Index z = 0; z < sources; ++z) {
       if (trajectory.eta(x, z) != trajectory.eta(y, z)) return trajectory.eta(x, z) < trajectory.eta(y, z);
     }
@@ -75,6 +80,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
   for (size_t i = 0; i < rows.size(); ++i) {
     out.symbols.push_back(trajectory.symbols[static_cast<size_t>(rows[i])]);
     out.eta.row(static_cast<Eigen::Index>(i)) = trajectory.eta.row(rows[i]);
+    if (!trajectory.contexts.empty()) out.contexts.push_back(trajectory.context(rows[i]));
   }
   out.weights = std::move(weights);
   return out;
@@ -89,9 +95,10 @@ std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTraj
   for (const auto& t : trajectories) {
     std::vector<int>& of = kinds.of.emplace_back(static_cast<size_t>(t.num_observations()));
     for (int n = 0; n < t.num_observations(); ++n) {
-      std::vector<double> key(static_cast<size_t>(t.eta.cols()) + 1);
+      std::vector<double> key(static_cast<size_t>(t.eta.cols()) + 2);
       key[0] = t.symbols[static_cast<size_t>(n)];
-      for (Eigen::Index z = 0; z < t.eta.cols(); ++z) key[static_cast<size_t>(z) + 1] = t.eta(n, z);
+      key[1] = t.context(n);
+      for (Eigen::Index z = 0; z < t.eta.cols(); ++z) key[static_cast<size_t>(z) + 2] = t.eta(n, z);
       const auto [it, inserted] = index.emplace(std::move(key), static_cast<int>(rows.size()));
       if (inserted) {
         if (static_cast<int>(rows.size()) >= max_kinds) return std::nullopt;
@@ -100,13 +107,32 @@ std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTraj
       of[static_cast<size_t>(n)] = it->second;
     }
   }
-  const Eigen::Index sources = rows.empty() ? 0 : static_cast<Eigen::Index>(rows[0].size()) - 1;
+  const Eigen::Index sources = rows.empty() ? 0 : static_cast<Eigen::Index>(rows[0].size()) - 2;
   kinds.eta.resize(static_cast<Eigen::Index>(rows.size()), sources);
   for (size_t k = 0; k < rows.size(); ++k) {
     kinds.symbols.push_back(static_cast<int>(rows[k][0]));
-    for (Eigen::Index z = 0; z < sources; ++z) kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 1];
+    kinds.contexts.push_back(static_cast<int>(rows[k][1]));
+    for (Eigen::Index z = 0; z < sources; ++z) kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 2];
   }
   return kinds;
+}
+
+void use_alpha_update(ObservationPrior& prior, AlphaUpdate update) {
+  prior.update = update;
+  prior.learn_eta = update == AlphaUpdate::kPosterior;
+}
+
+const char* alpha_update_name(AlphaUpdate update) { return update == AlphaUpdate::kPaper ? "paper" : "posterior"; }
+
+bool parse_alpha_update(const std::string& name, AlphaUpdate& update) {
+  if (name == "posterior") {
+    update = AlphaUpdate::kPosterior;
+  } else if (name == "paper") {
+    update = AlphaUpdate::kPaper;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 }  // namespace hbirl

@@ -2,7 +2,9 @@
 
 namespace hbirl {
 
-Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng) {
+Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
+                             bool* entered_terminal) {
+  if (entered_terminal) *entered_terminal = false;
   Trajectory trajectory;
   trajectory.reserve(static_cast<size_t>(std::max(length, 0)));
   const int A = mdp.num_actions;
@@ -16,7 +18,10 @@ Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int 
     const int j = begin + rng.categorical(Eigen::Map<const Eigen::VectorXd>(
                               mdp.transitions.valuePtr() + begin, end - begin));
     s = mdp.transitions.innerIndexPtr()[j];
-    if (mdp.is_terminal(s)) break;
+    if (mdp.is_terminal(s)) {
+      if (entered_terminal) *entered_terminal = true;
+      break;
+    }
   }
   return trajectory;
 }

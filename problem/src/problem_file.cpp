@@ -205,7 +205,8 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
 ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
                                         std::vector<std::string>* warnings) {
   node.check_keys({"num_symbols", "num_confounders", "subject_alpha", "subject_alpha_default",
-                   "confounder_alpha", "confounder_alpha_default", "learn", "c"},
+                   "confounder_alpha", "confounder_alpha_default", "learn", "c", "update", "prior_strength",
+                   "learn_eta", "eta_prior_strength"},
                   warnings);
   ObservationPrior prior;
   prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
@@ -217,6 +218,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   if (auto d = node.find("subject_alpha_default")) subject_default = d->as_number(0.0, 1e300);
   double confounder_default = 1.0;
   if (auto d = node.find("confounder_alpha_default")) confounder_default = d->as_number(0.0, 1e300);
+  prior.subject_alpha_base = subject_default;
   prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), prior.num_symbols, subject_default);
   prior.confounder_alpha =
       Eigen::MatrixXd::Constant(prior.num_confounders, prior.num_symbols, confounder_default);
@@ -256,9 +258,25 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
     }
   }
   if (auto l = node.find("learn")) prior.learn = l->as_bool();
+  if (auto u = node.find("update")) {
+    AlphaUpdate update = AlphaUpdate::kPosterior;
+    if (!parse_alpha_update(u->as_string(), update)) u->fail("expected \"posterior\" or \"paper\", got \"" + u->as_string() + "\"");
+    use_alpha_update(prior, update);
+  }
   if (auto c = node.find("c")) {
     prior.c = c->as_number();
     if (!(prior.c > 0.0 && prior.c <= 1.0)) c->fail("expected a number in (0, 1], got " + fmt(prior.c));
+  }
+  if (auto l = node.find("learn_eta")) prior.learn_eta = l->as_bool();
+  if (auto k = node.find("eta_prior_strength")) prior.eta_strength = k->as_number(1e-6, 1e12);
+  if (auto strength = node.find("prior_strength")) {
+    if (strength->is_string()) {
+      if (strength->as_string() != "auto") strength->fail("expected \"auto\" or a positive number, got \"" + strength->as_string() + "\"");
+    } else {
+      const double s = strength->as_number(ObservationPrior::kMinStrength, ObservationPrior::kMaxStrength);
+      prior.automatic_strength = false;
+      prior.strength = s;
+    }
   }
   return prior;
 }
@@ -499,8 +517,17 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
       for (int w = 0; w < p.num_symbols; ++w) ca.push_back({c, w, p.confounder_alpha(c, w)});
     }
     om["confounder_alpha"] = ca;
+    om["subject_alpha_default"] = p.subject_alpha_base;
     om["learn"] = p.learn;
+    om["update"] = alpha_update_name(p.update);
+    om["learn_eta"] = p.learn_eta;
+    om["eta_prior_strength"] = p.eta_strength;
     om["c"] = p.c;
+    if (p.automatic_strength) {
+      om["prior_strength"] = "auto";
+    } else {
+      om["prior_strength"] = p.strength;
+    }
     doc["observation_model"] = om;
   }
   J demo = J::array();

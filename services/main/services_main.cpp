@@ -233,10 +233,17 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
-  app.add_option("--c", o.learning.c, "Rate of the observation-model refinement")->check(CLI::Range(1e-6, 1.0))->capture_default_str();
+  std::string update = alpha_update_name(o.learning.update);
+  app.add_option("--alpha-update", update, "Observation-model learning: posterior (keeps the prior; docs/MODEL.md) or paper")
+      ->check(CLI::IsMember({"posterior", "paper"}))
+      ->capture_default_str();
+  app.add_option("--c", o.learning.c, "Damping of each observation-model refinement")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
+  parse_alpha_update(update, o.learning.update);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "optimiser";

@@ -86,6 +86,9 @@ Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOp
   prior.num_confounders = data.num_sources - 1;
   prior.subject_alpha = subject_prior(data.domain, mdp, data.controlled_truth, data.controlled_observed, data.num_symbols);
   prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
+  use_alpha_update(prior, options.update);
+  // The bus carries the stated eta only: remote workers cannot compute with learned eta.
+  prior.learn_eta = false;
   prior.c = options.c;
   ObservationEStepOptions estep_options;
   estep_options.max_alpha_iterations = options.max_alpha_iterations;

@@ -168,6 +168,34 @@ TEST_F(Cli, GenerateThenLearn) {
   EXPECT_EQ(std::max_element(w.begin(), w.end()) - w.begin(), 2);
 }
 
+// Every generated random task is a valid problem file (the user's one-command way to
+// reproduce a benchmark run); learning it reports what the observation model did.
+TEST_F(Cli, EveryGeneratedRandomTaskValidates) {
+  for (int seed = 1; seed <= 10; ++seed) {  // (the generator's own test checks 40 tasks in-process)
+    const fs::path p = dir_ / ("task" + std::to_string(seed) + ".json");
+    const Outcome g = run("generate random-task --seed " + std::to_string(seed) + " --draw 1 --out '" + p.string() + "'");
+    ASSERT_EQ(g.status, 0) << g.err;
+    const Outcome v = run("validate --problem '" + p.string() + "'");
+    EXPECT_EQ(v.status, 0) << "seed " << seed << ": " << v.err;
+    EXPECT_EQ(v.err, "") << "seed " << seed;  // no warnings either
+  }
+  const fs::path p = dir_ / "small.json";
+  ASSERT_EQ(run("generate random-task --seed 10 --out '" + p.string() + "'").status, 0);
+  const Outcome r = run("learn --restarts 1 --problem '" + p.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["observation_model"]["update"], "posterior");
+  EXPECT_GE(out["observation_model"]["prior_strength"].get<double>(), 1e-3);
+  EXPECT_TRUE(out["observation_model"].contains("learned_eta"));
+  const Outcome paper = run("learn --restarts 1 --alpha-update paper --problem '" + p.string() + "'");
+  ASSERT_EQ(paper.status, 0) << paper.err;
+  EXPECT_EQ(json::parse(paper.out)["observation_model"]["update"], "paper");
+  EXPECT_FALSE(json::parse(paper.out)["observation_model"].contains("learned_eta"));
+  const Outcome bad = run("generate random-task --eta sometimes");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--eta"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, MissingAndUnreadableFiles) {
   Outcome r = run("learn --from truth --problem '" + (dir_ / "nope.json").string() + "'");
   EXPECT_EQ(r.status, 2);
@@ -289,7 +317,7 @@ TEST_F(Cli, GridworldExperimentAtSmallScale) {
             std::string::npos) << r.out;
   const std::string csv = slurp(out / "gridworld_runs.csv");
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,seconds,error");
+            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,strength,seconds,error");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.csv"));
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.md"));
@@ -297,7 +325,7 @@ TEST_F(Cli, GridworldExperimentAtSmallScale) {
   const fs::path out1 = dir_ / "gw1";
   ASSERT_EQ(run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 1 --out '" +
                 out1.string() + "'").status, 0);
-  auto without_seconds = [](const std::string& text) {  // drop the "seconds" column
+  auto without_seconds = [](const std::string& text) {  // drop the "seconds" column (the 12th)
     std::string kept;
     std::istringstream in(text);
     for (std::string line; std::getline(in, line);) {
@@ -305,7 +333,7 @@ TEST_F(Cli, GridworldExperimentAtSmallScale) {
       std::istringstream cells(line);
       for (std::string cell; std::getline(cells, cell, ',');) fields.push_back(cell);
       for (size_t i = 0; i < fields.size(); ++i) {
-        if (i != 10) kept += fields[i] + ",";
+        if (i != 11) kept += fields[i] + ",";
       }
       kept += "\n";
     }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "brute_force_posterior.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "tiny_observed_problem.hpp"
 #include "sim_driver/gridworld_observations.hpp"
@@ -177,6 +178,176 @@ TEST(ObservationEStep, AlphaRefinementIsCarriedInTheState) {
   EXPECT_GT(r.alpha_iterations, 0);
   EXPECT_NE(state.alpha->subject_alpha, g.prior.subject_alpha);
   EXPECT_NEAR(r.counts.sum(), 200.0, 1e-9);  // 20 trajectories x 10 steps
+}
+
+// One refinement of the posterior update with c = 1 gives the weighed prior plus the
+// expected counts, the counts checked against brute-force enumeration of every
+// trajectory and labelling (tiny problems), for strengths on and off the grid.
+TEST(ObservationEStep, PosteriorUpdateIsThePriorPlusBruteForceCounts) {
+  Rng rng(17);
+  int checked = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const testing::TinyProblem p = testing::tiny_problem(trial, rng);
+    const testing::BruteForce truth = testing::brute_force(p.mdp, p.policy, p.model, p.trajectory);
+    if (!(truth.likelihood > 0.0)) continue;
+    ++checked;
+    ObservationPrior prior;
+    prior.num_symbols = p.model.num_symbols();
+    prior.num_confounders = p.model.num_confounders();
+    // The prior's mean is the problem's model: alpha = 1 + 4 O (every pair has counts).
+    prior.subject_alpha = 1.0 + 4.0 * p.model.subject.array();
+    prior.confounder_alpha = 1.0 + 4.0 * p.model.confounders.array();
+    prior.c = 1.0;
+    prior.learn_eta = false;
+    prior.automatic_strength = false;
+    prior.strength = trial % 2 == 0 ? 1.0 : 0.37;
+    ObservationEStepOptions options;
+    options.max_alpha_iterations = 1;
+    const ObservationEStep estep(p.mdp, {p.trajectory}, prior, options);
+    EStepState state = estep.initial_state(1);
+    // The E-step computes with the prior's mean; give it the same model as brute force.
+    state.alpha->subject_alpha = p.model.subject;
+    state.alpha->confounder_alpha = p.model.confounders;
+    estep.expect(p.policy, state);
+    const Eigen::MatrixXd subject = weighed_subject_prior(prior, prior.strength) + truth.stats.alpha_dot.subject;
+    const Eigen::MatrixXd elements = prior.confounder_alpha + truth.stats.alpha_dot.confounders;
+    EXPECT_LT((state.alpha->subject_alpha - subject).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+    if (elements.size() > 0) {
+      EXPECT_LT((state.alpha->confounder_alpha - elements).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(checked, 20);
+}
+
+// Pairs the prior has no counts for keep its mean whatever the strength, as long as some
+// pair has counts; with no counts anywhere the demonstration alone sets O.
+TEST(ObservationEStep, PairsWithoutCountsKeepTheirPriorMean) {
+  ObservationPrior prior;
+  prior.num_symbols = 2;
+  prior.subject_alpha = Eigen::MatrixXd::Ones(3, 2);
+  prior.subject_alpha.row(0) << 9, 1;
+  prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 2);
+  for (double s : {0.01, 1.0, 100.0}) {
+    const Eigen::MatrixXd w = weighed_subject_prior(prior, s);
+    EXPECT_DOUBLE_EQ(w(0, 0), 1.0 + s * 8.0);
+    EXPECT_DOUBLE_EQ(w(0, 1), 1.0);
+    EXPECT_DOUBLE_EQ(w(1, 0), ObservationPrior::kMaxStrength);
+    EXPECT_DOUBLE_EQ(w(2, 1), ObservationPrior::kMaxStrength);
+  }
+  prior.subject_alpha.row(0) << 1, 1;
+  EXPECT_EQ(weighed_subject_prior(prior, 5.0), Eigen::MatrixXd::Ones(3, 2));
+}
+
+// The held-out score of choose_strength, by hand: each trajectory's own expected counts
+// from the exact engine, its log-likelihood under the posterior mean of the prior and
+// the other trajectories' counts.
+TEST(ObservationEStep, HeldOutLikelihoodByHand) {
+  ObservedGridworld g = observed_gridworld(9, 2, 6, EtaKind::kPlausible);
+  g.prior.learn_eta = false;
+  g.prior.strength = std::sqrt(10.0);
+  std::vector<ObservedTrajectory> data(g.observations.trajectories.begin(), g.observations.trajectories.begin() + 4);
+  const ObservationEStep estep(g.task.mdp, data, g.prior);
+  const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(g.task.true_weights));
+  EStepState state = estep.initial_state(1);
+  estep.expect(policy, state);  // away from the prior
+  const std::optional<StrengthChoice> choice = estep.choose_strength(policy, state);
+  ASSERT_TRUE(choice);
+  const ObservationModel model = dirichlet_mean(*state.alpha);
+  ExactEngine engine(g.task.mdp);
+  std::vector<EStepStatistics> own;
+  AlphaCounts all = AlphaCounts::zero(g.task.mdp.num_pairs(), 2, 4);
+  for (const ObservedTrajectory& t : estep.trajectories()) {
+    own.push_back(EStepStatistics::zero(g.task.mdp.num_pairs(), 2, 4));
+    engine.accumulate(policy, model, t, own.back());
+    all += own.back().alpha_dot;
+  }
+  double held_out = 0.0;
+  for (size_t i = 0; i < own.size(); ++i) {
+    AlphaCounts others = all;
+    others.subject -= own[i].alpha_dot.subject;
+    others.confounders -= own[i].alpha_dot.confounders;
+    const AlphaCounts posterior = dirichlet_posterior(g.prior, g.prior.strength, others);
+    held_out += engine.log_likelihood(policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)},
+                                      estep.trajectories()[i]);
+  }
+  EXPECT_NEAR(choice->current_score, held_out, 1e-8 * std::abs(held_out));
+  EXPECT_GE(choice->best_score, choice->current_score);
+  // Not automatic: nothing to choose.
+  g.prior.automatic_strength = false;
+  const ObservationEStep fixed(g.task.mdp, data, g.prior);
+  EXPECT_FALSE(fixed.choose_strength(policy, fixed.initial_state(1)));
+}
+
+// Learned eta recovers a known miscalibration. The Gridworld's plausible eta gives the
+// favoured source 0.6, but observations are drawn from the sources evenly and the
+// favoured one is the true one with probability 0.8 (else any of the n sources): so
+// Pr(true source = favoured | eta) = 0.8 + 0.2 / n. With the true O fixed and the true
+// policy, the context that favours the subject must learn that, not 0.6; and with a huge
+// prior strength learned eta stays the stated one.
+TEST(ObservationEStep, LearnedEtaRecoversTheLabellersCalibration) {
+  Rng rng(3);
+  GridworldTask task = make_gridworld_task({}, 60, 10, rng);
+  const Eigen::MatrixXd subject = gridworld_subject_observation_model(5, 1.0);
+  const Eigen::MatrixXd elements = random_confounder_observation_model(3, rng);
+  GridworldObservationOptions options;
+  options.confounders = 3;
+  options.per_step = 40;
+  options.eta = EtaKind::kPlausible;
+  const GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject, elements, options, rng);
+  const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(task.true_weights));
+  for (double kappa : {10.0, 1e12}) {
+    ObservationPrior prior;
+    prior.num_symbols = 4;
+    prior.num_confounders = 3;
+    prior.subject_alpha = 1e9 * subject;  // O known: only eta moves
+    prior.confounder_alpha = 1e9 * elements;
+    prior.automatic_strength = false;
+    prior.c = 1.0;
+    prior.eta_strength = kappa;
+    const ObservationEStep estep(task.mdp, observed.trajectories, prior);
+    ASSERT_EQ(estep.num_contexts(), 4);  // one per favoured source
+    EStepState state = estep.initial_state(1);
+    for (int i = 0; i < 30; ++i) estep.expect(policy, state);
+    const RowMatrix learned = *estep.learned_eta(*state.alpha);
+    for (int c = 0; c < 4; ++c) {
+      Eigen::Index favoured = 0;
+      estep.context_eta().row(c).maxCoeff(&favoured);
+      if (kappa > 1e6) {
+        EXPECT_LT((learned.row(c) - estep.context_eta().row(c)).cwiseAbs().maxCoeff(), 1e-6);
+      } else if (favoured == 0) {
+        EXPECT_NEAR(learned(c, 0), 0.8 + 0.2 / 4, 0.03) << learned.row(c);
+      }
+    }
+  }
+}
+
+// The posterior update's answer does not depend on its damping c: EM with c = 1, 0.5 and
+// 0.1 ends at the same theta (to the EM tolerance) and the same prior strength.
+TEST(HiddenDataEm, PosteriorUpdateGivesTheSameAnswerForAnyC) {
+  ObservedGridworld g = observed_gridworld(4, 2, 10, EtaKind::kPlausible);
+  std::vector<ObservedTrajectory> data(g.observations.trajectories.begin(), g.observations.trajectories.begin() + 8);
+  std::optional<Eigen::VectorXd> first;
+  double strength = 0.0;
+  for (double c : {1.0, 0.5, 0.1}) {
+    g.prior.c = c;
+    ObservationEStepOptions options;
+    options.alpha_tolerance = 1e-7;
+    const ObservationEStep estep(g.task.mdp, data, g.prior, options);
+    LearnOptions learn;
+    learn.theta_tolerance = 1e-7;
+    learn.likelihood_tolerance = 1e-12;
+    learn.max_em_iterations = 3000;
+    const LearnResult r = learn_reward(g.task.mdp, estep, learn);
+    ASSERT_TRUE(r.restarts[0].converged) << "c = " << c;
+    if (!first) {
+      first = r.theta;
+      strength = r.restarts[0].alpha->strength;
+      continue;
+    }
+    EXPECT_LT((r.theta - *first).lpNorm<Eigen::Infinity>(), 1e-3 * std::max(1.0, first->lpNorm<Eigen::Infinity>()))
+        << "c = " << c << ": " << r.theta.transpose() << " vs " << first->transpose();
+    EXPECT_EQ(r.restarts[0].alpha->strength, strength) << "c = " << c;
+  }
 }
 
 }  // namespace

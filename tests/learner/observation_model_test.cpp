@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "learner/rng.hpp"
+
 namespace hbirl {
 namespace {
 
@@ -14,12 +18,16 @@ TEST(ObservationModel, DirichletMean) {
   EXPECT_DOUBLE_EQ(mean(1, 1), 1.0 / 3);  // empty prior: uniform
 }
 
-// Hand-computed: alpha = (4, 6), alpha_dot = (10, 0), c = 0.25:
-// alpha' = 0.25 (10, 0) + 0.75 (4, 6) = (5.5, 4.5); mean (0.55, 0.45).
-TEST(ObservationModel, AlphaUpdateByHand) {
+// One pair and one element over two symbols: subject alpha (4, 6), element alpha (1, 1),
+// c = 0.25; one refinement from alpha_dot = (10, 0) and (2, 6).
+ObservationPrior refined_by_hand(AlphaUpdate update, double strength) {
   ObservationPrior prior;
   prior.num_symbols = 2;
   prior.num_confounders = 1;
+  prior.update = update;
+  prior.c = 0.25;
+  prior.automatic_strength = false;
+  prior.strength = strength;
   prior.subject_alpha = Eigen::MatrixXd(1, 2);
   prior.subject_alpha << 4, 6;
   prior.confounder_alpha = Eigen::MatrixXd(1, 2);
@@ -27,14 +35,157 @@ TEST(ObservationModel, AlphaUpdateByHand) {
   AlphaCounts dot = AlphaCounts::zero(1, 1, 2);
   dot.subject << 10, 0;
   dot.confounders << 2, 6;
-  update_alpha(prior, dot, 0.25);
-  EXPECT_DOUBLE_EQ(prior.subject_alpha(0, 0), 5.5);
-  EXPECT_DOUBLE_EQ(prior.subject_alpha(0, 1), 4.5);
-  EXPECT_DOUBLE_EQ(prior.confounder_alpha(0, 0), 1.25);
-  EXPECT_DOUBLE_EQ(prior.confounder_alpha(0, 1), 2.25);
-  const ObservationModel model = dirichlet_mean(prior);
+  ObservationPrior alpha = prior;
+  update_alpha(alpha, prior, dot);
+  return alpha;
+}
+
+// The paper's update: alpha' = 0.25 (10, 0) + 0.75 (4, 6) = (5.5, 4.5), mean (0.55, 0.45);
+// element 0.25 (2, 6) + 0.75 (1, 1) = (1.25, 2.25).
+TEST(ObservationModel, PaperUpdateByHand) {
+  const ObservationPrior alpha = refined_by_hand(AlphaUpdate::kPaper, 1.0);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 0), 5.5);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 1), 4.5);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 0), 1.25);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 1), 2.25);
+  const ObservationModel model = dirichlet_mean(alpha);
   EXPECT_DOUBLE_EQ(model.subject(0, 0), 0.55);
   EXPECT_DOUBLE_EQ(model.confounders(0, 1), 2.25 / 3.5);
+}
+
+// The posterior update with strength s = 2 and base 1: subject prior(2) = 1 + 2 (3, 5) =
+// (7, 11), target (17, 11), alpha' = 0.25 (17, 11) + 0.75 (4, 6) = (7.25, 7.25); elements
+// (their prior as given) target (1, 1) + (2, 6) = (3, 7), alpha' = (1.5, 2.5).
+TEST(ObservationModel, PosteriorUpdateByHand) {
+  const ObservationPrior alpha = refined_by_hand(AlphaUpdate::kPosterior, 2.0);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 0), 7.25);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 1), 7.25);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 0), 1.5);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 1), 2.5);
+}
+
+ObservationPrior random_prior(Rng& rng) {
+  ObservationPrior prior;
+  prior.num_symbols = 3;
+  prior.num_confounders = 2;
+  prior.subject_alpha = Eigen::MatrixXd(4, 3);
+  prior.confounder_alpha = Eigen::MatrixXd(2, 3);
+  for (Eigen::Index i = 0; i < prior.subject_alpha.size(); ++i) prior.subject_alpha.data()[i] = 0.5 + 5 * rng.uniform();
+  for (Eigen::Index i = 0; i < prior.confounder_alpha.size(); ++i) prior.confounder_alpha.data()[i] = 0.5 + rng.uniform();
+  return prior;
+}
+
+// With no data the posterior update returns the prior (for any c, any number of times),
+// and with data its fixed point is the weighed prior + alpha_dot (elements: prior +
+// alpha_dot) whatever c is. The weighed prior keeps the base and scales what is above it.
+TEST(ObservationModel, PosteriorUpdateKeepsThePriorAndItsFixedPointDoesNotDependOnC) {
+  Rng rng(5);
+  const ObservationPrior prior = random_prior(rng);
+  const AlphaCounts none = AlphaCounts::zero(4, 2, 3);
+  AlphaCounts dot = none;
+  for (Eigen::Index i = 0; i < dot.subject.size(); ++i) dot.subject.data()[i] = 10 * rng.uniform();
+  for (Eigen::Index i = 0; i < dot.confounders.size(); ++i) dot.confounders.data()[i] = 30 * rng.uniform();
+  for (double s : {1.0, 0.01, 30.0}) {
+    for (double c : {1.0, 0.5, 0.1, 0.02}) {
+      ObservationPrior alpha = prior;
+      alpha.c = c;
+      alpha.strength = s;
+      // Without data the target is s * prior: with s = 1, the prior itself at once.
+      const Eigen::MatrixXd weighed = weighed_subject_prior(prior, s);
+      Eigen::MatrixXd by_hand = prior.subject_alpha;
+      for (Eigen::Index i = 0; i < by_hand.size(); ++i) {
+        const double a = prior.subject_alpha.data()[i];
+        by_hand.data()[i] = a <= 1.0 ? a : 1.0 + s * (a - 1.0);
+      }
+      EXPECT_LT((weighed - by_hand).cwiseAbs().maxCoeff(), 1e-12);
+      if (s == 1.0) {
+        EXPECT_EQ(weighed, prior.subject_alpha);
+      }
+      for (int i = 0; i < 3000; ++i) update_alpha(alpha, prior, none);
+      EXPECT_LT((alpha.subject_alpha - weighed).cwiseAbs().maxCoeff(), 1e-9) << "c = " << c;
+      EXPECT_LT((alpha.confounder_alpha - prior.confounder_alpha).cwiseAbs().maxCoeff(), 1e-12) << "c = " << c;
+      for (int i = 0; i < 3000; ++i) update_alpha(alpha, prior, dot);
+      EXPECT_LT((alpha.subject_alpha - (weighed + dot.subject)).cwiseAbs().maxCoeff(), 1e-9) << "c = " << c;
+      EXPECT_LT((alpha.confounder_alpha - (prior.confounder_alpha + dot.confounders)).cwiseAbs().maxCoeff(), 1e-9)
+          << "c = " << c;
+    }
+  }
+}
+
+// The paper's update forgets the prior: its fixed point is alpha_dot.
+TEST(ObservationModel, PaperUpdateForgetsThePrior) {
+  ObservationPrior prior;
+  prior.num_symbols = 2;
+  prior.num_confounders = 0;
+  prior.update = AlphaUpdate::kPaper;
+  prior.c = 0.1;
+  prior.subject_alpha = Eigen::MatrixXd::Constant(1, 2, 50.0);
+  prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 2);
+  AlphaCounts dot = AlphaCounts::zero(1, 0, 2);
+  dot.subject << 3, 1;
+  ObservationPrior alpha = prior;
+  for (int i = 0; i < 1000; ++i) update_alpha(alpha, prior, dot);
+  EXPECT_NEAR(alpha.subject_alpha(0, 0), 3.0, 1e-9);
+  EXPECT_NEAR(alpha.subject_alpha(0, 1), 1.0, 1e-9);
+}
+
+// MAP-EM's M-step (docs/MODEL.md): the mean of the Dirichlet posterior, O = (s alpha + n) /
+// sum, maximises sum_w n_w log O_w (the expected complete-data log-likelihood) plus the
+// prior's term sum_w s alpha_w log O_w over the simplex. Checked against random
+// perturbations of it, and the term against its definition.
+TEST(ObservationModel, PosteriorMeanMaximisesTheMapObjective) {
+  Rng rng(21);
+  const ObservationPrior prior = random_prior(rng);
+  ObservationPrior alpha = prior;
+  alpha.strength = 2.5;
+  AlphaCounts dot = AlphaCounts::zero(4, 2, 3);
+  for (Eigen::Index i = 0; i < dot.subject.size(); ++i) dot.subject.data()[i] = 10 * rng.uniform();
+  for (Eigen::Index i = 0; i < dot.confounders.size(); ++i) dot.confounders.data()[i] = 30 * rng.uniform();
+  const AlphaCounts posterior = dirichlet_posterior(prior, alpha.strength, dot);
+  const ObservationModel best{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)};
+  auto objective = [&](const ObservationModel& o) {
+    double f = 0.0;
+    for (Eigen::Index i = 0; i < o.subject.size(); ++i) f += dot.subject.data()[i] * std::log(o.subject.data()[i]);
+    for (Eigen::Index i = 0; i < o.confounders.size(); ++i) f += dot.confounders.data()[i] * std::log(o.confounders.data()[i]);
+    return f + log_prior_term(o, prior, alpha);
+  };
+  // By hand: beta log(O / mean of beta), beta = 1 + 2.5 (alpha - 1) above the base.
+  Eigen::MatrixXd beta = prior.subject_alpha;
+  for (Eigen::Index i = 0; i < beta.size(); ++i) {
+    const double a = prior.subject_alpha.data()[i];
+    beta.data()[i] = a <= 1.0 ? a : 1.0 + 2.5 * (a - 1.0);
+  }
+  const Eigen::MatrixXd beta_mean = dirichlet_mean(beta);
+  const Eigen::MatrixXd element_mean = dirichlet_mean(prior.confounder_alpha);
+  double by_hand = 0.0;
+  for (Eigen::Index i = 0; i < best.subject.size(); ++i) {
+    by_hand += beta.data()[i] * std::log(best.subject.data()[i] / beta_mean.data()[i]);
+  }
+  for (Eigen::Index i = 0; i < best.confounders.size(); ++i) {
+    by_hand += prior.confounder_alpha.data()[i] * std::log(best.confounders.data()[i] / element_mean.data()[i]);
+  }
+  EXPECT_NEAR(log_prior_term(best, prior, alpha), by_hand, 1e-9 * std::abs(by_hand));
+  const double at_best = objective(best);
+  for (int trial = 0; trial < 200; ++trial) {
+    ObservationModel other = best;
+    for (Eigen::Index i = 0; i < other.subject.size(); ++i) other.subject.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
+    for (Eigen::Index i = 0; i < other.confounders.size(); ++i) other.confounders.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
+    other.subject = dirichlet_mean(other.subject);
+    other.confounders = dirichlet_mean(other.confounders);
+    EXPECT_LE(objective(other), at_best + 1e-9);
+  }
+  // The paper's update and a fixed model have no prior term.
+  ObservationPrior paper = alpha;
+  paper.update = AlphaUpdate::kPaper;
+  EXPECT_EQ(log_prior_term(best, prior, paper), 0.0);
+}
+
+TEST(ObservationModel, StrengthGridSpansThreeDecadesEachWay) {
+  const std::vector<double>& grid = prior_strength_grid();
+  ASSERT_EQ(grid.size(), 13u);
+  EXPECT_NEAR(grid.front(), ObservationPrior::kMinStrength, 1e-15);
+  EXPECT_NEAR(grid.back(), ObservationPrior::kMaxStrength, 1e-9);
+  EXPECT_EQ(grid[6], 1.0);  // the prior as written is on the grid
 }
 
 }  // namespace

@@ -91,6 +91,45 @@ TEST(ProblemFile, RoundTripsThroughJson) {
   EXPECT_EQ(*p.demonstration[0].truth, *q.demonstration[0].truth);
 }
 
+// The observation model's learning options: defaults, every key, the round trip, and one
+// line naming the field for each bad value.
+TEST(ProblemFile, ObservationModelLearningOptions) {
+  const Problem defaults = parse_problem(spec_example().dump());
+  EXPECT_EQ(defaults.observation_model->update, AlphaUpdate::kPosterior);
+  EXPECT_TRUE(defaults.observation_model->automatic_strength);
+  EXPECT_TRUE(defaults.observation_model->learn_eta);
+  json d = spec_example();
+  d["observation_model"]["update"] = "paper";
+  d["observation_model"]["prior_strength"] = 0.5;
+  d["observation_model"]["subject_alpha_default"] = 2.0;
+  const Problem paper = parse_problem(d.dump());
+  EXPECT_EQ(paper.observation_model->update, AlphaUpdate::kPaper);
+  EXPECT_FALSE(paper.observation_model->learn_eta);  // the paper's update takes eta as given
+  EXPECT_FALSE(paper.observation_model->automatic_strength);
+  EXPECT_EQ(paper.observation_model->strength, 0.5);
+  EXPECT_EQ(paper.observation_model->subject_alpha_base, 2.0);
+  d["observation_model"]["update"] = "posterior";
+  d["observation_model"]["learn_eta"] = false;
+  d["observation_model"]["eta_prior_strength"] = 25.0;
+  const Problem p = parse_problem(d.dump());
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  for (const Problem* x : {&p, &q}) {
+    EXPECT_EQ(x->observation_model->update, AlphaUpdate::kPosterior);
+    EXPECT_FALSE(x->observation_model->learn_eta);
+    EXPECT_EQ(x->observation_model->eta_strength, 25.0);
+    EXPECT_EQ(x->observation_model->strength, 0.5);
+    EXPECT_EQ(x->observation_model->subject_alpha_base, 2.0);
+  }
+  expect_error([](json& e) { e["observation_model"]["update"] = "bayes"; }, "observation_model.update",
+               "expected \"posterior\" or \"paper\"");
+  expect_error([](json& e) { e["observation_model"]["prior_strength"] = "high"; }, "observation_model.prior_strength",
+               "expected \"auto\" or a positive number");
+  expect_error([](json& e) { e["observation_model"]["prior_strength"] = 0.0; }, "observation_model.prior_strength", "");
+  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = -1.0; }, "observation_model.eta_prior_strength",
+               "");
+  expect_error([](json& e) { e["observation_model"]["learn_eta"] = "yes"; }, "observation_model.learn_eta", "true or false");
+}
+
 TEST(ProblemFile, MalformedJson) {
   try {
     parse_problem("{\n  \"mdp\": {,\n}");

@@ -45,6 +45,7 @@ const Task& task() {
     out.prior.subject_alpha = controlled_run_alpha(out.task.mdp, controlled, subject, 6, 1.0, rng);
     out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
     out.prior.c = 0.5;
+    out.prior.learn_eta = false;  // as the service set learns: the bus carries the stated eta
     return out;
   }();
   return t;

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "learner/observations.hpp"
+
 namespace hbirl {
 
 enum class GridworldMethod { kTrueTrajectories, kTrueObservationFunction, kUniformEta, kPlausibleEta, kIgnoreCE };
@@ -39,7 +41,8 @@ struct GridworldExperimentOptions {
   // EM schedule. One alpha refinement per E-step, interleaved with the M-steps (same
   // fixed point as refining to convergence inside every E-step, ~4x fewer passes), and
   // tolerances that leave the greedy policy -- hence ILE -- unchanged (docs/results).
-  double c = 0.5;                  // alpha refinement rate (paper Algorithm 1)
+  AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
+  double c = 0.5;                  // damping of the alpha refinement (paper Algorithm 1)
   int max_alpha_iterations = 1;    // alpha refinements per E-step (see ObservationEStepOptions)
   double alpha_tolerance = 1e-3;
   double theta_tolerance = 1e-3;   // EM stopping rule, see LearnOptions
@@ -61,6 +64,7 @@ struct GridworldRun {
   int em_iterations = 0;
   double log_likelihood = 0.0;    // of the data at the learned weights (observations or true steps)
   double source_accuracy = -1.0;  // share of observations whose most probable source is the true one; -1 if n/a
+  double strength = -1.0;         // the posterior update's chosen subject prior strength; -1 if n/a
   double seconds = 0.0;
   std::string error;  // non-empty if the run failed (then the numbers above are meaningless)
 };

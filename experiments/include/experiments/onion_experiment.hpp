@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "learner/observations.hpp"
 #include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::onion {
@@ -38,6 +39,7 @@ struct OnionExperimentOptions {
   std::uint64_t seed = 1;
   int controlled_sorts = 20;
   SceneConfig scene;  // the demonstrations' scene (width, fps, which elements)
+  AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
   double c = 0.5;
   int max_alpha_iterations = 1;
   double alpha_tolerance = 1e-3;

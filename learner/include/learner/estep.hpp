@@ -19,7 +19,10 @@ namespace hbirl {
 
 struct EStepResult {
   Eigen::VectorXd counts;       // expected visits per (s, a) pair, summed over trajectories
-  double log_likelihood = 0.0;  // log Pr(data | theta)
+  double log_likelihood = 0.0;  // log Pr(data | theta, O), at the input point
+  // What EM maximises, at the input point: log_likelihood, plus with the posterior
+  // observation-model update the prior's term (observation_model.hpp, log_prior_term).
+  double objective = 0.0;
   int alpha_iterations = 0;     // observation-model refinements made by this call
   bool alpha_converged = true;
   int impossible_trajectories = 0;  // probability 0 under the model: left out
@@ -31,6 +34,14 @@ struct EStepState {
   std::optional<ObservationPrior> alpha;
   std::uint64_t seed = 0;
   std::uint64_t calls = 0;
+};
+
+// A hyper-parameter chosen from the data where EM has converged: the posterior update's
+// prior strength, by the held-out log-likelihood of each trajectory left out in turn.
+struct StrengthChoice {
+  double current_score = 0.0;  // held-out log-likelihood at the current strength
+  double best_strength = 1.0;  // the grid's best (the current one on ties)
+  double best_score = 0.0;
 };
 
 class EStep {
@@ -48,6 +59,16 @@ class EStep {
   virtual bool depends_on_policy() const = 0;
   // Number of trajectories and their lengths (the horizons of the data).
   virtual std::vector<int> trajectory_lengths() const = 0;
+  // log Pr(data | theta, O) at a point EM returned, with O the mean of the learned
+  // observation model (no refinement): what a user compares between models.
+  virtual double data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
+    EStepState copy = state;
+    return expect(policy, copy).log_likelihood;
+  }
+  // Nothing when the E-step has no hyper-parameter to choose at this state.
+  virtual std::optional<StrengthChoice> choose_strength(const SoftSolution&, const EStepState&) const {
+    return std::nullopt;
+  }
 };
 
 // True trajectories: N_hat is the visit count; the log-likelihood is

@@ -27,10 +27,14 @@ struct TrajectoryPosterior {
 struct EStepStatistics {
   Eigen::VectorXd counts;       // expected visits per (s, a) pair
   AlphaCounts alpha_dot;        // expected source-labelled counts
+  // Expected number of observations of each context (rows) made by each source
+  // (columns): what learned eta is fitted to. Only filled when it has rows (contexts > 0)
+  // and the observations carry contexts.
+  RowMatrix source_counts;
   double log_likelihood = 0.0;
   int impossible = 0;           // trajectories with probability 0 under the model (skipped)
 
-  static EStepStatistics zero(int pairs, int confounders, int symbols);
+  static EStepStatistics zero(int pairs, int confounders, int symbols, int contexts = 0);
   EStepStatistics& operator+=(const EStepStatistics& other);
 };
 
@@ -45,8 +49,11 @@ KindEmissions kind_emissions(const ObservationModel& model, const ObservationKin
 // alpha_dot from each kind's posterior weight G(k, r) = sum over the observations n of kind k
 // of weight_n gamma_{t(n)}(r) (ExactEngine::accumulate with kinds): the closed forms above,
 // summed per kind. Only the kinds listed in `touched` are read.
+// Also adds each kind's expected observations per source to row kinds.contexts[k] of
+// `source_counts` when that has rows.
 void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& kinds, const KindEmissions& emissions,
-                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out);
+                        const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out,
+                        RowMatrix& source_counts);
 
 // Forward-backward workspace bound to one MDP (which must outlive it).
 class ExactEngine {

@@ -3,8 +3,11 @@
 // posterior over each trajectory with a posterior engine (exact forward-backward by
 // default, or the paper's MCMC), and refine the observation model inside:
 //   repeat: statistics = sum over trajectories of engine(policy, O)
-//           alpha = c * alpha_dot + (1 - c) * alpha;  O = Dirichlet mean of alpha
+//           alpha = c * target + (1 - c) * alpha;  O = Dirichlet mean of alpha
 //   until O stops changing (alpha_tolerance, weighted by how much the data see each row)
+// with the target prior(s) + alpha_dot (the posterior update, the default) or alpha_dot
+// (the paper's); observation_model.hpp has both. The posterior update's s is chosen
+// between EM runs (choose_strength, called by HiddenDataEM once EM has converged).
 // The refined alpha is carried to the next EM iteration in the EStepState (warm start);
 // the first call starts from the prior. An E-step call makes at most
 // max_alpha_iterations refinements and reports whether O converged; HiddenDataEM only
@@ -85,15 +88,28 @@ class ObservationEStep final : public EStep {
   ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories, ObservationPrior prior,
                    ObservationEStepOptions options = {});
 
+  // The learned source distribution of each context at `alpha` (its eta_alpha's mean),
+  // or null when eta is not learned.
+  std::optional<RowMatrix> learned_eta(const ObservationPrior& alpha) const;
+
   EStepState initial_state(std::uint64_t seed) const override;
   EStepResult expect(const SoftSolution& policy, EStepState& state) const override;
   bool depends_on_policy() const override { return true; }
+  double data_log_likelihood(const SoftSolution& policy, const EStepState& state) const override;
+  // The posterior update's subject prior strength s, when automatic: for every s on
+  // prior_strength_grid() and each trajectory i, log Pr(trajectory i | theta, O_{-i}(s))
+  // with O_{-i}(s) the mean of the Dirichlet posterior from the prior and the other
+  // trajectories' expected counts (at the current posterior); the s with the largest sum.
+  std::optional<StrengthChoice> choose_strength(const SoftSolution& policy, const EStepState& state) const override;
   std::vector<int> trajectory_lengths() const override;
 
   // The posterior statistics for one observation model, summed over trajectories in a
   // fixed order of fixed-size blocks (bit-identical for any thread count, and for any
   // executor that honours its contract).
-  EStepStatistics statistics(const SoftSolution& policy, const ObservationModel& model, std::uint64_t seed) const;
+  // With `eta` (one row per context) the observations' eta is replaced by their
+  // context's row (learned eta); null keeps the stated eta.
+  EStepStatistics statistics(const SoftSolution& policy, const ObservationModel& model, std::uint64_t seed,
+                             const RowMatrix* eta = nullptr) const;
 
   // The blocks: trajectories [b * kBlockSize, (b + 1) * kBlockSize) form block b.
   static constexpr int kBlockSize = 16;
@@ -101,7 +117,11 @@ class ObservationEStep final : public EStep {
   // The statistics of the listed blocks, in the order listed, computed here on `threads`
   // threads (the values do not depend on it).
   std::vector<EStepStatistics> block_statistics(const SoftSolution& policy, const ObservationModel& model,
-                                                std::uint64_t seed, const std::vector<int>& blocks, int threads = 1) const;
+                                                std::uint64_t seed, const std::vector<int>& blocks, int threads = 1,
+                                                const RowMatrix* eta = nullptr) const;
+  // Learned eta's contexts: their number and stated eta (one row each); 0 when eta is not learned.
+  int num_contexts() const { return static_cast<int>(context_eta_.rows()); }
+  const RowMatrix& context_eta() const { return context_eta_; }
   const Mdp& mdp() const { return mdp_; }
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
@@ -111,9 +131,18 @@ class ObservationEStep final : public EStep {
   const ObservationEStepOptions& options() const { return options_; }
 
  private:
+  // Learned eta: gives every observation a context (each distinct eta, unless given) and
+  // fills context_eta_.
+  void assign_contexts();
+  // sum over contexts and sources of eta_strength * stated eta * log(learned eta).
+  double log_eta_prior_term(const RowMatrix& eta) const;
+  // The trajectory with each observation's eta replaced by its context's row of `eta`.
+  static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
+
   const Mdp& mdp_;
   std::vector<ObservedTrajectory> trajectories_;
   std::optional<ObservationKinds> kinds_;
+  RowMatrix context_eta_;
   ObservationPrior prior_;
   ObservationEStepOptions options_;
 };

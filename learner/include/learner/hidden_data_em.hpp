@@ -8,9 +8,14 @@
 // does not depend on theta and this is plain MaxCausalEnt IRL (one M-step).
 //
 // Restarts: restart 0 starts from theta = 0, restart r > 0 from theta ~ U[-1, 1]^K drawn
-// from the stream r of the seed. Selection rule: the restart with the highest
-// log-likelihood of the data, minus the L2 penalty when one is set; ties go to the
-// lowest restart index. Restarts run in parallel; the result is bit-identical for any
+// from the stream r of the seed. Selection rule: the restart with the highest score --
+// the log-likelihood of the data (with the posterior observation-model update and an
+// automatic prior strength, the held-out log-likelihood that chose the strength) --
+// minus the L2 penalty when one is set; ties go to the lowest restart index.
+//
+// When the E-step has a hyper-parameter to choose from the data (the posterior update's
+// prior strength), EM runs to convergence, the E-step chooses it there, and EM resumes
+// with the new value until the choice stands (at most 4 times). Restarts run in parallel; the result is bit-identical for any
 // thread count.
 #include <cstdint>
 #include <functional>
@@ -39,7 +44,7 @@ struct LearnOptions {
   bool accelerate = true;
   SoftViOptions soft_vi;
   // Called after every EM iteration (from the restart's thread): restart index,
-  // iteration, log-likelihood, theta, the E-step's report, and the observation model's
+  // iteration, objective (EStepResult::objective), theta, the E-step's report, and the observation model's
   // refined Dirichlet parameters (nullptr when O is not learned).
   std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&, const ObservationPrior*)> on_iteration;
 };
@@ -47,8 +52,14 @@ struct LearnOptions {
 struct RestartResult {
   Eigen::VectorXd initial_theta;
   Eigen::VectorXd theta;
-  double log_likelihood = 0.0;  // log Pr(data | theta)
-  double score = 0.0;           // log_likelihood - (l2 / 2) M ||theta||^2: the selection score
+  double log_likelihood = 0.0;  // log Pr(data | theta, O) with O the mean of the learned model
+  double objective = 0.0;       // EM's objective (EStepResult::objective)
+  // The held-out log-likelihood that chose the prior strength (EStep::choose_strength),
+  // when one was chosen.
+  std::optional<double> held_out_log_likelihood;
+  // The selection score: the held-out log-likelihood when there is one, else the
+  // objective; minus (l2 / 2) M ||theta||^2.
+  double score = 0.0;
   int em_iterations = 0;          // EM map evaluations (E-step + M-step)
   int optimizer_iterations = 0;  // summed over M-steps
   bool converged = false;
@@ -59,6 +70,7 @@ struct RestartResult {
 struct LearnResult {
   Eigen::VectorXd theta;
   double log_likelihood = 0.0;
+  double objective = 0.0;
   int selected_restart = 0;
   std::vector<RestartResult> restarts;
 };

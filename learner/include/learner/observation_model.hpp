@@ -1,9 +1,15 @@
 #pragma once
 // The observation model of SPEC §1: the subject's O_{s,a} and each confounding
-// element's O_e, categorical over Omega, used as the means of their Dirichlet priors,
-// and the refinement of those priors by paper Algorithm 1:
-//   alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}
-// where alpha_dot are the expected source-labelled counts from the E-step.
+// element's O_e, categorical over Omega with Dirichlet priors, and how the E-step
+// refines those Dirichlets from the expected source-labelled counts alpha_dot (paper
+// Algorithm 1). docs/MODEL.md ("The observation model") derives both updates:
+//   paper:      alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}            (fixed point: ML)
+//   posterior:  alpha_i = c * (prior(s) + alpha_dot) + (1 - c) * alpha_{i-1}
+// the second being MAP-EM: its fixed point is the Dirichlet posterior prior(s) + alpha_dot,
+// whose mean O is the maximum a posteriori O under the prior Dir(prior(s) + 1); prior(s)
+// is the subject's alpha weighed by s and the elements' alpha as given.
+#include <vector>
+
 #include "learner/observations.hpp"
 
 namespace hbirl {
@@ -31,7 +37,26 @@ struct AlphaCounts {
 Eigen::MatrixXd dirichlet_mean(const Eigen::MatrixXd& alpha);
 ObservationModel dirichlet_mean(const ObservationPrior& prior);
 
-// alpha <- c * alpha_dot + (1 - c) * alpha, for the subject and the confounders.
-void update_alpha(ObservationPrior& prior, const AlphaCounts& alpha_dot, double c);
+// The subject's power prior at strength s: min(alpha, base) + s * max(alpha - base, 0)
+// (ObservationPrior).
+Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s);
+
+// The Dirichlet posterior of the posterior update for prior `prior`, subject weight s and
+// expected counts: weighed_subject_prior(prior, s) + counts.subject, prior.confounder_alpha
+// + counts.confounders.
+AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const AlphaCounts& counts);
+
+// The prior's term of the posterior update's objective (MAP-EM maximises log Pr(data |
+// theta, O) plus this): sum over entries of beta * log(O / O_prior) with beta the weighed
+// prior and O_prior its mean (entries with beta 0 left out), i.e. log Dir(O; beta + 1) up
+// to a constant. 0 for the paper's update and for a fixed model.
+double log_prior_term(const ObservationModel& model, const ObservationPrior& prior, const ObservationPrior& alpha);
+
+// The strengths the posterior update chooses from: 10^(k/2), k = -6 .. 6 (1e-3 .. 1e3).
+const std::vector<double>& prior_strength_grid();
+
+// One refinement of `alpha` (the current parameters) towards its target by the rule in
+// alpha.update, from the E-step's alpha_dot; `prior` is the model's Dirichlet prior.
+void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const AlphaCounts& alpha_dot);
 
 }  // namespace hbirl

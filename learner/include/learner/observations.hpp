@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace hbirl {
@@ -19,6 +20,11 @@ struct ObservedTrajectory {
   // Optional multiplicities: observation n stands for weights[n] identical ones (see
   // merge_identical_observations). Empty means every weight is 1.
   std::vector<double> weights;
+  // Optional context of each observation (which rule of the labeller gave its eta), one
+  // per row: observations of a context share a learned source distribution when eta is
+  // learned (ObservationPrior::learn_eta). Empty means no contexts; the E-step then makes
+  // each distinct eta its own context.
+  std::vector<int> contexts;
   // The trajectory ended because its last action led into a terminal state (rather than
   // being cut off): the posterior then conditions on that.
   bool ends_in_terminal = false;
@@ -29,6 +35,7 @@ struct ObservedTrajectory {
     return step_begin[static_cast<size_t>(t) + 1] - step_begin[static_cast<size_t>(t)];
   }
   double weight(int n) const { return weights.empty() ? 1.0 : weights[static_cast<size_t>(n)]; }
+  int context(int n) const { return contexts.empty() ? -1 : contexts[static_cast<size_t>(n)]; }
 };
 
 // A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta and weight, bit for
@@ -47,6 +54,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
 struct ObservationKinds {
   std::vector<int> symbols;             // per kind
   RowMatrix eta;                        // per kind
+  std::vector<int> contexts;            // per kind (-1: none)
   std::vector<std::vector<int>> of;     // per trajectory, per observation row: its kind
   int num_kinds() const { return static_cast<int>(symbols.size()); }
 };
@@ -54,15 +62,66 @@ struct ObservationKinds {
 // The kinds of `trajectories`, or nothing when there are more than `max_kinds`.
 std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTrajectory>& trajectories, int max_kinds);
 
+// How the E-step refines the observation model (paper Algorithm 1; docs/MODEL.md, "The
+// observation model").
+enum class AlphaUpdate {
+  // The Dirichlet posterior: alpha = s * alpha_subject_prior + alpha_dot for the subject,
+  // alpha_prior + alpha_dot for the elements, at the fixed point; O = its mean. The prior
+  // is kept; s, the weight of the subject prior's counts, is chosen from the data by the
+  // held-out likelihood of each demonstration left out in turn unless fixed. The default.
+  kPosterior,
+  // The paper's alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}: fixed point alpha =
+  // alpha_dot (maximum likelihood; the prior only sets the start). Kept for fidelity.
+  kPaper,
+};
+
 // Dirichlet priors of the observation model (SPEC §1): alpha for the subject's
-// O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e.
+// O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e. The same
+// type carries the refined parameters from one EM iteration to the next (EStepState).
 struct ObservationPrior {
   int num_symbols = 0;
   int num_confounders = 0;
   Eigen::MatrixXd subject_alpha;     // (S*A) x num_symbols
   Eigen::MatrixXd confounder_alpha;  // num_confounders x num_symbols
   bool learn = true;                 // refine alpha inside the E-step (paper Algorithm 1)
-  double c = 0.1;                    // alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}
+  AlphaUpdate update = AlphaUpdate::kPosterior;
+  // Damping of each refinement: alpha_i = c * target + (1 - c) * alpha_{i-1}, the target
+  // being alpha_dot (kPaper) or the prior (the subject's weighed by s) + alpha_dot
+  // (kPosterior). With kPosterior, c changes the path only, not the fixed-point equation
+  // (a smaller c keeps the path near the prior for longer).
+  double c = 0.1;
+  // kPosterior: how much a controlled run's counts weigh against the demonstration (the
+  // paper's "scale the hyper-parameters by a small constant"), as a power prior: the
+  // subject's alpha is a base pseudo-count plus counts, and the counts are weighed by s,
+  //   prior(s) = min(alpha, base) + s * max(alpha - base, 0),
+  // so rows the controlled run never saw stay as uninformative as the base whatever s
+  // is. base is the problem file's subject_alpha_default. With automatic_strength s is
+  // chosen from the data (ObservationEStep::choose_strength) on prior_strength_grid()
+  // and `strength` holds the current value.
+  double subject_alpha_base = 1.0;
+  bool automatic_strength = true;
+  double strength = 1.0;
+  // Learned eta (docs/MODEL.md, "Learned eta"): the source distribution of each context
+  // (ObservedTrajectory::contexts; by default each distinct eta) gets a Dirichlet prior
+  // centred on its stated eta with eta_strength pseudo-observations, and is refined inside
+  // the E-step like alpha: to the Dirichlet posterior of that prior and the context's
+  // expected source counts. eta_alpha holds the refined parameters, one row per context
+  // (set by the E-step).
+  // On by default with the posterior update; callers turn it off with the paper's
+  // update (the paper's model takes eta as given).
+  bool learn_eta = true;
+  double eta_strength = 10.0;
+  RowMatrix eta_alpha;
+  static constexpr double kMinStrength = 1e-3;
+  static constexpr double kMaxStrength = 1e3;
 };
+
+// Sets the update and its companion default: eta is learned with the posterior update,
+// taken as given with the paper's.
+void use_alpha_update(ObservationPrior& prior, AlphaUpdate update);
+
+const char* alpha_update_name(AlphaUpdate update);
+// "posterior" or "paper"; false for anything else.
+bool parse_alpha_update(const std::string& name, AlphaUpdate& update);
 
 }  // namespace hbirl

@@ -16,8 +16,10 @@ struct StateAction {
 using Trajectory = std::vector<StateAction>;
 
 // Samples up to `length` steps from the start distribution under `policy` (one
-// probability per (s, a) pair). Stops early when the next state is terminal.
-Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng);
+// probability per (s, a) pair). Stops early when the next state is terminal; then
+// *entered_terminal (when given) is set true, else false.
+Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
+                             bool* entered_terminal = nullptr);
 
 // N(s,a): how often each pair is visited, one entry per pair.
 Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories);

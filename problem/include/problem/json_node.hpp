@@ -40,6 +40,7 @@ class JsonNode {
   double as_number(double lo, double hi) const;
   bool as_bool() const;
   std::string as_string() const;
+  bool is_string() const { return value_->is_string(); }
 
  private:
   std::string describe() const;  // "a string", "the number 3.5", ...

@@ -33,7 +33,8 @@ Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const s
                               const std::vector<ObservedTrajectory>& observed, int num_symbols);
 
 struct LearningOptions {
-  double c = 0.5;                   // alpha refinement rate
+  AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
+  double c = 0.5;                   // damping of the alpha refinement
   std::uint64_t seed = 1;
   int max_alpha_iterations = 1;     // as in hbirl experiment onion
   double alpha_tolerance = 1e-3;

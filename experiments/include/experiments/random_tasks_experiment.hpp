@@ -1,0 +1,84 @@
+#pragma once
+// hbirl on tasks nobody tuned it for (`hbirl experiment random-tasks`,
+// docs/results/random_tasks): random MDPs, rewards and sensors (sim_driver/random_task.hpp),
+// each learned by
+//   true_trajectories  MaxCausalEnt on the true (s, a): what the data could give at best
+//   fixed_prior        O fixed at the prior's mean (the controlled run; observation_model.learn false)
+//   paper_c0.5, paper_c0.1   the paper's update alpha = c alpha_dot + (1 - c) alpha
+//   posterior          the default: the Dirichlet posterior (prior kept), the subject prior's
+//                      strength chosen by held-out likelihood, eta learned; c = 0.1
+//   posterior_c1, posterior_c0.5, posterior_c0.02  the same, damped otherwise (the answer must not change)
+//   posterior_r4       the default with 4 restarts instead of 1 (do restarts change the answer?)
+// with the EM schedule of the paper experiments (one observation-model refinement per
+// E-step; tolerances 1e-3 on theta and O, 1e-6 on the objective; up to 3000 EM iterations). A run is "optimal" when the learned reward's optimal
+// policy is optimal under the true reward (ILE 0 to 1e-8 of the value scale).
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace hbirl {
+
+struct RandomTaskMethod {
+  std::string key;       // as above
+  std::string kind;      // "truth", "fixed", "paper", "posterior"
+  double c = 0.1;
+  int restarts = 1;
+};
+
+const std::vector<RandomTaskMethod>& all_random_task_methods();
+// The listed keys (comma-separated) or "all"; throws InputError naming an unknown key.
+std::vector<RandomTaskMethod> parse_random_task_methods(const std::string& keys);
+
+struct RandomTasksOptions {
+  int tasks = 200;               // task seeds first_seed .. first_seed + tasks - 1
+  std::uint64_t first_seed = 1;
+  std::vector<std::uint64_t> seeds;  // these task seeds instead, when not empty
+  int draws = 3;                 // data sets per task
+  std::vector<RandomTaskMethod> methods = all_random_task_methods();
+  int threads = 0;
+  std::function<void(int done, int total)> progress;  // called from worker threads
+};
+
+struct RandomTaskRun {
+  std::uint64_t seed = 0;
+  int draw = 0;
+  std::string method;
+  // The task.
+  std::string layout;
+  int states = 0, actions = 0, features = 0, goals = 0, traps = 0;
+  int symbols = 0, confounders = 0, per_step = 0, demonstrations = 0, controlled = 0;
+  double decisiveness = 0.0, informativeness = 0.0, subject_share = 0.0, occlusion = 0.0, discount = 0.0;
+  std::string eta;
+  // The result.
+  double ile = 0.0;
+  double ile_relative = 0.0;
+  bool optimal = false;
+  double policy_agreement = 0.0;
+  int em_iterations = 0;
+  bool converged = false;
+  double log_likelihood = 0.0;
+  double strength = -1.0;  // the posterior update's chosen prior strength; -1 if n/a
+  std::vector<double> theta;
+  double seconds = 0.0;
+  std::string error;
+};
+
+std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& options);
+
+std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs);
+// The runs back from that CSV (to summarise and draw a committed run again); InputError
+// naming the line for anything else.
+std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv);
+
+// The summary page (markdown): per method the share of optimal runs (95% Wilson
+// interval) and the relative ILE, broken down by confounders, occlusion, sensor
+// informativeness and eta; paired comparisons; whether the default depends on c; what
+// restarts change. `footer` goes at the end.
+std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const std::string& footer);
+
+// Figure: share of optimal runs per method, overall and by each breakdown (gnuplot).
+// Returns "" on success, else why no figure was drawn.
+std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem);
+
+}  // namespace hbirl

@@ -1,0 +1,519 @@
+#include "experiments/random_tasks_experiment.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "experiments/summary.hpp"
+#include "learner/estep_observations.hpp"
+#include "learner/hidden_data_em.hpp"
+#include "learner/input_error.hpp"
+#include "learner/metrics.hpp"
+#include "learner/parallel.hpp"
+#include "sim_driver/random_task.hpp"
+
+namespace hbirl {
+
+namespace {
+
+// "Near optimal": the learned policy loses at most this share of the optimal value.
+constexpr double kNearOptimal = 0.05;
+
+// Enough EM iterations for damped updates to converge (c = 0.02 with one refinement per
+// E-step needs several hundred).
+constexpr int kMaxEmIterations = 3000;
+
+// A run is optimal when its greedy policy loses nothing under the true reward.
+constexpr double kOptimalTolerance = 1e-8;
+// Two answers are the same fixed point when theta agrees to this (relative to max(1, |theta|))
+// and the learned policies are equally good.
+constexpr double kSameThetaTolerance = 1e-2;
+
+RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
+  RandomTaskRun r;
+  r.seed = task.seed;
+  r.draw = task.draw;
+  r.method = method.key;
+  r.layout = task.layout;
+  r.states = task.mdp.num_states;
+  r.actions = task.mdp.num_actions;
+  r.features = task.mdp.num_features();
+  r.goals = task.goals;
+  r.traps = task.traps;
+  r.symbols = task.num_symbols;
+  r.confounders = task.num_confounders;
+  r.per_step = task.per_step;
+  r.demonstrations = static_cast<int>(task.demonstrations.size());
+  r.controlled = static_cast<int>(task.controlled.size());
+  r.informativeness = task.informativeness;
+  r.decisiveness = task.decisiveness;
+  r.subject_share = task.subject_share;
+  r.occlusion = task.occlusion;
+  r.discount = task.mdp.discount;
+  r.eta = eta_kind_name(task.eta);
+  return r;
+}
+
+void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun& r) {
+  // The paper experiments' EM schedule (experiments/gridworld_experiment.hpp): one
+  // observation-model refinement per E-step, interleaved with the M-steps; one thread per run.
+  LearnOptions options;
+  options.restarts = method.restarts;
+  options.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
+  options.threads = 1;
+  options.theta_tolerance = 1e-3;
+  options.likelihood_tolerance = 1e-6;
+  options.max_em_iterations = kMaxEmIterations;
+  LearnResult learned;
+  if (method.kind == "truth") {
+    learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
+  } else {
+    ObservationPrior prior = task.prior;
+    prior.learn = method.kind != "fixed";
+    use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
+    prior.c = method.c;
+    ObservationEStepOptions estep_options;
+    estep_options.max_alpha_iterations = 1;
+    estep_options.alpha_tolerance = 1e-3;
+    const ObservationEStep estep(task.mdp, task.observed.trajectories, prior, estep_options);
+    learned = learn_reward(task.mdp, estep, options);
+  }
+  const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
+  const InverseLearningError ile = inverse_learning_error(task.mdp, task.true_weights, learned.theta);
+  r.ile = ile.ile;
+  r.ile_relative = ile.relative();
+  r.optimal = r.ile_relative <= kOptimalTolerance;
+  r.policy_agreement = policy_agreement(task.mdp, task.true_weights, learned.theta);
+  r.em_iterations = best.em_iterations;
+  r.converged = best.converged;
+  r.log_likelihood = learned.log_likelihood;
+  if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) r.strength = best.alpha->strength;
+  r.theta.assign(learned.theta.data(), learned.theta.data() + learned.theta.size());
+}
+
+// 95% Wilson score interval of a proportion k / n.
+std::pair<double, double> wilson(int k, int n) {
+  if (n == 0) return {0.0, 1.0};
+  const double z = 1.959963984540054;
+  const double p = static_cast<double>(k) / n;
+  const double d = 1.0 + z * z / n;
+  const double centre = (p + z * z / (2.0 * n)) / d;
+  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / d;
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+// The groups of the breakdown: a name and which runs belong to it.
+struct Group {
+  std::string name;
+  std::function<bool(const RandomTaskRun&)> member;
+};
+
+std::vector<Group> breakdown() {
+  return {
+      {"all", [](const RandomTaskRun&) { return true; }},
+      {"|E| = 0", [](const RandomTaskRun& r) { return r.confounders == 0; }},
+      {"|E| 1-3", [](const RandomTaskRun& r) { return r.confounders >= 1 && r.confounders <= 3; }},
+      {"|E| 4-7", [](const RandomTaskRun& r) { return r.confounders >= 4; }},
+      {"occluded < 10%", [](const RandomTaskRun& r) { return r.occlusion < 0.1; }},
+      {"occluded 10-20%", [](const RandomTaskRun& r) { return r.occlusion >= 0.1 && r.occlusion < 0.2; }},
+      {"occluded 20-30%", [](const RandomTaskRun& r) { return r.occlusion >= 0.2; }},
+      {"informativeness < 0.53", [](const RandomTaskRun& r) { return r.informativeness < 0.3 + 0.7 / 3; }},
+      {"informativeness 0.53-0.77",
+       [](const RandomTaskRun& r) { return r.informativeness >= 0.3 + 0.7 / 3 && r.informativeness < 0.3 + 1.4 / 3; }},
+      {"informativeness > 0.77", [](const RandomTaskRun& r) { return r.informativeness >= 0.3 + 1.4 / 3; }},
+      {"plausible eta", [](const RandomTaskRun& r) { return r.eta == "plausible"; }},
+      {"uniform eta", [](const RandomTaskRun& r) { return r.eta == "uniform"; }},
+      {"grid", [](const RandomTaskRun& r) { return r.layout == "grid"; }},
+      {"graph", [](const RandomTaskRun& r) { return r.layout == "graph"; }},
+      {"with a trap", [](const RandomTaskRun& r) { return r.traps > 0; }},
+  };
+}
+
+std::vector<std::string> methods_in(const std::vector<RandomTaskRun>& runs) {
+  std::vector<std::string> methods;
+  for (const auto& m : all_random_task_methods()) {
+    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m.key; })) methods.push_back(m.key);
+  }
+  return methods;
+}
+
+struct Cell {
+  int n = 0;
+  int optimal = 0;
+  int near = 0;  // within 5% of the optimal value
+  double ile_sum = 0.0;
+  double ile_sq = 0.0;
+};
+
+Cell cell(const std::vector<RandomTaskRun>& runs, const std::string& method, const Group& group) {
+  Cell c;
+  for (const auto& r : runs) {
+    if (r.method != method || !r.error.empty() || !group.member(r)) continue;
+    ++c.n;
+    c.optimal += r.optimal ? 1 : 0;
+    c.near += r.ile_relative <= kNearOptimal ? 1 : 0;
+    c.ile_sum += r.ile_relative;
+    c.ile_sq += r.ile_relative * r.ile_relative;
+  }
+  return c;
+}
+
+// Runs of two methods on the same (seed, draw), both without error.
+template <typename F>
+void paired(const std::vector<RandomTaskRun>& runs, const std::string& a, const std::string& b, F&& f) {
+  std::map<std::pair<std::uint64_t, int>, const RandomTaskRun*> first;
+  for (const auto& r : runs) {
+    if (r.method == a && r.error.empty()) first[{r.seed, r.draw}] = &r;
+  }
+  for (const auto& r : runs) {
+    if (r.method != b || !r.error.empty()) continue;
+    const auto it = first.find({r.seed, r.draw});
+    if (it != first.end()) f(*it->second, r);
+  }
+}
+
+double theta_difference(const RandomTaskRun& a, const RandomTaskRun& b) {
+  double diff = 0.0;
+  double scale = 1.0;
+  for (size_t k = 0; k < a.theta.size() && k < b.theta.size(); ++k) {
+    diff = std::max(diff, std::abs(a.theta[k] - b.theta[k]));
+    scale = std::max(scale, std::abs(a.theta[k]));
+  }
+  return diff / scale;
+}
+
+bool same_answer(const RandomTaskRun& a, const RandomTaskRun& b) {
+  return std::abs(a.ile_relative - b.ile_relative) <= 1e-6 && a.optimal == b.optimal;
+}
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f%%", 100.0 * x);
+  return buf;
+}
+
+}  // namespace
+
+const std::vector<RandomTaskMethod>& all_random_task_methods() {
+  static const std::vector<RandomTaskMethod> methods = {
+      {"true_trajectories", "truth", 0.1, 1},    {"fixed_prior", "fixed", 0.1, 1},
+      {"paper_c0.5", "paper", 0.5, 1},           {"paper_c0.1", "paper", 0.1, 1},
+      {"posterior", "posterior", 0.1, 1},        {"posterior_c1", "posterior", 1.0, 1},
+      {"posterior_c0.5", "posterior", 0.5, 1},   {"posterior_c0.02", "posterior", 0.02, 1},
+      {"posterior_r4", "posterior", 0.1, 4},
+  };
+  return methods;
+}
+
+std::vector<RandomTaskMethod> parse_random_task_methods(const std::string& keys) {
+  if (keys == "all") return all_random_task_methods();
+  std::vector<RandomTaskMethod> out;
+  std::stringstream in(keys);
+  for (std::string key; std::getline(in, key, ',');) {
+    const auto& all = all_random_task_methods();
+    const auto it = std::find_if(all.begin(), all.end(), [&](const RandomTaskMethod& m) { return m.key == key; });
+    if (it == all.end()) {
+      std::string known;
+      for (const auto& m : all) known += (known.empty() ? "" : ", ") + m.key;
+      throw InputError("--methods", "unknown method \"" + key + "\" (" + known + ")");
+    }
+    out.push_back(*it);
+  }
+  if (out.empty()) throw InputError("--methods", "is empty");
+  return out;
+}
+
+std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& o) {
+  std::vector<std::uint64_t> seeds = o.seeds;
+  if (seeds.empty()) {
+    for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
+  }
+  if (seeds.empty() || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
+  const int items = static_cast<int>(seeds.size()) * o.draws;
+  const size_t per_item = o.methods.size();
+  std::vector<RandomTaskRun> runs(static_cast<size_t>(items) * per_item);
+  std::atomic<int> done{0};
+  const int total = static_cast<int>(runs.size());
+  parallel_for(items, o.threads, [&](int i) {
+    const std::uint64_t seed = seeds[static_cast<size_t>(i / o.draws)];
+    const int draw = i % o.draws;
+    std::optional<RandomTask> task;
+    std::string task_error;
+    try {
+      task = make_random_task(seed, draw);
+    } catch (const std::exception& e) {
+      task_error = e.what();
+    }
+    for (size_t m = 0; m < per_item; ++m) {
+      RandomTaskRun& r = runs[static_cast<size_t>(i) * per_item + m];
+      const auto start = std::chrono::steady_clock::now();
+      if (task) {
+        r = describe(*task, o.methods[m]);
+        try {
+          learn(*task, o.methods[m], r);
+        } catch (const std::exception& e) {
+          r.error = e.what();  // one failed run must not lose the others
+        }
+      } else {
+        r.seed = seed;
+        r.draw = draw;
+        r.method = o.methods[m].key;
+        r.error = "no task: " + task_error;
+      }
+      r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const int finished = ++done;
+      if (o.progress) o.progress(finished, total);
+    }
+  });
+  return runs;
+}
+
+std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "seed,draw,method,layout,states,actions,features,goals,traps,symbols,confounders,per_step,demonstrations,"
+         "controlled,decisiveness,informativeness,subject_share,occlusion,discount,eta,ile,ile_relative,optimal,policy_agreement,"
+         "em_iterations,converged,log_likelihood,strength,theta,seconds,error\n";
+  for (const auto& r : runs) {
+    out << r.seed << "," << r.draw << "," << r.method << "," << r.layout << "," << r.states << "," << r.actions << ","
+        << r.features << "," << r.goals << "," << r.traps << "," << r.symbols << "," << r.confounders << "," << r.per_step
+        << "," << r.demonstrations << "," << r.controlled << "," << r.decisiveness << "," << r.informativeness << "," << r.subject_share << ","
+        << r.occlusion << "," << r.discount << "," << r.eta << "," << r.ile << "," << r.ile_relative << ","
+        << (r.optimal ? 1 : 0) << "," << r.policy_agreement << "," << r.em_iterations << "," << (r.converged ? 1 : 0)
+        << "," << r.log_likelihood << ",";
+    if (r.strength >= 0.0) out << r.strength;
+    out << ",";
+    for (size_t k = 0; k < r.theta.size(); ++k) out << (k ? ";" : "") << r.theta[k];
+    std::string error = r.error;
+    std::replace(error.begin(), error.end(), ',', ';');
+    std::replace(error.begin(), error.end(), '\n', ' ');
+    out << "," << r.seconds << "," << error << "\n";
+  }
+  return out.str();
+}
+
+std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line;
+  if (!std::getline(in, line)) throw InputError("runs CSV", "is empty");
+  std::vector<std::string> header;
+  {
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) header.push_back(cell);
+  }
+  const std::string expected = random_task_runs_csv({});
+  if (line + "\n" != expected) throw InputError("runs CSV", "line 1: not a random_tasks_runs.csv header");
+  std::vector<RandomTaskRun> runs;
+  for (int number = 2; std::getline(in, line); ++number) {
+    std::vector<std::string> f;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
+    if (line.back() == ',') f.emplace_back();
+    if (f.size() != header.size()) {
+      throw InputError("runs CSV", "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected " +
+                                      std::to_string(header.size()));
+    }
+    try {
+      RandomTaskRun r;
+      size_t i = 0;
+      r.seed = std::stoull(f[i++]);
+      r.draw = std::stoi(f[i++]);
+      r.method = f[i++];
+      r.layout = f[i++];
+      for (int* x : {&r.states, &r.actions, &r.features, &r.goals, &r.traps, &r.symbols, &r.confounders, &r.per_step,
+                     &r.demonstrations, &r.controlled}) {
+        *x = std::stoi(f[i++]);
+      }
+      for (double* x : {&r.decisiveness, &r.informativeness, &r.subject_share, &r.occlusion, &r.discount}) *x = std::stod(f[i++]);
+      r.eta = f[i++];
+      r.ile = std::stod(f[i++]);
+      r.ile_relative = std::stod(f[i++]);
+      r.optimal = f[i++] == "1";
+      r.policy_agreement = std::stod(f[i++]);
+      r.em_iterations = std::stoi(f[i++]);
+      r.converged = f[i++] == "1";
+      r.log_likelihood = std::stod(f[i++]);
+      const std::string strength = f[i++];
+      if (!strength.empty()) r.strength = std::stod(strength);
+      std::istringstream theta(f[i++]);
+      for (std::string x; std::getline(theta, x, ';');) r.theta.push_back(std::stod(x));
+      r.seconds = std::stod(f[i++]);
+      r.error = f[i++];
+      runs.push_back(std::move(r));
+    } catch (const std::logic_error&) {
+      throw InputError("runs CSV", "line " + std::to_string(number) + ": a field is not a number");
+    }
+  }
+  return runs;
+}
+
+std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const std::string& footer) {
+  const std::vector<std::string> methods = methods_in(runs);
+  std::ostringstream out;
+  out << "# Random tasks: share of runs whose learned policy is optimal\n\n";
+  out << "Per method and group of tasks: the share of runs whose learned reward's optimal policy is optimal under the "
+         "true reward (ILE 0), with its 95% Wilson interval, and the mean ILE relative to ||V*||_1 "
+      << "(± 95% CI). n = runs in the group.\n\n";
+  out << "| group | n |";
+  for (const auto& m : methods) out << " " << m << " |";
+  out << "\n|---|---|";
+  for (size_t i = 0; i < methods.size(); ++i) out << "---|";
+  out << "\n";
+  for (const Group& g : breakdown()) {
+    const Cell first = cell(runs, methods.empty() ? "" : methods.front(), g);
+    out << "| " << g.name << " | " << first.n << " |";
+    for (const auto& m : methods) {
+      const Cell c = cell(runs, m, g);
+      if (c.n == 0) {
+        out << " |";
+        continue;
+      }
+      const auto [lo, hi] = wilson(c.optimal, c.n);
+      const double mean = c.ile_sum / c.n;
+      const double sd = c.n > 1 ? std::sqrt(std::max(0.0, (c.ile_sq - c.n * mean * mean) / (c.n - 1))) : 0.0;
+      char buf[160];
+      std::snprintf(buf, sizeof buf, " **%.1f%%** [%.1f, %.1f]<br>ILE %.3f ± %.3f |", 100.0 * c.optimal / c.n, 100.0 * lo,
+                    100.0 * hi, mean, 1.96 * sd / std::sqrt(static_cast<double>(c.n)));
+      out << buf;
+    }
+    out << "\n";
+  }
+  out << "\nWithin 5% of the optimal value (ILE <= 0.05 ||V*||_1), all runs:";
+  for (const auto& m : methods) {
+    const Cell c = cell(runs, m, breakdown().front());
+    if (c.n == 0) continue;
+    const auto [lo, hi] = wilson(c.near, c.n);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " %s %.1f%% [%.1f, %.1f];", m.c_str(), 100.0 * c.near / c.n, 100.0 * lo, 100.0 * hi);
+    out << buf;
+  }
+  out << "\n";
+  // Paired comparisons on the same data.
+  auto compare = [&](const std::string& a, const std::string& b) {
+    int both = 0, only_a = 0, only_b = 0, neither = 0;
+    paired(runs, a, b, [&](const RandomTaskRun& x, const RandomTaskRun& y) {
+      if (x.optimal && y.optimal) ++both;
+      else if (x.optimal) ++only_a;
+      else if (y.optimal) ++only_b;
+      else ++neither;
+    });
+    if (both + only_a + only_b + neither == 0) return;
+    out << "| " << a << " vs " << b << " | " << both << " | " << only_a << " | " << only_b << " | " << neither << " |\n";
+  };
+  out << "\n## Paired: the same data, two methods\n\n| methods (a vs b) | both optimal | only a | only b | neither |\n|---|---|---|---|---|\n";
+  compare("posterior", "fixed_prior");
+  compare("posterior", "paper_c0.5");
+  compare("posterior", "paper_c0.1");
+  compare("posterior", "true_trajectories");
+  compare("fixed_prior", "true_trajectories");
+  // Does the default depend on c?
+  out << "\n## Does the default's answer depend on c?\n\n";
+  for (const std::string other : {"posterior_c1", "posterior_c0.5", "posterior_c0.02"}) {
+    int n = 0, same_theta = 0, same = 0, unconverged = 0;
+    paired(runs, "posterior", other, [&](const RandomTaskRun& x, const RandomTaskRun& y) {
+      ++n;
+      same_theta += theta_difference(x, y) <= kSameThetaTolerance ? 1 : 0;
+      same += same_answer(x, y) ? 1 : 0;
+      unconverged += (!x.converged || !y.converged) ? 1 : 0;
+    });
+    if (n == 0) continue;
+    out << "- posterior (c = 0.1) vs " << other << ": same learned policy value (relative ILE within 1e-6) in " << same << " of " << n
+        << " runs (" << percent(static_cast<double>(same) / n) << "); theta within " << kSameThetaTolerance
+        << " (relative to max(1, |theta|)) in " << same_theta << " (" << percent(static_cast<double>(same_theta) / n)
+        << "); " << unconverged << " pairs with a run that hit the EM iteration limit.\n";
+  }
+  // Restarts.
+  {
+    int n = 0, changed = 0, better = 0, worse = 0, theta_changed = 0;
+    paired(runs, "posterior", "posterior_r4", [&](const RandomTaskRun& one, const RandomTaskRun& four) {
+      ++n;
+      theta_changed += theta_difference(one, four) > kSameThetaTolerance ? 1 : 0;
+      if (!same_answer(one, four)) {
+        ++changed;
+        if (four.ile_relative < one.ile_relative) ++better;
+        else ++worse;
+      }
+    });
+    if (n > 0) {
+      out << "\n## Do more restarts change the answer?\n\n- posterior with 4 restarts vs 1: theta moved by more than "
+          << kSameThetaTolerance << " in " << theta_changed << " of " << n << " runs; the learned policy's value changed in "
+          << changed << " (" << percent(static_cast<double>(changed) / n) << "): better in " << better << ", worse in "
+          << worse << ".\n";
+    }
+  }
+  out << "\n## EM\n\n| method | runs | converged | median EM iterations | median seconds |\n|---|---|---|---|---|\n";
+  for (const auto& m : methods) {
+    std::vector<double> iterations;
+    std::vector<double> seconds;
+    int converged = 0;
+    for (const auto& r : runs) {
+      if (r.method != m || !r.error.empty()) continue;
+      iterations.push_back(r.em_iterations);
+      seconds.push_back(r.seconds);
+      converged += r.converged ? 1 : 0;
+    }
+    if (iterations.empty()) continue;
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %d (%.1f%%) | %.0f | %.3f |\n", m.c_str(), iterations.size(), converged,
+                  100.0 * converged / static_cast<double>(iterations.size()), median(iterations), median(seconds));
+    out << buf;
+  }
+  int failed = 0;
+  for (const auto& r : runs) failed += r.error.empty() ? 0 : 1;
+  if (failed > 0) out << "\n" << failed << " runs failed (see the error column of the runs CSV).\n";
+  out << "\n" << footer << "\n";
+  return out.str();
+}
+
+std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem) {
+  // The main methods (the damping and restart variants are in the summary's tables).
+  std::vector<std::string> methods;
+  for (const std::string m : {"true_trajectories", "fixed_prior", "paper_c0.5", "paper_c0.1", "posterior"}) {
+    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; })) methods.push_back(m);
+  }
+  // Per group: share optimal and share within 5% of the optimal value, each with its
+  // Wilson interval (gnuplot data strings take double quotes).
+  std::ostringstream data;
+  for (const char* block : {"$optimal", "$near"}) {
+    data << block << " << EOD\n";
+    for (const Group& g : breakdown()) {
+      data << '"' << g.name << '"';
+      for (const auto& m : methods) {
+        const Cell c = cell(runs, m, g);
+        const int k = std::string(block) == "$optimal" ? c.optimal : c.near;
+        const auto [lo, hi] = wilson(k, c.n);
+        data << " " << (c.n ? 100.0 * k / c.n : 0.0) << " " << 100.0 * lo << " " << 100.0 * hi;
+      }
+      data << "\n";
+    }
+    data << "EOD\n";
+  }
+  data << "set style data histograms\nset style histogram errorbars gap 2 lw 1\nset style fill solid 0.85 border -1\n"
+       << "set boxwidth 0.9\nset xtics rotate by -30 left\nset grid ytics\nset key outside right top\nset yrange [0:105]\n"
+       << "set ylabel '% of runs'\nset bmargin 7\n";
+  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"};
+  auto panel = [&](const std::string& block, const std::string& title) {
+    std::ostringstream plot;
+    plot << "set title " << gnuplot_quoted(title) << "\nplot ";
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if (m) plot << ", \\\n     ";
+      plot << block << " using " << 2 + 3 * m << ":" << 3 + 3 * m << ":" << 4 + 3 * m << (m == 0 ? ":xtic(1)" : "")
+           << " title " << gnuplot_quoted(methods[m]) << " lc rgb '" << colours[m % 5] << "'";
+    }
+    return plot.str() + "\n";
+  };
+  const std::string plot = "set multiplot layout 2,1\n" +
+                           panel("$optimal", "Random tasks: runs whose learned policy is optimal (ILE 0; 95% Wilson interval)") +
+                           panel("$near", "Runs within 5% of the optimal value (ILE <= 0.05 ||V*||_1)") + "unset multiplot\n";
+  return run_gnuplot(path_stem, data.str(), plot, 1400, 1100);
+}
+
+}  // namespace hbirl
