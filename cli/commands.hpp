@@ -41,7 +41,7 @@ struct EngineArgs {
   McmcOptions mcmc;
 };
 void add_engine_options(CLI::App* cmd, EngineArgs& args);
-// --alpha-update bayes|paper: how the observation model is refined (observation_model.hpp).
+// --alpha-update posterior|paper: how the observation model is refined (observation_model.hpp).
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update);
 EngineFactory engine_factory(const EngineArgs& args);
 }  // namespace hbirl::cli

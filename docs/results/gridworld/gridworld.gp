@@ -17,42 +17,42 @@ $m1 << EOD
 5 3.16254 3.37539
 7 2.21192 1.82464
 9 8.97977 11.4942
-11 20.9637 19.4324
+11 21.0591 19.5373
 13 33.1882 22.2612
-15 46.985 26.8368
+15 47.275 26.8216
 EOD
 $m2 << EOD
-0 0.800337 1.04799
-1 0.744602 1.04144
-3 2.98533 3.74006
-5 10.4537 6.37425
-7 21.8599 10.6568
-9 47.6636 17.4404
-11 84.5873 26.4981
-13 54.5609 19.9878
-15 93.9669 27.403
+0 0.955556 1.06627
+1 0.934059 1.21142
+3 2.36264 2.34494
+5 5.66609 3.89168
+7 8.00302 4.9209
+9 30.0403 16.4355
+11 45.2037 22.338
+13 44.4553 22.4407
+15 65.5036 28.5655
 EOD
 $m3 << EOD
-0 0.800337 1.04799
-1 1.48129 1.76749
-3 1.9827 2.35246
-5 3.40613 2.90528
-7 8.04035 4.38621
-9 7.63144 5.99387
-11 12.2764 5.1307
-13 9.5062 4.26449
-15 16.0398 6.96075
+0 0.955556 1.06627
+1 0.944719 1.20988
+3 0.35727 0.23198
+5 2.6485 2.50903
+7 2.85435 3.49672
+9 2.70356 4.82624
+11 3.92594 3.14585
+13 2.56523 2.31079
+15 4.32003 3.26149
 EOD
 $m4 << EOD
-0 0.800337 1.04799
-1 82.6802 37.8576
-3 228.023 44.0237
-5 328.52 28.3647
-7 368.316 0.173512
-9 367.917 1.05981
-11 368.475 0.0211228
-13 368.361 0.260674
-15 368.449 0.0680197
+0 0.955556 1.06627
+1 203.721 45.454
+3 275.102 39.4065
+5 305.106 34.345
+7 351.034 19.2829
+9 345.405 22.0352
+11 356.888 15.8759
+13 368.23 0.298453
+15 356.875 15.8425
 EOD
 set title 'Gridworld: ILE vs confounding elements (65 runs per point, 95% CI)'
 set xlabel 'Number of confounding elements |E|'
@@ -67,14 +67,18 @@ set style line 3 lc rgb '#7570b3' lw 2 pt 9 ps 1.1
 set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
-set terminal pngcairo size 900,600 font 'sans,11'
+set terminal pngcairo size 900,600 noenhanced font 'sans,11'
 set output 'docs/results/gridworld/gridworld.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Ignore CE'
-set terminal svg size 900,600 font 'sans,11' background rgb 'white'
+set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
 set output 'docs/results/gridworld/gridworld.svg'
-replot
+plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
+     $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
+     $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \
+     $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
+     $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Ignore CE'
 unset output

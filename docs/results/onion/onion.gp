@@ -24,7 +24,7 @@ $m1 << EOD
 10 0.735052 0.467224
 EOD
 $m2 << EOD
-1 4.42195 0.665028
+1 4.52514 0.674156
 2 0 0
 3 0 0
 4 0 0
@@ -50,14 +50,14 @@ EOD
 $m4 << EOD
 1 2.70404 0.706148
 2 0 0
-3 0.666259 0.510991
-4 0.735052 0.535508
-5 0.627259 0.496387
-6 0.235086 0.302873
-7 0.107793 0.213885
-8 0.039 0.0773845
+3 0 0
+4 0 0
+5 0 0
+6 0 0
+7 0 0
+8 0 0
 9 0 0
-10 0.039 0.0773845
+10 0 0
 EOD
 set title 'Onion sorting: ILE vs trajectories (100 runs per point, 95% CI)'
 set xlabel 'Number of trajectories'
@@ -72,14 +72,18 @@ set style line 3 lc rgb '#7570b3' lw 2 pt 9 ps 1.1
 set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
-set terminal pngcairo size 900,600 font 'sans,11'
+set terminal pngcairo size 900,600 noenhanced font 'sans,11'
 set output 'docs/results/onion/onion.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
-set terminal svg size 900,600 font 'sans,11' background rgb 'white'
+set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
 set output 'docs/results/onion/onion.svg'
-replot
+plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
+     $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
+     $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
+     $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
+     $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
 unset output

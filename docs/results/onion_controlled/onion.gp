@@ -40,7 +40,7 @@ $m3 << EOD
 2 0 0
 3 0 0
 4 0 0
-5 0.16169 0.183349
+5 0 0
 6 0 0
 7 0 0
 8 0 0
@@ -48,7 +48,7 @@ $m3 << EOD
 10 0 0
 EOD
 $m4 << EOD
-1 2.16885 0.417574
+1 1.6185 0.146073
 2 0 0
 3 0 0
 4 0 0
@@ -72,14 +72,18 @@ set style line 3 lc rgb '#7570b3' lw 2 pt 9 ps 1.1
 set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
-set terminal pngcairo size 900,600 font 'sans,11'
+set terminal pngcairo size 900,600 noenhanced font 'sans,11'
 set output 'docs/results/onion_controlled/onion.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
-set terminal svg size 900,600 font 'sans,11' background rgb 'white'
+set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
 set output 'docs/results/onion_controlled/onion.svg'
-replot
+plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
+     $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
+     $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
+     $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
+     $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
 unset output
