@@ -170,12 +170,20 @@ std::string failed_note(int failed) {
 }
 
 // Options every experiment has.
+// "posterior update" or "paper update, c = 0.5": c is the paper's step size only.
+std::string update_description(AlphaUpdate update, double c) {
+  std::ostringstream out;
+  out << alpha_update_name(update) << " update";
+  if (update == AlphaUpdate::kPaper) out << ", c = " << c;
+  return out.str();
+}
+
 void add_shared_options(CLI::App* cmd, std::string& out, int& runs, AlphaUpdate& update, double& c, int& restarts,
                         std::uint64_t& seed, int& threads) {
   cmd->add_option("--out,-o", out, "Output folder")->capture_default_str();
   cmd->add_option("--runs", runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
   add_alpha_update_option(cmd, update);
-  cmd->add_option("--c", c, "Damping of each observation-model refinement, alpha = c target + (1 - c) alpha")
+  cmd->add_option("--c", c, "The paper's step size, alpha = c alpha_dot + (1 - c) alpha (--alpha-update paper only)")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
   cmd->add_option("--restarts", restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
@@ -211,7 +219,7 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   spec.x_header = "|E|";
   std::ostringstream footer;
   footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
-         << " observations per step, " << alpha_update_name(o.update) << " update, c = " << o.c << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
+         << " observations per step, " << update_description(o.update, o.c) << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
          << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
          << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
@@ -269,7 +277,7 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   spec.x_header = "trajectories";
   std::ostringstream footer;
   footer << o.runs << " runs per point, from frames rendered at " << o.scene.width << " px, " << o.scene.fps
-         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; " << alpha_update_name(o.update) << " update, c = " << o.c << ", seed " << o.seed
+         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; " << update_description(o.update, o.c) << ", seed " << o.seed
          << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
          << failed_note(c.failed) << ".";
@@ -389,7 +397,7 @@ Command add_experiment(CLI::App& app) {
       "random-tasks",
       "hbirl on random tasks nobody tuned it for (hbirl generate random-task): each task learned from its\n"
       "true trajectories, with O fixed at the controlled run's prior, with the paper's update (c = 0.5, 0.1) and\n"
-      "with the default posterior update (c = 0.1, and 1, 0.5, 0.02; 4 restarts). Writes random_tasks_runs.csv (one row\n"
+      "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts). Writes random_tasks_runs.csv (one row\n"
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
       "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");
@@ -399,7 +407,7 @@ Command add_experiment(CLI::App& app) {
   tasks_cmd->add_option("--first-seed", t->options.first_seed, "Seed of the first task")->capture_default_str();
   tasks_cmd->add_option("--methods", t->methods,
                         "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
-                        "posterior_c1, posterior_c0.5, posterior_c0.02, posterior_r4; or all")
+                        "posterior_c0.5, posterior_c0.02, posterior_r4; or all")
       ->capture_default_str();
   tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
   tasks_cmd->add_option("--summarise", t->runs_csv,

@@ -104,7 +104,7 @@ Command add_generate(CLI::App& app) {
   auto g = std::make_shared<GridworldArgs>();
   CLI::App* grid = cmd->add_subcommand(
       "gridworld",
-      "The paper's Gridworld (SPEC §3): n x n cells, 4 moves that succeed with probability\n"
+      "The paper's Gridworld (paper §Experiments A): n x n cells, 4 moves that succeed with probability\n"
       "--intended and otherwise slip to one of the other three moves' cells, features =\n"
       "being in each corner, a goal corner with weight 1, and --trajectories demonstrations\n"
       "of --length steps by the soft expert (true state-action pairs only).");

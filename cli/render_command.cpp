@@ -88,7 +88,7 @@ Command add_render(CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand(
       "render",
-      "Render frames of the simulated onion-sorting camera (SPEC §3): the expert sorting\n"
+      "Render frames of the simulated onion-sorting camera (paper §Experiments B): the expert sorting\n"
       "onions with the chosen confounding elements, each frame with the blobs perception\n"
       "found, their symbol (gN: gripper region N of 20; B/D: bright/dark onion) and the\n"
       "labeller's eta for the expert. Writes PNGs to --out and a JSON list of them (with the\n"

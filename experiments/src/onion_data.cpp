@@ -5,33 +5,6 @@
 
 namespace hbirl::onion {
 
-perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta) {
-  perception::LabellerOptions o;
-  o.width = config.width;
-  o.height = config.height();
-  const GripperSize g = gripper_size(config);
-  o.gripper_area = static_cast<double>(g.width) * g.height;
-  o.onion_area = onion_area(config);
-  o.uniform_eta = uniform_eta;
-  return o;
-}
-
-std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
-                                std::uint64_t seed) {
-  const Eigen::VectorXd weights = expert_weights();
-  Rng rng(seed, 11);
-  std::vector<Episode> sorts;
-  double time = options.start_time;
-  const bool first_blemished = rng.uniform() < 0.5;
-  for (int i = 0; i < options.sorts; ++i) {
-    const bool blemished = options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
-    const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
-    sorts.push_back(make_episode(steps, blemished, time, rng.next_u64()));
-    time += static_cast<double>(steps.size()) * config.step_seconds;
-  }
-  return sorts;
-}
-
 OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
                                std::uint64_t seed) {
   const OnionScene scene(config, seed);
@@ -63,26 +36,6 @@ OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const 
     out.observed.push_back(std::move(observed));
   }
   return out;
-}
-
-Eigen::MatrixXd controlled_prior(const Mdp& mdp, const OnionDemonstration& controlled, double pseudo_count) {
-  Eigen::MatrixXd counts = Eigen::MatrixXd::Zero(mdp.num_pairs(), perception::kNumSymbols);
-  Eigen::VectorXd visits = Eigen::VectorXd::Zero(mdp.num_pairs());
-  for (size_t i = 0; i < controlled.truth.size(); ++i) {
-    const ObservedTrajectory& o = controlled.observed[i];
-    for (int t = 0; t < o.length(); ++t) {
-      const StateAction& x = controlled.truth[i][static_cast<size_t>(t)];
-      const int r = mdp.pair(x.state, x.action);
-      visits[r] += 1.0;
-      for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-        counts(r, o.symbols[static_cast<size_t>(n)]) += o.weight(n);
-      }
-    }
-  }
-  for (int r = 0; r < mdp.num_pairs(); ++r) {
-    if (visits[r] > 0.0) counts.row(r) /= visits[r];
-  }
-  return counts.array() + pseudo_count;
 }
 
 }  // namespace hbirl::onion

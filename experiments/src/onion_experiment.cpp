@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "experiments/onion_data.hpp"
+#include "learner/controlled_prior.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
@@ -129,8 +130,9 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   controlled_scene.step_seconds = scene.step_seconds;
   DemonstrationOptions controlled_options;
   controlled_options.sorts = o.controlled_sorts;
+  const OnionDemonstration controlled = demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
   const Eigen::MatrixXd subject_alpha =
-      controlled_prior(mdp, demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64()));
+      controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols, controlled_prior_options());
   const Eigen::MatrixXd subject_o = dirichlet_mean(subject_alpha);
   const int most = *std::max_element(o.trajectories.begin(), o.trajectories.end());
   const size_t per_run = o.trajectories.size() * o.methods.size();

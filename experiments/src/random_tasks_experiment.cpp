@@ -59,14 +59,14 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
 }
 
 void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun& r) {
-  // The paper experiments' EM schedule (experiments/gridworld_experiment.hpp): one
-  // observation-model refinement per E-step, interleaved with the M-steps; one thread per run.
+  // One observation-model refinement per E-step, interleaved with the M-steps (the paper
+  // experiments' schedule), to hbirl learn's tolerances: the paper experiments' looser
+  // 1e-3 / 1e-6 stopped EM short of its fixed point in some tasks (docs/MODEL.md). One
+  // thread per run.
   LearnOptions options;
   options.restarts = method.restarts;
   options.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
   options.threads = 1;
-  options.theta_tolerance = 1e-3;
-  options.likelihood_tolerance = 1e-6;
   options.max_em_iterations = kMaxEmIterations;
   LearnResult learned;
   if (method.kind == "truth") {
@@ -78,7 +78,6 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     prior.c = method.c;
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = 1;
-    estep_options.alpha_tolerance = 1e-3;
     const ObservationEStep estep(task.mdp, task.observed.trajectories, prior, estep_options);
     learned = learn_reward(task.mdp, estep, options);
   }
@@ -202,8 +201,8 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
   static const std::vector<RandomTaskMethod> methods = {
       {"true_trajectories", "truth", 0.1, 1},    {"fixed_prior", "fixed", 0.1, 1},
       {"paper_c0.5", "paper", 0.5, 1},           {"paper_c0.1", "paper", 0.1, 1},
-      {"posterior", "posterior", 0.1, 1},        {"posterior_c1", "posterior", 1.0, 1},
-      {"posterior_c0.5", "posterior", 0.5, 1},   {"posterior_c0.02", "posterior", 0.02, 1},
+      {"posterior", "posterior", 0.1, 1},        {"posterior_c0.5", "posterior", 0.5, 1},
+      {"posterior_c0.02", "posterior", 0.02, 1},
       {"posterior_r4", "posterior", 0.1, 4},
   };
   return methods;
@@ -412,17 +411,19 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
   compare("fixed_prior", "true_trajectories");
   // Does the default depend on c?
   out << "\n## Does the default's answer depend on c?\n\n";
-  for (const std::string other : {"posterior_c1", "posterior_c0.5", "posterior_c0.02"}) {
-    int n = 0, same_theta = 0, same = 0, unconverged = 0;
+  for (const std::string other : {"posterior_c0.5", "posterior_c0.02"}) {
+    int n = 0, identical = 0, same_theta = 0, same = 0, unconverged = 0;
     paired(runs, "posterior", other, [&](const RandomTaskRun& x, const RandomTaskRun& y) {
       ++n;
+      identical += x.theta == y.theta ? 1 : 0;
       same_theta += theta_difference(x, y) <= kSameThetaTolerance ? 1 : 0;
       same += same_answer(x, y) ? 1 : 0;
       unconverged += (!x.converged || !y.converged) ? 1 : 0;
     });
     if (n == 0) continue;
-    out << "- posterior (c = 0.1) vs " << other << ": same learned policy value (relative ILE within 1e-6) in " << same << " of " << n
-        << " runs (" << percent(static_cast<double>(same) / n) << "); theta within " << kSameThetaTolerance
+    out << "- posterior (c = 0.1) vs " << other << ": the same theta (as written) in " << identical << " of " << n
+        << " runs; the same learned policy value (relative ILE within 1e-6) in " << same << " ("
+        << percent(static_cast<double>(same) / n) << "); theta within " << kSameThetaTolerance
         << " (relative to max(1, |theta|)) in " << same_theta << " (" << percent(static_cast<double>(same_theta) / n)
         << "); " << unconverged << " pairs with a run that hit the EM iteration limit.\n";
   }

@@ -206,8 +206,8 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
     update_alpha(alpha, prior_, stats.alpha_dot);
     double eta_change = 0.0;
     if (eta) {
-      // The same damped step towards the Dirichlet posterior of each context.
-      alpha.eta_alpha = alpha.c * (prior_.eta_strength * context_eta_ + stats.source_counts) + (1.0 - alpha.c) * alpha.eta_alpha;
+      // The same exact M-step: the Dirichlet posterior of each context's source shares.
+      alpha.eta_alpha = prior_.eta_strength * context_eta_ + stats.source_counts;
       std::optional<RowMatrix> next_eta = learned_eta(alpha);
       eta_change = (*next_eta - *eta).cwiseAbs().maxCoeff();
       eta = std::move(next_eta);

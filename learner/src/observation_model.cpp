@@ -86,9 +86,11 @@ void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const 
     alpha.confounder_alpha = c * alpha_dot.confounders + (1.0 - c) * alpha.confounder_alpha;
     return;
   }
-  const AlphaCounts target = dirichlet_posterior(prior, alpha.strength, alpha_dot);
-  alpha.subject_alpha = c * target.subject + (1.0 - c) * alpha.subject_alpha;
-  alpha.confounder_alpha = c * target.confounders + (1.0 - c) * alpha.confounder_alpha;
+  // MAP-EM's M-step is exact (docs/MODEL.md): no step size, so nothing a user must choose
+  // changes where EM goes.
+  AlphaCounts target = dirichlet_posterior(prior, alpha.strength, alpha_dot);
+  alpha.subject_alpha = std::move(target.subject);
+  alpha.confounder_alpha = std::move(target.confounders);
 }
 
 }  // namespace hbirl

@@ -1,4 +1,4 @@
-// The service processes of the set (SPEC §4), one executable: it runs as the service it is
+// The service processes of the set (README.md "Services and channels"), one executable: it runs as the service it is
 // called by -- hbirl-sim-driver, hbirl-perception, hbirl-labeller, hbirl-sampler,
 // hbirl-optimiser are links to it -- or as `hbirl-services SERVICE ...`. Each process only
 // wires a library service (services/pipeline.hpp, estep_service.hpp) to the bus and to
@@ -237,7 +237,7 @@ int optimiser(int argc, char** argv) {
   app.add_option("--alpha-update", update, "Observation-model learning: posterior (keeps the prior; docs/MODEL.md) or paper")
       ->check(CLI::IsMember({"posterior", "paper"}))
       ->capture_default_str();
-  app.add_option("--c", o.learning.c, "Damping of each observation-model refinement")
+  app.add_option("--c", o.learning.c, "The paper's step size (--alpha-update paper only)")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();

@@ -1,6 +1,6 @@
 #include "services/learning.hpp"
 
-#include "experiments/onion_data.hpp"
+#include "learner/controlled_prior.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "perception/labeller.hpp"
@@ -48,33 +48,12 @@ DomainNames domain_names(const std::string& domain, int num_sources) {
 
 Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
                               const std::vector<ObservedTrajectory>& observed, int num_symbols) {
-  if (truth.size() != observed.size()) throw InputError("ground_truth", "not one trajectory of true steps per controlled episode");
-  for (size_t i = 0; i < truth.size(); ++i) {
-    if (static_cast<int>(truth[i].size()) != observed[i].length()) throw InputError("ground_truth", "steps differ from the episode's");
-    for (const auto& x : truth[i]) {
-      if (x.state >= mdp.num_states || x.action >= mdp.num_actions) throw InputError("ground_truth", "state or action outside the domain");
-    }
-  }
   if (domain == "onion") {
-    onion::OnionDemonstration controlled;
-    controlled.truth = truth;
-    controlled.observed = observed;
-    Eigen::MatrixXd alpha = onion::controlled_prior(mdp, controlled);
-    if (alpha.cols() != num_symbols) throw InputError("observations.num_symbols", "differs from the domain's");
-    return alpha;
+    if (num_symbols != perception::kNumSymbols) throw InputError("observations.num_symbols", "differs from the domain's");
+    return controlled_run_prior(mdp, truth, observed, num_symbols, onion::controlled_prior_options());
   }
   if (domain != "gridworld") unknown_domain(domain);
-  Eigen::MatrixXd alpha = Eigen::MatrixXd::Ones(mdp.num_pairs(), num_symbols);
-  for (size_t i = 0; i < truth.size(); ++i) {
-    const ObservedTrajectory& o = observed[i];
-    for (int t = 0; t < o.length(); ++t) {
-      const StateAction& x = truth[i][static_cast<size_t>(t)];
-      for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-        alpha(mdp.pair(x.state, x.action), o.symbols[static_cast<size_t>(n)]) += o.weight(n);
-      }
-    }
-  }
-  return alpha;
+  return controlled_run_prior(mdp, truth, observed, num_symbols);
 }
 
 Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOptions& options,

@@ -5,7 +5,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
 #include "learner/estep_exact.hpp"
 #include "learner/metrics.hpp"
@@ -13,6 +12,7 @@
 #include "perception/labeller.hpp"
 #include "services/log_bus.hpp"
 #include "sim_driver/onion.hpp"
+#include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
 

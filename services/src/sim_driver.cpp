@@ -7,10 +7,10 @@
 #include <set>
 #include <thread>
 
-#include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
 #include "services/pipeline.hpp"
 #include "sim_driver/onion.hpp"
+#include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
 
@@ -27,7 +27,6 @@ struct SimDriver::Plan {
     bool controlled = false;
     double start_time = 0.0;  // sim seconds
     Trajectory steps;
-    bool blemished = false;   // onion
     bool ends_in_terminal = false;
   };
   std::string domain;
@@ -81,7 +80,7 @@ std::unique_ptr<SimDriver::Plan> onion_plan(Bus& bus, const SimDriverOptions& o,
   plan->listeners = {"perception", "labeller", "optimiser"};
   for (int id = 0; id < static_cast<int>(cam->episodes.size()); ++id) {
     const onion::Episode& e = cam->episodes[static_cast<size_t>(id)];
-    plan->episodes.push_back({id < cam->controlled, e.start_time, e.steps, e.blemished, true});  // a sort ends with the release
+    plan->episodes.push_back({id < cam->controlled, e.start_time, e.steps, true});  // a sort ends with the release
   }
   const std::string encoding = o.encoding;
   plan->publish_frame = [cam, &bus, &counters, encoding](int id, int t, int k) {
@@ -105,7 +104,7 @@ std::unique_ptr<SimDriver::Plan> onion_plan(Bus& bus, const SimDriverOptions& o,
   return plan;
 }
 
-// The paper's Gridworld (SPEC §3): a goal corner and the soft expert's trajectories
+// The paper's Gridworld (paper §Experiments A): a goal corner and the soft expert's trajectories
 // drawn from the seed; the controlled run's observations are the subject's alone (eta
 // all on the subject), the demonstrations' are drawn equally from the subject and each
 // confounding element and labelled with eta as `eta` says. One OBSERVATIONS message
@@ -160,7 +159,7 @@ std::unique_ptr<SimDriver::Plan> gridworld_plan(Bus& bus, const SimDriverOptions
   for (size_t i = 0; i < controlled.size() + task.trajectories.size(); ++i) {
     const bool is_controlled = i < controlled.size();
     const Trajectory& steps = is_controlled ? controlled[i] : task.trajectories[i - controlled.size()];
-    plan->episodes.push_back({is_controlled, start, steps, false, false});  // no terminal states: cut off
+    plan->episodes.push_back({is_controlled, start, steps, false});  // no terminal states: cut off
     start += static_cast<double>(steps.size()) * g.step_seconds;
   }
   SimDriver::Plan* p = plan.get();  // the plan owns the function: it never outlives it
@@ -245,7 +244,6 @@ void SimDriver::publish_truth(int id, int t) {
   truth.step = t;
   truth.state = e.steps[static_cast<size_t>(t)].state;
   truth.action = e.steps[static_cast<size_t>(t)].action;
-  truth.blemished = e.blemished;
   truth.num_features = static_cast<std::int32_t>(p.true_weights.size());
   truth.true_weights.assign(p.true_weights.data(), p.true_weights.data() + p.true_weights.size());
   publish(bus_, channels::kGroundTruth, truth, counters_);

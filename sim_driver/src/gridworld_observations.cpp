@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "learner/controlled_prior.hpp"
+
 namespace hbirl {
 
 Eigen::MatrixXd gridworld_subject_observation_model(int size, double decay) {
@@ -89,14 +91,18 @@ void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, 
 
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
                                      const Eigen::MatrixXd& subject_o, int per_step, double pseudo_count, Rng& rng) {
-  Eigen::MatrixXd alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), subject_o.cols(), pseudo_count);
-  for (const Trajectory& trajectory : trajectories) {
-    for (const StateAction& step : trajectory) {
+  // The subject alone: every observation drawn from its O at the true (s, a).
+  std::vector<ObservedTrajectory> observed(trajectories.size());
+  for (size_t i = 0; i < trajectories.size(); ++i) {
+    for (const StateAction& step : trajectories[i]) {
       const int r = mdp.pair(step.state, step.action);
-      for (int i = 0; i < per_step; ++i) alpha(r, rng.categorical(subject_o.row(r).transpose())) += 1.0;
+      for (int k = 0; k < per_step; ++k) observed[i].symbols.push_back(rng.categorical(subject_o.row(r).transpose()));
+      observed[i].step_begin.push_back(static_cast<int>(observed[i].symbols.size()));
     }
   }
-  return alpha;
+  ControlledPriorOptions options;
+  options.pseudo_count = pseudo_count;
+  return controlled_run_prior(mdp, trajectories, observed, static_cast<int>(subject_o.cols()), options);
 }
 
 }  // namespace hbirl

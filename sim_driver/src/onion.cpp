@@ -95,6 +95,13 @@ Eigen::VectorXd expert_weights() {
   return w;
 }
 
+ControlledPriorOptions controlled_prior_options() {
+  ControlledPriorOptions o;
+  o.pseudo_count = 1.0;
+  o.per_visit = true;
+  return o;
+}
+
 Trajectory expert_sort(const Mdp& mdp, const Eigen::VectorXd& weights, int gripper_start, bool blemished,
                        int max_steps) {
   const std::vector<int> policy = value_iteration(mdp, mdp.reward(weights)).actions;

@@ -331,4 +331,31 @@ void OnionScene::render(const Episode& episode, int t, int frame, cv::Mat& out) 
   if (config_.foreground_person) draw_foreground_person(out, time);
 }
 
+perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta) {
+  perception::LabellerOptions o;
+  o.width = config.width;
+  o.height = config.height();
+  const GripperSize g = gripper_size(config);
+  o.gripper_area = static_cast<double>(g.width) * g.height;
+  o.onion_area = onion_area(config);
+  o.uniform_eta = uniform_eta;
+  return o;
+}
+
+std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                                std::uint64_t seed) {
+  const Eigen::VectorXd weights = expert_weights();
+  Rng rng(seed, 11);
+  std::vector<Episode> sorts;
+  double time = options.start_time;
+  const bool first_blemished = rng.uniform() < 0.5;
+  for (int i = 0; i < options.sorts; ++i) {
+    const bool blemished = options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
+    const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
+    sorts.push_back(make_episode(steps, blemished, time, rng.next_u64()));
+    time += static_cast<double>(steps.size()) * config.step_seconds;
+  }
+  return sorts;
+}
+
 }  // namespace hbirl::onion

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "learner/controlled_prior.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
@@ -23,7 +24,7 @@ TEST(OnionData, ControlledRunGivesTheSubjectPrior) {
     EXPECT_TRUE(d.observed[i].ends_in_terminal);
     for (int t = 0; t < d.observed[i].length(); ++t) EXPECT_GT(d.observed[i].observations_at(t), 0);  // never occluded
   }
-  const Eigen::MatrixXd alpha = controlled_prior(mdp, d, 1.0);
+  const Eigen::MatrixXd alpha = controlled_run_prior(mdp, d.truth, d.observed, perception::kNumSymbols, controlled_prior_options());
   ASSERT_EQ(alpha.cols(), perception::kNumSymbols);
   const int r = mdp.pair(index({kUnknown, kGripped, kAtInspection}), kInspect);
   // One frame = one gripper blob and one onion blob: 2 observations x 30 frames per step.
@@ -51,7 +52,7 @@ TEST(OnionData, QualitiesAlternate) {
   EXPECT_EQ(std::count(all.blemished.begin(), all.blemished.end(), true), 5);
 }
 
-// End to end from frames (SPEC §3, the test): 6 sorts in the full scene with the
+// End to end from frames (paper §Experiments B): 6 sorts in the full scene with the
 // labeller's plausible eta; HiddenDataEM learns to keep good onions and bin blemished ones.
 TEST(OnionData, LearnsTheSortingRuleFromFramesWithPlausibleEta) {
   const Mdp mdp = make_onion_mdp();
@@ -66,7 +67,7 @@ TEST(OnionData, LearnsTheSortingRuleFromFramesWithPlausibleEta) {
   ObservationPrior prior;
   prior.num_symbols = perception::kNumSymbols;
   prior.num_confounders = perception::kNumSources - 1;
-  prior.subject_alpha = controlled_prior(mdp, controlled, 1.0);
+  prior.subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols, controlled_prior_options());
   prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
   prior.c = 0.5;
   ObservationEStepOptions estep_options;

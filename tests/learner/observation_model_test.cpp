@@ -54,14 +54,14 @@ TEST(ObservationModel, PaperUpdateByHand) {
 }
 
 // The posterior update with strength s = 2 and base 1: subject prior(2) = 1 + 2 (3, 5) =
-// (7, 11), target (17, 11), alpha' = 0.25 (17, 11) + 0.75 (4, 6) = (7.25, 7.25); elements
-// (their prior as given) target (1, 1) + (2, 6) = (3, 7), alpha' = (1.5, 2.5).
+// (7, 11), alpha' = (7, 11) + (10, 0) = (17, 11) at once (the exact M-step; c = 0.25 is
+// not used); elements (their prior as given) (1, 1) + (2, 6) = (3, 7).
 TEST(ObservationModel, PosteriorUpdateByHand) {
   const ObservationPrior alpha = refined_by_hand(AlphaUpdate::kPosterior, 2.0);
-  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 0), 7.25);
-  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 1), 7.25);
-  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 0), 1.5);
-  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 1), 2.5);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 0), 17.0);
+  EXPECT_DOUBLE_EQ(alpha.subject_alpha(0, 1), 11.0);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 0), 3.0);
+  EXPECT_DOUBLE_EQ(alpha.confounder_alpha(0, 1), 7.0);
 }
 
 ObservationPrior random_prior(Rng& rng) {
@@ -75,10 +75,10 @@ ObservationPrior random_prior(Rng& rng) {
   return prior;
 }
 
-// With no data the posterior update returns the prior (for any c, any number of times),
-// and with data its fixed point is the weighed prior + alpha_dot (elements: prior +
-// alpha_dot) whatever c is. The weighed prior keeps the base and scales what is above it.
-TEST(ObservationModel, PosteriorUpdateKeepsThePriorAndItsFixedPointDoesNotDependOnC) {
+// With no data the posterior update returns the prior, and with data prior + alpha_dot,
+// in one step and whatever c is (c is the paper's step size only). The weighed prior
+// keeps the base and scales what is above it.
+TEST(ObservationModel, PosteriorUpdateReturnsPriorPlusCountsWhateverC) {
   Rng rng(5);
   const ObservationPrior prior = random_prior(rng);
   const AlphaCounts none = AlphaCounts::zero(4, 2, 3);
@@ -86,27 +86,27 @@ TEST(ObservationModel, PosteriorUpdateKeepsThePriorAndItsFixedPointDoesNotDepend
   for (Eigen::Index i = 0; i < dot.subject.size(); ++i) dot.subject.data()[i] = 10 * rng.uniform();
   for (Eigen::Index i = 0; i < dot.confounders.size(); ++i) dot.confounders.data()[i] = 30 * rng.uniform();
   for (double s : {1.0, 0.01, 30.0}) {
+    const Eigen::MatrixXd weighed = weighed_subject_prior(prior, s);
+    Eigen::MatrixXd by_hand = prior.subject_alpha;
+    for (Eigen::Index i = 0; i < by_hand.size(); ++i) {
+      const double a = prior.subject_alpha.data()[i];
+      by_hand.data()[i] = a <= 1.0 ? a : 1.0 + s * (a - 1.0);
+    }
+    EXPECT_LT((weighed - by_hand).cwiseAbs().maxCoeff(), 1e-12);
+    if (s == 1.0) {
+      EXPECT_EQ(weighed, prior.subject_alpha);
+    }
     for (double c : {1.0, 0.5, 0.1, 0.02}) {
       ObservationPrior alpha = prior;
       alpha.c = c;
       alpha.strength = s;
-      // Without data the target is s * prior: with s = 1, the prior itself at once.
-      const Eigen::MatrixXd weighed = weighed_subject_prior(prior, s);
-      Eigen::MatrixXd by_hand = prior.subject_alpha;
-      for (Eigen::Index i = 0; i < by_hand.size(); ++i) {
-        const double a = prior.subject_alpha.data()[i];
-        by_hand.data()[i] = a <= 1.0 ? a : 1.0 + s * (a - 1.0);
-      }
-      EXPECT_LT((weighed - by_hand).cwiseAbs().maxCoeff(), 1e-12);
-      if (s == 1.0) {
-        EXPECT_EQ(weighed, prior.subject_alpha);
-      }
-      for (int i = 0; i < 3000; ++i) update_alpha(alpha, prior, none);
-      EXPECT_LT((alpha.subject_alpha - weighed).cwiseAbs().maxCoeff(), 1e-9) << "c = " << c;
+      alpha.subject_alpha.setConstant(123.0);  // wherever the previous iteration left it
+      update_alpha(alpha, prior, none);
+      EXPECT_LT((alpha.subject_alpha - weighed).cwiseAbs().maxCoeff(), 1e-12) << "c = " << c;
       EXPECT_LT((alpha.confounder_alpha - prior.confounder_alpha).cwiseAbs().maxCoeff(), 1e-12) << "c = " << c;
-      for (int i = 0; i < 3000; ++i) update_alpha(alpha, prior, dot);
-      EXPECT_LT((alpha.subject_alpha - (weighed + dot.subject)).cwiseAbs().maxCoeff(), 1e-9) << "c = " << c;
-      EXPECT_LT((alpha.confounder_alpha - (prior.confounder_alpha + dot.confounders)).cwiseAbs().maxCoeff(), 1e-9)
+      update_alpha(alpha, prior, dot);
+      EXPECT_LT((alpha.subject_alpha - (weighed + dot.subject)).cwiseAbs().maxCoeff(), 1e-12) << "c = " << c;
+      EXPECT_LT((alpha.confounder_alpha - (prior.confounder_alpha + dot.confounders)).cwiseAbs().maxCoeff(), 1e-12)
           << "c = " << c;
     }
   }

@@ -11,7 +11,7 @@ namespace {
 
 using nlohmann::json;
 
-// The SPEC §6 example, extended with names and a terminal-free 3-state MDP.
+// A minimal problem file (format: README.md "Problem files"), extended with names and a terminal-free 3-state MDP.
 json spec_example() {
   return json::parse(R"({
     "mdp": {

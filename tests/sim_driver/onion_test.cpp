@@ -7,7 +7,8 @@
 namespace hbirl::onion {
 namespace {
 
-// The transition table of SPEC §3, action by action, against hand-written expectations.
+// The onion-sorting transition table (paper §Experiments B; docs/MODEL.md "The onion-sorting domain"),
+// action by action, against hand-written expectations.
 TEST(OnionMdp, TransitionTable) {
   const Mdp mdp = make_onion_mdp({0.3, 0.95});
   auto p = [&](const State& s, int a, const State& next) {

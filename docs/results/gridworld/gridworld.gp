@@ -1,4 +1,4 @@
-# Written by hbirl; run `gnuplot docs/results/gridworld/gridworld.gp` to redraw.
+# Written by hbirl; run `gnuplot /tmp/gw/gridworld.gp` to redraw.
 $m0 << EOD
 0 0.158338 0.0292691
 1 0.158338 0.0292691
@@ -22,37 +22,37 @@ $m1 << EOD
 15 47.275 26.8216
 EOD
 $m2 << EOD
-0 0.955556 1.06627
-1 0.934059 1.21142
-3 2.36264 2.34494
-5 5.66609 3.89168
-7 8.00302 4.9209
-9 30.0403 16.4355
-11 45.2037 22.338
-13 44.4553 22.4407
-15 65.5036 28.5655
+0 0.95591 1.06625
+1 0.930202 1.21157
+3 2.36242 2.34495
+5 5.07124 3.7525
+7 7.17677 4.82865
+9 29.4933 15.6309
+11 46.7438 22.4439
+13 44.097 22.4922
+15 72.972 31.0868
 EOD
 $m3 << EOD
-0 0.955556 1.06627
-1 0.944719 1.20988
-3 0.35727 0.23198
+0 0.95591 1.06625
+1 0.946857 1.20979
+3 0.35725 0.231982
 5 2.6485 2.50903
-7 2.85435 3.49672
-9 2.70356 4.82624
-11 3.92594 3.14585
-13 2.56523 2.31079
-15 4.32003 3.26149
+7 2.85355 3.49676
+9 2.70323 4.82625
+11 3.92295 3.14466
+13 2.5639 2.31089
+15 4.32005 3.26103
 EOD
 $m4 << EOD
-0 0.955556 1.06627
-1 203.721 45.454
-3 275.102 39.4065
-5 305.106 34.345
-7 351.034 19.2829
-9 345.405 22.0352
-11 356.888 15.8759
-13 368.23 0.298453
-15 356.875 15.8425
+0 0.95591 1.06625
+1 198.287 45.6571
+3 268.867 40.1217
+5 302.627 34.3147
+7 345.331 22.0553
+9 334.371 26.5192
+11 368.252 0.293971
+13 362.578 11.3176
+15 357.052 15.8479
 EOD
 set title 'Gridworld: ILE vs confounding elements (65 runs per point, 95% CI)'
 set xlabel 'Number of confounding elements |E|'
@@ -68,14 +68,14 @@ set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
 set terminal pngcairo size 900,600 noenhanced font 'sans,11'
-set output 'docs/results/gridworld/gridworld.png'
+set output '/tmp/gw/gridworld.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Ignore CE'
 set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
-set output 'docs/results/gridworld/gridworld.svg'
+set output '/tmp/gw/gridworld.svg'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's Gridworld experiment (SPEC §3; paper §Experiments A, Fig. 3): ILE of five
+// The paper's Gridworld experiment (paper §Experiments A, Fig. 3; README.md "Results"): ILE of five
 // methods as the number of confounding elements |E| grows.
 //
 // A run r at |E| = E: the task (goal corner, 20 soft-expert trajectories of 10 steps,
@@ -42,7 +42,7 @@ struct GridworldExperimentOptions {
   // fixed point as refining to convergence inside every E-step, ~4x fewer passes), and
   // tolerances that leave the greedy policy -- hence ILE -- unchanged (docs/results).
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
-  double c = 0.5;                  // damping of the alpha refinement (paper Algorithm 1)
+  double c = 0.5;                  // the paper's step size (Algorithm 1; update paper only)
   int max_alpha_iterations = 1;    // alpha refinements per E-step (see ObservationEStepOptions)
   double alpha_tolerance = 1e-3;
   double theta_tolerance = 1e-3;   // EM stopping rule, see LearnOptions

@@ -7,10 +7,12 @@
 //   paper_c0.5, paper_c0.1   the paper's update alpha = c alpha_dot + (1 - c) alpha
 //   posterior          the default: the Dirichlet posterior (prior kept), the subject prior's
 //                      strength chosen by held-out likelihood, eta learned; c = 0.1
-//   posterior_c1, posterior_c0.5, posterior_c0.02  the same, damped otherwise (the answer must not change)
+//   posterior_c0.5, posterior_c0.02  the same with c = 0.5, 0.02 (the paper's step size,
+//                      which the posterior update does not use: the answer must not change)
 //   posterior_r4       the default with 4 restarts instead of 1 (do restarts change the answer?)
-// with the EM schedule of the paper experiments (one observation-model refinement per
-// E-step; tolerances 1e-3 on theta and O, 1e-6 on the objective; up to 3000 EM iterations). A run is "optimal" when the learned reward's optimal
+// with one observation-model refinement per E-step (the paper experiments' schedule) and
+// hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
+// iterations). A run is "optimal" when the learned reward's optimal
 // policy is optimal under the true reward (ILE 0 to 1e-8 of the value scale).
 #include <cstdint>
 #include <functional>

@@ -1,5 +1,5 @@
 #pragma once
-// The E-step interface of HiddenDataEM (SPEC §2). An E-step turns a policy into the
+// The E-step interface of HiddenDataEM (paper §II-A, Algorithm 1). An E-step turns a policy into the
 // expected number of visits N_hat(s,a) of each state-action pair under the posterior
 // Pr(X | data; theta) -- the sufficient statistic of the M-step (maxcausalent.hpp), from
 // which the expected feature counts phi_hat = Phi^T N_hat follow -- and the data's

@@ -1,5 +1,5 @@
 #pragma once
-// The exact E-step engine (SPEC §2, engine 1). The source label Z of each observation is
+// The exact E-step engine (docs/MODEL.md "The E-step on observations"). The source label Z of each observation is
 // summed out,
 //   p(w | s,a) = eta(0) O_{s,a}(w) + sum_e eta(e) O_e(w),
 // so a trajectory is a chain over (s, a) pairs with emission prod_n p(w_n | s_t, a_t) at

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's E-step engine (SPEC §2, engine 2; paper appendix, Algorithms 1-2):
+// The paper's E-step engine (paper appendix, Algorithms 1-2; docs/MODEL.md "The E-step on observations"):
 // Metropolis-within-Gibbs over the source labels Z, the states s and the actions a of a
 // trajectory. Every node is updated by the paper's "Sample" step: propose a value
 // uniformly, accept with probability min(1, Pr(new | rest) / Pr(old | rest)), using

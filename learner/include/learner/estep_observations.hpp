@@ -1,5 +1,5 @@
 #pragma once
-// The E-step on observations (SPEC §2, paper Algorithm 1): for a policy, compute the
+// The E-step on observations (paper Algorithm 1; docs/MODEL.md): for a policy, compute the
 // posterior over each trajectory with a posterior engine (exact forward-backward by
 // default, or the paper's MCMC), and refine the observation model inside:
 //   repeat: statistics = sum over trajectories of engine(policy, O)

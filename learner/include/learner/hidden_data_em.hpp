@@ -1,5 +1,5 @@
 #pragma once
-// HiddenDataEM (SPEC §2, paper §II-A) with random restarts.
+// HiddenDataEM (paper §II-A, Algorithm 1) with random restarts (docs/MODEL.md "Restarts and selection").
 //
 // Each restart alternates
 //   E-step: N_hat = E[visits | data; theta]             (EStep::expect)

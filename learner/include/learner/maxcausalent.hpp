@@ -1,5 +1,5 @@
 #pragma once
-// The MaxCausalEnt M-step objective (SPEC §1-§2) and its exact gradient.
+// The MaxCausalEnt M-step objective (paper §II-A) and its exact gradient.
 //
 // Choice (documented in docs/MODEL.md): the objective is the causal log-likelihood of
 // the demonstrated state-action visits under the stationary soft policy pi_theta of

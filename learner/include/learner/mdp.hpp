@@ -1,5 +1,5 @@
 #pragma once
-// A discrete MDP <S, A, T, R = theta . phi> (SPEC §1).
+// A discrete MDP <S, A, T, R = theta . phi> (paper §II; docs/MODEL.md "MDP conventions").
 //
 // Rows of the transition and feature matrices are indexed by the state-action pair
 // r = s * num_actions + a. Transitions are sparse (CSR: Eigen's row-major sparse

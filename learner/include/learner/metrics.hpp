@@ -1,5 +1,5 @@
 #pragma once
-// How good is a learned reward? (SPEC §2 "Metrics", paper §II.)
+// How good is a learned reward? (paper §II; docs/MODEL.md "Metrics".)
 #include <vector>
 
 #include "learner/mdp.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// The observation model of SPEC §1: the subject's O_{s,a} and each confounding
+// The observation model of the paper (§II): the subject's O_{s,a} and each confounding
 // element's O_e, categorical over Omega with Dirichlet priors, and how the E-step
 // refines those Dirichlets from the expected source-labelled counts alpha_dot (paper
 // Algorithm 1). docs/MODEL.md ("The observation model") derives both updates:
@@ -55,8 +55,9 @@ double log_prior_term(const ObservationModel& model, const ObservationPrior& pri
 // The strengths the posterior update chooses from: 10^(k/2), k = -6 .. 6 (1e-3 .. 1e3).
 const std::vector<double>& prior_strength_grid();
 
-// One refinement of `alpha` (the current parameters) towards its target by the rule in
-// alpha.update, from the E-step's alpha_dot; `prior` is the model's Dirichlet prior.
+// One refinement of `alpha` (the current parameters) by the rule in alpha.update, from the
+// E-step's alpha_dot; `prior` is the model's Dirichlet prior. kPosterior: the exact M-step,
+// alpha = weighed prior + alpha_dot (c is not used); kPaper: c alpha_dot + (1 - c) alpha.
 void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const AlphaCounts& alpha_dot);
 
 }  // namespace hbirl

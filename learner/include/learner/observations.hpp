@@ -1,5 +1,5 @@
 #pragma once
-// What the sensors give the learner (SPEC §1): at timestep t, N_t >= 0 observations,
+// What the sensors give the learner (paper §II): at timestep t, N_t >= 0 observations,
 // each a symbol omega in Omega = {0 .. num_symbols-1} with a source distribution eta over
 // 1 + |E| sources (index 0 the subject, 1..|E| the confounding elements). N_t = 0 is
 // occlusion. Stored flat, one row per observation, so an E-step streams through memory.
@@ -75,7 +75,7 @@ enum class AlphaUpdate {
   kPaper,
 };
 
-// Dirichlet priors of the observation model (SPEC §1): alpha for the subject's
+// Dirichlet priors of the observation model (paper §II): alpha for the subject's
 // O_{s,a} (one row per (s, a) pair) and for each confounding element's O_e. The same
 // type carries the refined parameters from one EM iteration to the next (EStepState).
 struct ObservationPrior {
@@ -85,10 +85,9 @@ struct ObservationPrior {
   Eigen::MatrixXd confounder_alpha;  // num_confounders x num_symbols
   bool learn = true;                 // refine alpha inside the E-step (paper Algorithm 1)
   AlphaUpdate update = AlphaUpdate::kPosterior;
-  // Damping of each refinement: alpha_i = c * target + (1 - c) * alpha_{i-1}, the target
-  // being alpha_dot (kPaper) or the prior (the subject's weighed by s) + alpha_dot
-  // (kPosterior). With kPosterior, c changes the path only, not the fixed-point equation
-  // (a smaller c keeps the path near the prior for longer).
+  // The paper's step size (kPaper only): alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}.
+  // kPosterior has none: its M-step is exact (docs/MODEL.md), because a damped step there
+  // made EM's answer depend on c (it picks which fixed point the path reaches).
   double c = 0.1;
   // kPosterior: how much a controlled run's counts weigh against the demonstration (the
   // paper's "scale the hyper-parameters by a small constant"), as a power prior: the

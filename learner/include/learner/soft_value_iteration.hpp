@@ -1,6 +1,6 @@
 #pragma once
 // Soft (maximum causal entropy) value iteration and the stationary soft policy of
-// SPEC §1 / the paper's appendix:
+// the paper's appendix (docs/MODEL.md "The expert: the stationary soft policy"):
 //   Q(s,a) = R(s,a) + gamma * sum_s' T(s'|s,a) V(s')
 //   V(s)   = logsumexp_a Q(s,a)
 //   pi(a|s) = exp(Q(s,a) - V(s))

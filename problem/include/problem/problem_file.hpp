@@ -1,5 +1,5 @@
 #pragma once
-// The problem file of SPEC §6: the user's MDP and demonstration as one JSON document.
+// The problem file (README.md "Problem files"): the user's MDP and demonstration as one JSON document.
 // Everything is validated here, at the edge; a bad file raises InputError naming the
 // field and position, e.g. "demonstration[3].steps[2].observations[0]: eta has 2
 // entries, expected 3". The full format is documented in README.md ("Problem files").

@@ -1,6 +1,6 @@
 #pragma once
-// The bus every hbirl service talks through (SPEC §4; STYLE "one abstract bus
-// interface"): raw messages on named channels, with three implementations behind one
+// The bus every hbirl service talks through (README.md "Services and channels"), one abstract bus
+// interface: raw messages on named channels, with three implementations behind one
 // interface so that a service's code is the same live, in a replay and in a unit test:
 //   LcmBus     LCM itself: udpm:// (live, several machines), memq:// (in-process), and
 //              LCM's own file:// log provider (replay at recorded speed);

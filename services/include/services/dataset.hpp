@@ -1,5 +1,5 @@
 #pragma once
-// The learner's data, assembled from the stream (SPEC §4): episodes and their steps
+// The learner's data, assembled from the stream (README.md "Services and channels"): episodes and their steps
 // (EPISODE), the observations of every frame (OBSERVATIONS) and, for controlled-run
 // episodes, the expert's true (s, a) at every step (GROUND_TRUTH). Channels arrive out
 // of step with each other (observations come two services later than the markers), so
@@ -16,15 +16,10 @@
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
 #include "services/bus.hpp"
+#include "services/channels.hpp"
 #include "services/typed.hpp"
 
 namespace hbirl::services {
-
-namespace channels {
-inline const std::string kEpisode = "EPISODE";
-inline const std::string kObservations = "OBSERVATIONS";
-inline const std::string kGroundTruth = "GROUND_TRUTH";
-}  // namespace channels
 
 struct Dataset {
   std::string domain;

@@ -1,5 +1,5 @@
 #pragma once
-// The E-step as a service (SPEC §4 "sampler"; issue 5): the optimiser's HiddenDataEM asks
+// The E-step as a service (hbirl-sampler, README.md "Services and channels"): the optimiser's HiddenDataEM asks
 // sampler workers, over the bus, for the statistics of the blocks of trajectories each
 // is assigned, and sums them in block order -- so the learned theta is bit-identical to
 // a run without workers, with 1, 2 or 4 of them, and when one dies mid-run.
@@ -34,16 +34,10 @@
 #include "hbirl/trajectory_t.hpp"
 #include "learner/estep_observations.hpp"
 #include "services/bus.hpp"
+#include "services/channels.hpp"
 #include "services/typed.hpp"
 
 namespace hbirl::services {
-
-namespace channels {
-inline const std::string kTrajectory = "TRAJECTORY";
-inline const std::string kStatus = "STATUS";
-inline const std::string kEStepRequest = "ESTEP_REQUEST";
-inline const std::string kEStepResult = "ESTEP_RESULT";
-}  // namespace channels
 
 // Trajectories on the bus. from_message throws InputError naming the bad field.
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest);

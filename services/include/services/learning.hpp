@@ -13,7 +13,7 @@
 
 namespace hbirl::services {
 
-// The domains the services know: "onion" (SPEC §3, from camera frames) and "gridworld"
+// The domains the services know: "onion" (paper §Experiments B, from camera frames) and "gridworld"
 // (the paper's 5x5 Gridworld; its simulator publishes the observations itself).
 // Each throws InputError("domain", ...) for any other name.
 Mdp domain_mdp(const std::string& domain);
@@ -26,15 +26,16 @@ struct DomainNames {
 };
 DomainNames domain_names(const std::string& domain, int num_sources = 1);
 // The informative prior for the subject's observation model from the controlled run's
-// observations and true steps: onion, the symbol counts per visit of (s, a) plus 1
-// (hbirl experiment onion); gridworld, the symbol counts plus 1 (hbirl experiment
-// gridworld, SPEC §3). Throws InputError for true steps outside the domain.
+// observations and true steps (learner/controlled_prior.hpp): onion, the symbol counts
+// per visit of (s, a) plus 1 (hbirl experiment onion); gridworld, the symbol counts plus 1
+// (hbirl experiment gridworld, paper §Experiments A). Throws InputError for true steps or
+// symbols outside the domain.
 Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
                               const std::vector<ObservedTrajectory>& observed, int num_symbols);
 
 struct LearningOptions {
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
-  double c = 0.5;                   // damping of the alpha refinement
+  double c = 0.5;                   // the paper's step size (update paper only)
   std::uint64_t seed = 1;
   int max_alpha_iterations = 1;     // as in hbirl experiment onion
   double alpha_tolerance = 1e-3;

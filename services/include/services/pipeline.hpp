@@ -15,6 +15,7 @@
 #include "hbirl/posterior_t.hpp"
 #include "hbirl/reward_t.hpp"
 #include "perception/blobs.hpp"
+#include "services/channels.hpp"
 #include "services/dataset.hpp"
 #include "services/estep_service.hpp"
 #include "services/learning.hpp"
@@ -22,16 +23,6 @@
 #include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
-
-namespace channels {
-inline const std::string kCamera = "CAMERA";
-inline const std::string kDetections = "DETECTIONS";
-inline const std::string kEmProgress = "EM_PROGRESS";
-inline const std::string kReward = "REWARD";
-inline const std::string kFrameRequest = "FRAME_REQUEST";
-inline const std::string kObservationModel = "OBSERVATION_MODEL";
-inline const std::string kPosterior = "POSTERIOR";
-}  // namespace channels
 
 // ---- sim_driver ----
 // The paper's Gridworld as a simulated sensor: it has no camera, so the simulator

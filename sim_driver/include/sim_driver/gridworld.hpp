@@ -1,5 +1,5 @@
 #pragma once
-// The paper's Gridworld (SPEC §3 "Gridworld"): an n x n grid, 4 moves, the intended move
+// The paper's Gridworld (paper §Experiments A): an n x n grid, 4 moves, the intended move
 // succeeds with probability `intended`, otherwise the agent lands in one of the other
 // three moves' cells (equally likely); a move off the grid stays put. Reward features:
 // being in each of the 4 corners. No terminal states; uniform start.
@@ -29,7 +29,7 @@ std::vector<std::string> gridworld_action_names();
 std::vector<std::string> gridworld_feature_names();
 
 // A learning task: the MDP, a goal corner drawn at random (weight 1, others 0) and
-// `num_trajectories` demonstrations of `length` steps from the soft expert of SPEC §1.
+// `num_trajectories` demonstrations of `length` steps from the soft expert (docs/MODEL.md "The expert").
 struct GridworldTask {
   Mdp mdp;
   int goal = 0;

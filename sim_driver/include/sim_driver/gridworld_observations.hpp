@@ -1,5 +1,5 @@
 #pragma once
-// What the learner sees in the paper's Gridworld (SPEC §3): 4 symbols, one per corner.
+// What the learner sees in the paper's Gridworld (paper §Experiments A): 4 symbols, one per corner.
 // The subject's true O makes symbol k exponentially more likely as the agent nears corner
 // k, O_s(k) ∝ exp(-decay * manhattan(s, corner k)), whatever the action; each
 // confounding element has a random observation function (a Dirichlet(1) draw). At each
@@ -47,7 +47,7 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
 // only for kPlausible.
 void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng);
 
-// The informative subject prior of SPEC §3: symbol counts per (s, a) from a controlled run
+// The informative subject prior (paper §Experiments A): symbol counts per (s, a) from a controlled run
 // (the subject alone, true states known), plus `pseudo_count` everywhere.
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
                                      const Eigen::MatrixXd& subject_o, int per_step, double pseudo_count, Rng& rng);

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's onion-sorting domain (SPEC §3 "Onion sorting"; paper §Experiments B).
+// The paper's onion-sorting domain (paper §Experiments B; docs/MODEL.md "The onion-sorting domain").
 //
 // State = (onion quality, onion position, gripper position), 3 x 3 x 3 = 27 states,
 //   s = quality * 9 + onion * 3 + gripper
@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "learner/controlled_prior.hpp"
 #include "learner/mdp.hpp"
 #include "learner/rng.hpp"
 #include "learner/trajectory.hpp"
@@ -66,6 +67,11 @@ std::vector<std::string> feature_names();
 
 // The expert's reward: keep good onions on the conveyor, bin blemished ones.
 Eigen::VectorXd expert_weights();
+
+// How the subject prior is built from the controlled run: counts per visit plus 1, so
+// that the run weighs as much as one demonstrated step per (s, a) (docs/MODEL.md "The
+// onion-sorting domain").
+ControlledPriorOptions controlled_prior_options();
 
 // One sort by the expert: the optimal policy of `weights` from an uninspected onion on
 // the conveyor with the gripper at `gripper_start`, for an onion that is blemished or not.

@@ -1,5 +1,5 @@
 #pragma once
-// The simulated camera of the onion-sorting experiment (SPEC §3, paper Fig. 2): an RGB
+// The simulated camera of the onion-sorting experiment (paper §Experiments B, Fig. 2): an RGB
 // view of the expert's blue gripper sorting onions at a conveyor, an inspection spot and
 // a bin, with the confounding elements of the paper, each switchable:
 //   - a person in a blue shirt (the gripper's colour) walking behind the expert, carrying
@@ -18,7 +18,9 @@
 #include <string>
 #include <vector>
 
+#include "learner/mdp.hpp"
 #include "learner/trajectory.hpp"
+#include "perception/labeller.hpp"
 
 namespace hbirl::onion {
 
@@ -101,5 +103,25 @@ class OnionScene {
 
 // A sort's episode for the scene: the expert's trajectory and a random onion pose.
 Episode make_episode(const Trajectory& steps, bool blemished, double start_time, std::uint64_t seed);
+
+struct DemonstrationOptions {
+  int sorts = 10;
+  // Onion qualities: alternate good and blemished from a random first one, so any two
+  // consecutive sorts show both (the paper: "two trajectories are needed ... to see at
+  // least one good and one blemished onion"); false: each sort's onion is blemished
+  // with probability `blemished`.
+  bool alternate_quality = true;
+  double blemished = 0.5;
+  bool uniform_eta = false;    // the labeller's Uniform-eta variant (labeller_options)
+  double start_time = 0.0;     // sim time of the first sort
+};
+
+// The sorts a demonstration renders: the expert's steps and each onion's quality and
+// pose, one after another from options.start_time. Same arguments, same sorts.
+std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
+                                std::uint64_t seed);
+
+// The labeller's reference sizes for a scene (the gripper's box, an onion's area).
+perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta = false);
 
 }  // namespace hbirl::onion
