@@ -23,8 +23,8 @@ namespace {
 // "Near optimal": the learned policy loses at most this share of the optimal value.
 constexpr double kNearOptimal = 0.05;
 
-// Enough EM iterations for damped updates to converge (c = 0.02 with one refinement per
-// E-step needs several hundred).
+// Enough EM iterations for the slowest method to converge (the paper's update at c = 0.1
+// with one refinement per E-step needs several hundred).
 constexpr int kMaxEmIterations = 3000;
 
 // A run is optimal when its greedy policy loses nothing under the true reward.
@@ -475,7 +475,7 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
 }
 
 std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem) {
-  // The main methods (the damping and restart variants are in the summary's tables).
+  // The main methods (the c and restart variants are in the summary's tables).
   std::vector<std::string> methods;
   for (const std::string m : {"true_trajectories", "fixed_prior", "paper_c0.5", "paper_c0.1", "posterior"}) {
     if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; })) methods.push_back(m);

@@ -1,9 +1,30 @@
 #include "learner/controlled_prior.hpp"
 
+#include <cmath>
+
 #include "learner/input_error.hpp"
 
 namespace hbirl {
 namespace {
+
+// The steps' slices of the observations, and their multiplicities, are what the counts
+// index by: check them before reading.
+void check_layout(const ObservedTrajectory& o) {
+  const std::vector<int>& begin = o.step_begin;
+  if (begin.empty() || begin.front() != 0) throw InputError("observations.step_begin", "must start at 0");
+  for (size_t t = 1; t < begin.size(); ++t) {
+    if (begin[t] < begin[t - 1]) throw InputError("observations.step_begin", "decreases");
+  }
+  if (static_cast<size_t>(begin.back()) != o.symbols.size()) {
+    throw InputError("observations.step_begin", "does not end at the number of observations");
+  }
+  if (!o.weights.empty() && o.weights.size() != o.symbols.size()) {
+    throw InputError("observations.weights", "not one per observation");
+  }
+  for (double w : o.weights) {
+    if (!std::isfinite(w) || w < 0.0) throw InputError("observations.weights", "must be finite and non-negative");
+  }
+}
 
 void check_controlled_run(const Mdp& mdp, const std::vector<Trajectory>& truth,
                           const std::vector<ObservedTrajectory>& observed, int num_symbols) {
@@ -16,6 +37,7 @@ void check_controlled_run(const Mdp& mdp, const std::vector<Trajectory>& truth,
         throw InputError("ground_truth", "state or action outside the domain");
       }
     }
+    check_layout(observed[i]);
     for (int w : observed[i].symbols) {
       if (w < 0 || w >= num_symbols) throw InputError("observations.symbols", "symbol outside the domain's");
     }

@@ -40,7 +40,8 @@ struct GridworldExperimentOptions {
   int per_step = 40;
   // EM schedule. One alpha refinement per E-step, interleaved with the M-steps (same
   // fixed point as refining to convergence inside every E-step, ~4x fewer passes), and
-  // tolerances that leave the greedy policy -- hence ILE -- unchanged (docs/results).
+  // tolerances that left the greedy policy -- hence ILE -- unchanged when they were chosen
+  // (not re-measured with the exact posterior step: docs/MODEL.md).
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
   double c = 0.5;                  // the paper's step size (Algorithm 1; update paper only)
   int max_alpha_iterations = 1;    // alpha refinements per E-step (see ObservationEStepOptions)

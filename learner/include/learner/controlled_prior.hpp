@@ -24,8 +24,9 @@ struct ControlledPriorOptions {
 // alpha(pair(s, a), w) = pseudo_count + the observations of symbol w (with their
 // multiplicities) at the controlled steps in (s, a) [/ visits of (s, a)]. `truth[i]` and
 // `observed[i]` are one episode. Throws InputError naming "ground_truth" for a trajectory
-// count or length that differs, or a state or action outside the MDP, and
-// "observations.symbols" for a symbol outside [0, num_symbols).
+// count or length that differs, or a state or action outside the MDP,
+// "observations.symbols" for a symbol outside [0, num_symbols), and
+// "observations.step_begin" / "observations.weights" for a malformed layout.
 Eigen::MatrixXd controlled_run_prior(const Mdp& mdp, const std::vector<Trajectory>& truth,
                                      const std::vector<ObservedTrajectory>& observed, int num_symbols,
                                      const ControlledPriorOptions& options = {});

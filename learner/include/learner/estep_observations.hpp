@@ -3,10 +3,10 @@
 // posterior over each trajectory with a posterior engine (exact forward-backward by
 // default, or the paper's MCMC), and refine the observation model inside:
 //   repeat: statistics = sum over trajectories of engine(policy, O)
-//           alpha = c * target + (1 - c) * alpha;  O = Dirichlet mean of alpha
-//   until O stops changing (alpha_tolerance, weighted by how much the data see each row)
-// with the target prior(s) + alpha_dot (the posterior update, the default) or alpha_dot
-// (the paper's); observation_model.hpp has both. The posterior update's s is chosen
+//           alpha = prior(s) + alpha_dot  (the posterior update, the default), or
+//           alpha = c * alpha_dot + (1 - c) * alpha  (the paper's);  O = Dirichlet mean of alpha
+//   until O stops changing (alpha_tolerance, weighted by how much the data see each row);
+// observation_model.hpp has both. The posterior update's s is chosen
 // between EM runs (choose_strength, called by HiddenDataEM once EM has converged).
 // The refined alpha is carried to the next EM iteration in the EStepState (warm start);
 // the first call starts from the prior. An E-step call makes at most

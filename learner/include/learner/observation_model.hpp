@@ -4,10 +4,10 @@
 // refines those Dirichlets from the expected source-labelled counts alpha_dot (paper
 // Algorithm 1). docs/MODEL.md ("The observation model") derives both updates:
 //   paper:      alpha_i = c * alpha_dot + (1 - c) * alpha_{i-1}            (fixed point: ML)
-//   posterior:  alpha_i = c * (prior(s) + alpha_dot) + (1 - c) * alpha_{i-1}
-// the second being MAP-EM: its fixed point is the Dirichlet posterior prior(s) + alpha_dot,
-// whose mean O is the maximum a posteriori O under the prior Dir(prior(s) + 1); prior(s)
-// is the subject's alpha weighed by s and the elements' alpha as given.
+//   posterior:  alpha_i = prior(s) + alpha_dot                             (MAP-EM's M-step)
+// the second being the Dirichlet posterior, whose mean O is the maximum a posteriori O
+// under the prior Dir(prior(s) + 1); prior(s) is the subject's alpha weighed by s and the
+// elements' alpha as given. It has no step size, so c never changes its answer.
 #include <vector>
 
 #include "learner/observations.hpp"

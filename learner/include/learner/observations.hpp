@@ -103,8 +103,8 @@ struct ObservationPrior {
   // Learned eta (docs/MODEL.md, "Learned eta"): the source distribution of each context
   // (ObservedTrajectory::contexts; by default each distinct eta) gets a Dirichlet prior
   // centred on its stated eta with eta_strength pseudo-observations, and is refined inside
-  // the E-step like alpha: to the Dirichlet posterior of that prior and the context's
-  // expected source counts. eta_alpha holds the refined parameters, one row per context
+  // the E-step by MAP-EM's exact step, to the Dirichlet posterior of that prior and the
+  // context's expected source counts (whatever `update` is: c never applies to eta). eta_alpha holds the refined parameters, one row per context
   // (set by the E-step).
   // On by default with the posterior update; callers turn it off with the paper's
   // update (the paper's model takes eta as given).
