@@ -144,8 +144,7 @@ struct Cell {
   int n = 0;
   int optimal = 0;
   int near = 0;  // within 5% of the optimal value
-  double ile_sum = 0.0;
-  double ile_sq = 0.0;
+  std::vector<double> ile;  // relative ILE of each run
 };
 
 Cell cell(const std::vector<RandomTaskRun>& runs, const std::string& method, const Group& group) {
@@ -155,8 +154,7 @@ Cell cell(const std::vector<RandomTaskRun>& runs, const std::string& method, con
     ++c.n;
     c.optimal += r.optimal ? 1 : 0;
     c.near += r.ile_relative <= kNearOptimal ? 1 : 0;
-    c.ile_sum += r.ile_relative;
-    c.ile_sq += r.ile_relative * r.ile_relative;
+    c.ile.push_back(r.ile_relative);
   }
   return c;
 }
@@ -372,11 +370,10 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
         continue;
       }
       const auto [lo, hi] = wilson(c.optimal, c.n);
-      const double mean = c.ile_sum / c.n;
-      const double sd = c.n > 1 ? std::sqrt(std::max(0.0, (c.ile_sq - c.n * mean * mean) / (c.n - 1))) : 0.0;
+      const SummaryRow ile = mean_and_ci(c.ile);
       char buf[160];
       std::snprintf(buf, sizeof buf, " **%.1f%%** [%.1f, %.1f]<br>ILE %.3f ± %.3f |", 100.0 * c.optimal / c.n, 100.0 * lo,
-                    100.0 * hi, mean, 1.96 * sd / std::sqrt(static_cast<double>(c.n)));
+                    100.0 * hi, ile.mean, ile.ci95);
       out << buf;
     }
     out << "\n";

@@ -15,6 +15,23 @@
 
 namespace hbirl {
 
+SummaryRow mean_and_ci(const std::vector<double>& values) {
+  SummaryRow row;
+  row.n = static_cast<int>(values.size());
+  if (row.n == 0) return row;
+  double sum = 0.0;
+  for (double x : values) sum += x;
+  row.mean = sum / row.n;
+  double ss = 0.0;
+  for (double x : values) ss += (x - row.mean) * (x - row.mean);
+  row.sd = row.n > 1 ? std::sqrt(ss / (row.n - 1)) : 0.0;
+  if (row.n > 1) {
+    const boost::math::students_t t(row.n - 1);
+    row.ci95 = boost::math::quantile(t, 0.975) * row.sd / std::sqrt(static_cast<double>(row.n));
+  }
+  return row;
+}
+
 std::vector<SummaryRow> summarise(const std::vector<std::string>& methods, const std::vector<int>& xs,
                                   const std::vector<double>& values) {
   std::vector<std::string> order;
@@ -27,20 +44,9 @@ std::vector<SummaryRow> summarise(const std::vector<std::string>& methods, const
   for (const auto& method : order) {
     for (const auto& [key, v] : groups) {
       if (key.first != method) continue;
-      SummaryRow row;
+      SummaryRow row = mean_and_ci(v);
       row.method = method;
       row.x = key.second;
-      row.n = static_cast<int>(v.size());
-      double sum = 0.0;
-      for (double x : v) sum += x;
-      row.mean = sum / row.n;
-      double ss = 0.0;
-      for (double x : v) ss += (x - row.mean) * (x - row.mean);
-      row.sd = row.n > 1 ? std::sqrt(ss / (row.n - 1)) : 0.0;
-      if (row.n > 1) {
-        const boost::math::students_t t(row.n - 1);
-        row.ci95 = boost::math::quantile(t, 0.975) * row.sd / std::sqrt(static_cast<double>(row.n));
-      }
       rows.push_back(row);
     }
   }

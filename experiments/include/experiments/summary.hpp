@@ -15,6 +15,9 @@ struct SummaryRow {
   double ci95 = 0.0;  // half-width: t_{0.975, n-1} * sd / sqrt(n)
 };
 
+// The mean, standard deviation and 95% t-interval of `values` (method and x left empty).
+SummaryRow mean_and_ci(const std::vector<double>& values);
+
 // values[i] belongs to (methods[i], xs[i]); rows come out ordered by method (first
 // appearance) then x.
 std::vector<SummaryRow> summarise(const std::vector<std::string>& methods, const std::vector<int>& xs,
