@@ -60,7 +60,7 @@ void BM_EStepPassOverBus(benchmark::State& state) {
     buses.push_back(std::make_unique<MemoryBus>(hub));
     counters.push_back(std::make_unique<Counters>());
     counters.back()->quiet = true;
-    workers.push_back(std::make_unique<SamplerWorker>(*buses.back(), d.task.mdp, "sampler-" + std::to_string(w), *counters.back()));
+    workers.push_back(std::make_unique<SamplerWorker>(*buses.back(), "sampler-" + std::to_string(w), *counters.back()));
   }
   for (int w = 0; w < n; ++w) {
     threads.emplace_back([&, w] {
@@ -70,7 +70,7 @@ void BM_EStepPassOverBus(benchmark::State& state) {
   MemoryBus bus(hub);
   Counters c;
   c.quiet = true;
-  auto executor = std::make_shared<BusBlockExecutor>(bus, d.observed, c);
+  auto executor = std::make_shared<BusBlockExecutor>(bus, d.task.mdp, "gridworld", d.observed, c);
   if (executor->wait_for_workers(n, 10000) != n) state.SkipWithError("workers did not come up");
   ObservationEStepOptions options;
   options.executor = executor;

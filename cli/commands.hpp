@@ -27,6 +27,7 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 #include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
 #include "problem/problem_file.hpp"
+#include "sim_driver/domain.hpp"
 
 namespace hbirl::cli {
 // Read a problem file; warnings go to stderr, errors are rethrown as InputError whose
@@ -44,4 +45,13 @@ void add_engine_options(CLI::App* cmd, EngineArgs& args);
 // --alpha-update posterior|paper: how the observation model is refined (observation_model.hpp).
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update);
 EngineFactory engine_factory(const EngineArgs& args);
+
+// --domain SPEC and --size N: a domain from the registry (sim_driver/domain.hpp).
+struct DomainArgs {
+  std::string spec;
+  DomainOptions options;
+};
+void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what);
+// The domain, warnings to stderr; nullptr when no --domain was given.
+std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args);
 }  // namespace hbirl::cli

@@ -82,3 +82,22 @@ CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
 }
 
 }  // namespace hbirl::cli
+
+namespace hbirl::cli {
+
+void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what) {
+  cmd->add_option("--domain", args.spec, what);
+  cmd->add_option("--size", args.options.gridworld_size, "With --domain gridworld: cells a side")
+      ->check(CLI::Range(2, 200))
+      ->capture_default_str();
+}
+
+std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args) {
+  if (args.spec.empty()) return nullptr;
+  std::vector<std::string> warnings;
+  std::shared_ptr<const Domain> domain = open_domain(args.spec, args.options, &warnings);
+  warn_all(args.spec, warnings);
+  return domain;
+}
+
+}  // namespace hbirl::cli

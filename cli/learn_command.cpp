@@ -10,7 +10,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "problem/json_format.hpp"
-#include "services/pipeline.hpp"
+#include "services/optimiser.hpp"
 
 namespace hbirl::cli {
 
@@ -19,6 +19,7 @@ namespace {
 struct LearnArgs {
   std::string problem;
   std::string log;
+  DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
   std::string from = "observations";
   std::string optimizer = "lbfgs";
   double l2 = 0.0;
@@ -77,17 +78,18 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
 }
 
 // Offline from a recorded run of the service set: the same data set and the same learning
-// as hbirl-optimiser, so the same theta (services/pipeline.hpp).
+// as hbirl-optimiser, so the same theta (services/optimiser.hpp).
 int run_learn_from_log(const LearnArgs& args) {
   services::LearningOptions options;
   options.seed = args.seed;
   services::Counters counters;
   counters.service = "hbirl learn";
-  const services::OptimiserResult r = services::learn_from_log(args.log, options, counters);
+  const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
+  const services::OptimiserResult r = services::learn_from_log(args.log, options, counters, domain);
   nlohmann::ordered_json out;
   out["log"] = args.log;
   out["domain"] = r.data.domain;
-  out["feature_names"] = services::domain_names(r.data.domain).features;
+  out["feature_names"] = services::domain_of(r.data, domain)->names(1).features;
   out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
   if (r.data.true_weights) {
     out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
@@ -251,6 +253,8 @@ Command add_learn(CLI::App& app) {
                   "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "
                   "the same data and learning as hbirl-optimiser, so the same theta")
       ->excludes(problem);
+  add_domain_options(cmd, args->domain,
+                     "With --log: the domain file the run was on (built-in domains, onion and gridworld, are named in the log)");
   cmd->add_option("--from", args->from,
                   "What to learn from: 'observations' (HiddenDataEM on the observations) or "
                   "'truth' (MaxCausalEnt on the truth trajectories)")

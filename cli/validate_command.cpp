@@ -1,5 +1,6 @@
-// hbirl validate: check a problem file and summarise it.
+// hbirl validate: check a problem file or a domain file and summarise it.
 #include "commands.hpp"
+#include "problem/domain_file.hpp"
 #include "problem/json_format.hpp"
 
 namespace hbirl::cli {
@@ -50,17 +51,60 @@ int run_validate(const std::string& path) {
   return 0;
 }
 
+// A domain file (README.md "Your own task"): its sizes, names and sensor.
+int run_validate_domain(const std::string& path) {
+  std::vector<std::string> warnings;
+  DomainSpec d;
+  try {
+    d = read_domain_file(path, &warnings);
+  } catch (const InputError& e) {
+    throw in_file(path, e);
+  }
+  warn_all(path, warnings);
+  open_domain(path);  // what the services would open (e.g. a built-in domain's name is refused)
+  int terminal = 0;
+  for (int s = 0; s < d.mdp.num_states; ++s) terminal += d.mdp.is_terminal(s);
+  nlohmann::ordered_json out;
+  out["valid"] = true;
+  out["name"] = d.name;
+  out["num_states"] = d.mdp.num_states;
+  out["num_actions"] = d.mdp.num_actions;
+  out["num_features"] = d.mdp.num_features();
+  out["num_transitions"] = d.mdp.transitions.nonZeros();
+  out["terminal_states"] = terminal;
+  out["discount"] = d.mdp.discount;
+  out["num_symbols"] = d.num_symbols();
+  out["num_sources"] = d.num_sources();
+  out["has_true_weights"] = d.true_weights.has_value();
+  out["has_observation_model"] = d.observation_model.has_value();
+  if (d.sensor) {
+    const SensorSpec& s = *d.sensor;
+    out["sensor"] = {{"observations_per_step", s.observations_per_step}, {"eta", s.eta},
+                     {"occlusion", s.occlusion},                         {"trajectories", s.trajectories},
+                     {"length", s.length},                               {"controlled_trajectories", s.controlled_trajectories}};
+  } else {
+    out["sensor"] = nullptr;
+  }
+  emit(format_json(out), "");
+  return 0;
+}
+
 }  // namespace
 
 Command add_validate(CLI::App& app) {
   auto path = std::make_shared<std::string>();
+  auto domain = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "validate",
-      "Check a problem file and print a JSON summary (sizes, trajectories, steps,\n"
-      "observations, occluded steps). Problems are reported as one line on stderr naming\n"
-      "the field and position, with exit status 2; unknown keys only warn.");
-  cmd->add_option("--problem,-p", *path, "Problem file (JSON, see README.md)")->required();
-  return [path] { return run_validate(*path); };
+      "Check a problem file (or, with --domain, a domain file) and print a JSON summary (sizes,\n"
+      "trajectories, steps, observations, occluded steps; a domain's names and sensor). Problems\n"
+      "are reported as one line on stderr naming the field and position, with exit status 2;\n"
+      "unknown keys only warn.");
+  CLI::Option* problem = cmd->add_option("--problem,-p", *path, "Problem file (JSON, see README.md)");
+  CLI::Option* domain_file = cmd->add_option("--domain", *domain, "Domain file (JSON, README.md \"Your own task\")");
+  problem->excludes(domain_file);
+  cmd->require_option(1);
+  return [path, domain] { return domain->empty() ? run_validate(*path) : run_validate_domain(*domain); };
 }
 
 }  // namespace hbirl::cli

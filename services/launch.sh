@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Starts hbirl's service set -- simulator, perception and labeller (onion), sampler
-# workers, optimiser -- and the dashboard, waits for the optimiser to learn, prints the
+# Starts hbirl's service set -- simulator, perception and labeller (a camera's domain),
+# sampler workers, optimiser -- and the dashboard, waits for the optimiser to learn, prints the
 # learned reward, writes the report and shuts everything down (also on Ctrl-C). Exits
 # non-zero if any service failed.
 #
@@ -16,6 +16,9 @@ repo="$(dirname "$here")"
 build="$repo/build"
 workers=2
 domain=onion
+size=5
+no_sim=0
+sensor=""
 confounders=3
 trajectories=20
 eta=plausible
@@ -40,9 +43,16 @@ usage() {
 usage: services/launch.sh [options]
 
 Runs a demo as separate processes over LCM and prints the learned reward.
-  --domain D             onion (camera frames -> perception -> labeller -> learner) or
-                         gridworld (the paper's 5x5 Gridworld; its simulator publishes the
-                         observations itself) (default $domain)
+  --domain D             onion (camera frames -> perception -> labeller -> learner),
+                         gridworld (the paper's Gridworld; its simulator publishes the
+                         observations itself), or a domain file (README.md "Your own task":
+                         its simulated sensor publishes the observations) (default $domain)
+  --size N               gridworld: cells a side (default $size)
+  --no-sim               no simulator: the learning side only (optimiser, workers, dashboard),
+                         waiting for a sensor that publishes EPISODE, OBSERVATIONS (and
+                         GROUND_TRUTH for controlled episodes) -- e.g. hbirl publish
+  --sensor CMD           with --no-sim: run CMD as the sensor inside the set (its LCM URL is
+                         appended as --url URL), e.g. "build/hbirl publish --problem F"
   --workers N            sampler workers (default $workers)
   --seed S               seed of the run (default $seed)
  onion:
@@ -53,11 +63,11 @@ Runs a demo as separate processes over LCM and prints the learned reward.
   --fps F                camera frames per simulated second (default $fps)
   --max-fps F            pacing of the camera, frames per wall-clock second (default $max_fps;
                          gridworld: steps per second)
- gridworld:
+ gridworld (a domain file's sensor section says these for its run):
   --confounders N        confounding elements |E| (default $confounders)
   --trajectories N       demonstrations (default $trajectories)
-  --eta K                plausible or uniform (default $eta)
- both:
+  --eta K                plausible, uniform or true (default $eta)
+ all:
   --record               record every message with lcm-logger to OUT/run.lcmlog
                          (replay: build/hbirl learn --log OUT/run.lcmlog); on with the dashboard
   --dashboard-port P     serve the live dashboard on http://127.0.0.1:P/ (default $dashboard_port)
@@ -79,6 +89,9 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --workers) workers="$2"; shift 2 ;;
     --domain) domain="$2"; shift 2 ;;
+    --size) size="$2"; shift 2 ;;
+    --no-sim) no_sim=1; shift ;;
+    --sensor) sensor="$2"; shift 2 ;;
     --confounders) confounders="$2"; shift 2 ;;
     --trajectories) trajectories="$2"; shift 2 ;;
     --eta) eta="$2"; shift 2 ;;
@@ -103,13 +116,20 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-case "$domain" in
-  onion|gridworld) ;;
-  *) echo "launch.sh: --domain must be onion or gridworld, not '$domain'" >&2; exit 2 ;;
-esac
 bin="$build/hbirl-services"
 if [ ! -x "$bin" ]; then
   echo "launch.sh: $bin not found: build first (cmake -S . -B build && cmake --build build -j)" >&2
+  exit 2
+fi
+# A domain file by its absolute path (the services may run elsewhere); the simulator
+# says what the domain needs (perception and the labeller for a camera) and checks it.
+if [ -f "$domain" ]; then domain="$(cd "$(dirname "$domain")" && pwd)/$(basename "$domain")"; fi
+domain_args=(--domain "$domain" --size "$size")
+if ! listeners="$("$build/hbirl-sim-driver" "${domain_args[@]}" --print-listeners)"; then
+  exit 2  # the simulator said why, in one line
+fi
+if [ -n "$sensor" ] && [ "$no_sim" = 0 ]; then
+  echo "launch.sh: --sensor needs --no-sim (the simulator is the sensor otherwise)" >&2
   exit 2
 fi
 [ -n "$out" ] || out="$repo/runs/$(date +%Y%m%d-%H%M%S)"
@@ -123,7 +143,7 @@ dashboard_pid=""
 if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
   rm -f "$out/run.lcmlog"  # an earlier run's recording is not this one's
   if [ -x "$build/hbirl-dashboard" ]; then
-    "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" >"$out/logs/dashboard.log" 2>&1 &
+    "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" "${domain_args[@]}" >"$out/logs/dashboard.log" 2>&1 &
     dashboard_pid=$!
     sleep 0.3
     if kill -0 "$dashboard_pid" 2>/dev/null; then
@@ -145,7 +165,7 @@ finish() {
   local status="$1"
   trap 'stop_dashboard; exit 130' INT TERM
   if [ -z "$inner" ] && [ "$report" = 1 ] && [ "$record" = 1 ] && [ -f "$out/run.lcmlog" ] && [ -x "$build/hbirl" ]; then
-    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" >/dev/null 2>"$out/logs/report.log"; then
+    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" "${domain_args[@]}" >/dev/null 2>"$out/logs/report.log"; then
       echo "launch.sh: report: $out/report/index.html"
     else
       echo "launch.sh: the report could not be written (see $out/logs/report.log)" >&2
@@ -220,26 +240,33 @@ if [ "$record" = 1 ]; then
 fi
 for i in $(seq 1 "$workers"); do
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --domain "$domain" --id "sampler-$i" \
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" \
       --kill-self-after-blocks "$kill_worker_after_blocks"
   else
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --domain "$domain" --id "sampler-$i"
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i"  # the MDP comes over the bus
   fi
 done
-if [ "$domain" = onion ]; then
-  start labeller "$build/hbirl-labeller" --url "$url"
-  start perception "$build/hbirl-perception" --url "$url"
+if [ "$no_sim" = 0 ]; then
+  for service in $listeners; do
+    case "$service" in
+      perception|labeller) start "$service" "$build/hbirl-$service" --url "$url" ;;
+    esac
+  done
 fi
-"$build/hbirl-optimiser" --url "$url" --workers "$workers" --out "$out/result.json" >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
+"$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" --out "$out/result.json" \
+  >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
 optimiser=$!
 pids+=("$optimiser")
 names+=(optimiser)
-if [ "$domain" = onion ]; then
-  start sim-driver "$build/hbirl-sim-driver" --url "$url" --domain onion --config "$config" --sorts "$sorts" \
-    --controlled-sorts "$controlled_sorts" --seed "$seed" --fps "$fps" --max-frames-per-second "$max_fps"
+if [ "$no_sim" = 0 ]; then
+  # Each domain's simulator reads the options that concern it.
+  start sim-driver "$build/hbirl-sim-driver" --url "$url" "${domain_args[@]}" --config "$config" --sorts "$sorts" \
+    --controlled-sorts "$controlled_sorts" --fps "$fps" --confounders "$confounders" --trajectories "$trajectories" \
+    --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
+elif [ -n "$sensor" ]; then
+  start sensor bash -c "$sensor --url \"\$0\"" "$url"
 else
-  start sim-driver "$build/hbirl-sim-driver" --url "$url" --domain gridworld --confounders "$confounders" \
-    --trajectories "$trajectories" --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
+  echo "launch.sh: no simulator (--no-sim): waiting for a sensor on $url (hbirl publish --problem F --url '$url')"
 fi
 
 

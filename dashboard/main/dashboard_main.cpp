@@ -35,7 +35,18 @@ int run(int argc, char** argv) {
   app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
   app.add_option("--port", port, "Port to serve on (0: any free one)")->check(CLI::Range(0, 65535))->capture_default_str();
   app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
+  std::string domain_spec;
+  DomainOptions domain_options;
+  app.add_option("--domain", domain_spec,
+                 "The run's domain when it is a domain file (built-in domains, onion and gridworld, are named by the run)");
+  app.add_option("--size", domain_options.gridworld_size, "--domain gridworld: cells a side")->check(CLI::Range(2, 200));
   CLI11_PARSE(app, argc, argv);
+  std::shared_ptr<const Domain> domain;
+  if (!domain_spec.empty()) {
+    std::vector<std::string> warnings;
+    domain = open_domain(domain_spec, domain_options, &warnings);
+    for (const auto& w : warnings) std::fprintf(stderr, "hbirl-dashboard: warning: %s: %s\n", domain_spec.c_str(), w.c_str());
+  }
   if (!url.empty() && !log.empty()) throw InputError("--log", "give --url or --log, not both");
 
   services::install_stop_handlers();
@@ -44,7 +55,7 @@ int run(int argc, char** argv) {
   std::unique_ptr<services::Bus> bus;
   services::Counters counters;
   counters.service = "hbirl-dashboard";
-  dashboard::DashboardState state;
+  dashboard::DashboardState state(domain);
   dashboard::Server server(state, web);
   const int bound = server.bind(host, port);
   std::thread serving([&server] { server.run(); });

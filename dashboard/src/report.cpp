@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "dashboard/state.hpp"
-#include "experiments/summary.hpp"
+#include "plot/gnuplot.hpp"
 #include "learner/input_error.hpp"
 #include "services/log_bus.hpp"
 
@@ -191,12 +191,12 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
 
 }  // namespace
 
-Report write_report(const std::string& log_path, const std::string& out_dir) {
+Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain) {
   services::LogBus bus(log_path);  // throws InputError("bus", ...)
   services::Counters counters;
   counters.service = "hbirl report";
   counters.quiet = true;
-  DashboardState state;
+  DashboardState state(std::move(domain));
   state.subscribe(bus, counters);
   while (bus.handle(0) >= 0) {
   }

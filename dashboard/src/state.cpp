@@ -7,7 +7,6 @@
 
 #include "learner/input_error.hpp"
 #include "services/dataset.hpp"
-#include "services/pipeline.hpp"
 
 namespace hbirl::dashboard {
 
@@ -88,7 +87,9 @@ void DashboardState::subscribe(services::Bus& bus, services::Counters& counters)
 
 void DashboardState::set_domain(const std::string& domain) {
   if (domain.empty() || domain == domain_) return;
-  domain_names(domain, 1);  // throws for an unknown one
+  std::shared_ptr<const Domain> found = given_ && given_->name() == domain ? given_ : builtin_domain(domain);
+  if (!found) throw InputError("episode_marker.domain", "'" + domain + "' is not a built-in domain: start the dashboard with --domain FILE");
+  domain_object_ = std::move(found);
   domain_ = domain;
 }
 
@@ -293,7 +294,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   j["version"] = version_;
   j["domain"] = domain_;
   DomainNames names;
-  if (!domain_.empty()) names = domain_names(domain_, num_sources_);
+  if (domain_object_) names = domain_object_->names(num_sources_);
   j["names"] = {{"states", names.states},     {"actions", names.actions}, {"features", names.features},
                 {"symbols", names.symbols},   {"sources", names.sources}};
   std::vector<std::string> colours;

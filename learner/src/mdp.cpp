@@ -3,9 +3,24 @@
 #include <cmath>
 #include <string>
 
+#include "learner/digest.hpp"
 #include "learner/input_error.hpp"
 
 namespace hbirl {
+
+std::uint64_t dynamics_digest(const Mdp& mdp) {
+  Fnv1a h;
+  h.add(mdp.num_states);
+  h.add(mdp.num_actions);
+  h.add(mdp.discount);
+  h.add(static_cast<std::int64_t>(mdp.transitions.nonZeros()));
+  h.add(mdp.transitions.outerIndexPtr(), static_cast<size_t>(mdp.transitions.outerSize() + 1) * sizeof(int));
+  h.add(mdp.transitions.innerIndexPtr(), static_cast<size_t>(mdp.transitions.nonZeros()) * sizeof(int));
+  h.add(mdp.transitions.valuePtr(), static_cast<size_t>(mdp.transitions.nonZeros()) * sizeof(double));
+  h.add(mdp.start.data(), static_cast<size_t>(mdp.start.size()) * sizeof(double));
+  h.add(mdp.terminal.data(), mdp.terminal.size());
+  return h.value();
+}
 
 namespace {
 constexpr double kSumTolerance = 1e-9;

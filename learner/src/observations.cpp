@@ -4,25 +4,10 @@
 #include <map>
 #include <numeric>
 
+#include "learner/digest.hpp"
+
 namespace hbirl {
 
-namespace {
-class Fnv1a {
- public:
-  void add(const void* data, size_t size) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < size; ++i) hash_ = (hash_ ^ p[i]) * 0x100000001b3ULL;
-  }
-  template <class T>
-  void add(const T& value) {
-    add(&value, sizeof value);
-  }
-  std::uint64_t value() const { return hash_; }
-
- private:
-  std::uint64_t hash_ = 0xcbf29ce484222325ULL;
-};
-}  // namespace
 
 std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories) {
   Fnv1a h;

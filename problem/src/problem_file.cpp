@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "problem/json_node.hpp"
+#include "readers.hpp"
 
 namespace hbirl {
 
@@ -61,6 +62,10 @@ struct Sizes {
   int actions = 0;
   int features = 0;
 };
+
+}  // namespace
+
+namespace detail {
 
 Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
   node.check_keys({"num_states", "num_actions", "num_features", "transitions", "start", "features",
@@ -281,6 +286,47 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   return prior;
 }
 
+Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp) {
+  const size_t k = node.size();
+  if (static_cast<int>(k) != mdp.num_features()) {
+    node.fail("has " + std::to_string(k) + " entries, expected " + std::to_string(mdp.num_features()) + " (mdp.num_features)");
+  }
+  Eigen::VectorXd w(static_cast<Eigen::Index>(k));
+  for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = node[i].as_number();
+  return w;
+}
+
+nlohmann::json parse_json_text(const std::string& text) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    // "[json.exception.parse_error.101] parse error at line 2, column 5: ..." -> drop the tag.
+    std::string what = e.what();
+    const auto tag_end = what.find("] ");
+    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
+    if (e.id == 406) what += " (NaN and infinity are not JSON numbers)";  // number overflow
+    throw InputError("", "malformed JSON: " + what);
+  }
+}
+
+std::string read_text_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError("", "cannot read: it is a directory");
+  errno = 0;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError("", "cannot read: " + std::string(std::strerror(errno ? errno : EIO)));
+  return text;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::read_mdp;
+using detail::read_observation_model;
+
 ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<ObservationPrior>& prior,
                               std::vector<std::string>* warnings) {
   ObservedTrajectory out;
@@ -402,16 +448,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
     }
     problem.demonstration.push_back(std::move(trajectory));
   }
-  if (auto tw = root.find("true_weights")) {
-    const size_t k = tw->size();
-    if (static_cast<int>(k) != problem.mdp.num_features()) {
-      tw->fail("has " + std::to_string(k) + " entries, expected " + std::to_string(problem.mdp.num_features()) +
-               " (mdp.num_features)");
-    }
-    Eigen::VectorXd w(static_cast<Eigen::Index>(k));
-    for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = (*tw)[i].as_number();
-    problem.true_weights = w;
-  }
+  if (auto tw = root.find("true_weights")) problem.true_weights = detail::read_true_weights(*tw, problem.mdp);
   return problem;
 }
 
@@ -429,29 +466,11 @@ std::vector<Trajectory> Problem::truth_trajectories() const {
 }
 
 Problem parse_problem(const std::string& text, std::vector<std::string>* warnings) {
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    // "[json.exception.parse_error.101] parse error at line 2, column 5: ..." -> drop the tag.
-    std::string what = e.what();
-    const auto tag_end = what.find("] ");
-    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
-    if (e.id == 406) what += " (NaN and infinity are not JSON numbers)";  // number overflow
-    throw InputError("", "malformed JSON: " + what);
-  }
-  return parse_document(doc, warnings);
+  return parse_document(detail::parse_json_text(text), warnings);
 }
 
 Problem read_problem_file(const std::string& path, std::vector<std::string>* warnings) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError("", "cannot read: it is a directory");
-  errno = 0;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError("", "cannot read: " + std::string(std::strerror(errno ? errno : EIO)));
-  return parse_problem(text, warnings);
+  return parse_problem(detail::read_text_file(path), warnings);
 }
 
 nlohmann::ordered_json problem_to_json(const Problem& problem) {

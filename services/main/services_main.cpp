@@ -14,10 +14,12 @@
 
 #include "learner/input_error.hpp"
 #include "services/estep_service.hpp"
+#include "services/labeller_service.hpp"
 #include "services/learning.hpp"
-#include "services/pipeline.hpp"
+#include "services/optimiser.hpp"
+#include "services/perception_service.hpp"
 #include "services/process.hpp"
-#include "sim_driver/onion.hpp"
+#include "services/sim_driver.hpp"
 
 namespace hbirl::services {
 namespace {
@@ -47,24 +49,51 @@ int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
   return 0;
 }
 
+// --domain and --size: a domain from the registry (sim_driver/domain.hpp).
+struct DomainArgs {
+  std::string spec;
+  DomainOptions options;
+};
+
+void add_domain_options(CLI::App& app, DomainArgs& d, const std::string& what) {
+  app.add_option("--domain", d.spec, what)->capture_default_str();
+  app.add_option("--size", d.options.gridworld_size, "gridworld: cells a side")->check(CLI::Range(2, 200))->capture_default_str();
+}
+
+std::shared_ptr<const Domain> open_domain_args(const DomainArgs& d) {
+  std::vector<std::string> warnings;
+  std::shared_ptr<const Domain> domain = open_domain(d.spec, d.options, &warnings);
+  for (const auto& w : warnings) std::fprintf(stderr, "hbirl: warning: %s: %s\n", d.spec.c_str(), w.c_str());
+  return domain;
+}
+
 int sim_driver(int argc, char** argv) {
   CLI::App app("hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
                "the subject prior), then the demonstrations, as EPISODE markers and GROUND_TRUTH, and\n"
-               "  onion:     CAMERA frames (PNG) of the onion-sorting scene, for perception and the labeller;\n"
-               "  gridworld: the paper's 5x5 Gridworld, whose simulated sensor publishes OBSERVATIONS with\n"
-               "             their eta itself (no perception or labeller needed).\n"
+               "  onion:       CAMERA frames (PNG) of the onion-sorting scene, for perception and the labeller;\n"
+               "  gridworld:   the paper's Gridworld (--size, default 5x5), whose simulated sensor publishes\n"
+               "               OBSERVATIONS with their eta itself (no perception or labeller needed);\n"
+               "  FILE.json:   a domain file's task, watched by the sensor its \"sensor\" section describes\n"
+               "               (README.md \"Your own task\"), publishing OBSERVATIONS the same way.\n"
                "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
   Common c;
   add_common(app, c);
   SimDriverOptions o;
+  SimulationOptions& sim = o.simulation;
+  DomainArgs d{"onion", {}};
   std::string config = "all";
   std::string eta = "plausible";
   double delay = 10.0;
-  app.add_option("--domain", o.domain, "onion or gridworld")->check(CLI::IsMember({"onion", "gridworld"}))->capture_default_str();
-  app.add_option("--seed", o.seed, "Seed of the run (onion: sorts and scene; gridworld: goal, trajectories, observations)")
+  bool print_listeners = false;
+  add_domain_options(app, d, "onion, gridworld or a domain file");
+  app.add_flag("--print-listeners", print_listeners,
+               "Print the services this domain's run needs listening (perception and labeller for a camera,\n"
+               "the optimiser) and exit");
+  app.add_option("--seed", sim.seed, "Seed of the run (onion: sorts and scene; gridworld: goal, trajectories, observations;\n"
+                                     "a domain file: trajectories, observations)")
       ->capture_default_str();
   app.add_option("--max-frames-per-second", o.max_frames_per_second,
-                 "Pacing in wall-clock frames (gridworld: steps) per second (0: none)")
+                 "Pacing in wall-clock frames (a sensor: steps) per second (0: none)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   app.add_option("--start-delay", delay, "At most this many seconds to wait for the services downstream to be listening")
@@ -72,35 +101,40 @@ int sim_driver(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--config,-c", config, "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
-  app.add_option("--controlled-sorts", o.controlled_sorts, "onion: sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--sorts", o.sorts, "onion: demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--width", o.scene.width, "onion: frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
-  app.add_option("--fps", o.scene.fps, "onion: frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
-  app.add_option("--confounders", o.gridworld.confounders, "gridworld: confounding elements |E|")
+  app.add_option("--controlled-sorts", sim.controlled_sorts, "onion: sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--sorts", sim.sorts, "onion: demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
+  app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  app.add_option("--confounders", sim.confounders, "gridworld: confounding elements |E|")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  app.add_option("--per-step", o.gridworld.per_step, "gridworld: observations per step")->check(CLI::Range(0, 100000))->capture_default_str();
-  app.add_option("--trajectories", o.gridworld.trajectories, "gridworld: demonstrations")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--controlled-trajectories", o.gridworld.controlled_trajectories, "gridworld: trajectories of the controlled run")
+  app.add_option("--per-step", sim.per_step, "gridworld: observations per step")->check(CLI::Range(0, 100000))->capture_default_str();
+  app.add_option("--trajectories", sim.trajectories, "gridworld: demonstrations")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--controlled-trajectories", sim.controlled_trajectories, "gridworld: trajectories of the controlled run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  app.add_option("--length", o.gridworld.length, "gridworld: steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--eta", eta, "gridworld: the observations' eta, plausible or uniform")
-      ->check(CLI::IsMember({"plausible", "uniform"}))
+  app.add_option("--length", sim.length, "gridworld: steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--eta", eta, "gridworld: the observations' eta, plausible, uniform or true")
+      ->check(CLI::IsMember({"plausible", "uniform", "true"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const onion::SceneConfig elements = onion::SceneConfig::parse(config, "--config");
-  o.scene.blue_shirt_person = elements.blue_shirt_person;
-  o.scene.other_onions = elements.other_onions;
-  o.scene.foreground_person = elements.foreground_person;
-  o.scene.mirror = elements.mirror;
-  o.gridworld.eta = eta == "uniform" ? EtaKind::kUniform : EtaKind::kPlausible;
+  sim.scene.blue_shirt_person = elements.blue_shirt_person;
+  sim.scene.other_onions = elements.other_onions;
+  sim.scene.foreground_person = elements.foreground_person;
+  sim.scene.mirror = elements.mirror;
+  sim.eta = eta == "uniform" ? EtaKind::kUniform : eta == "true" ? EtaKind::kTrue : EtaKind::kPlausible;
+  const std::shared_ptr<const Domain> domain = open_domain_args(d);
+  if (print_listeners) {
+    std::printf("%s\n", domain->has_camera() ? "perception labeller optimiser" : "optimiser");
+    return 0;
+  }
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sim_driver";
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
-  SimDriver driver(*bus, o, counters);
+  SimDriver driver(*bus, *domain, o, counters);
   // Wait until the services downstream listen (their first heartbeat), at most --start-delay.
   std::set<std::string> waiting;
   for (const auto& l : driver.listeners()) waiting.insert(l);
@@ -175,24 +209,20 @@ int labeller(int argc, char** argv) {
 }
 
 int sampler(int argc, char** argv) {
-  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's trajectories (TRAJECTORY) and\n"
-               "answers ESTEP_REQUEST for the blocks assigned to it (ESTEP_RESULT). Run any number, on any\n"
-               "number of machines (same LCM URL with ttl=1).");
+  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and trajectories\n"
+               "(TRAJECTORY) and answers ESTEP_REQUEST for the blocks assigned to it (ESTEP_RESULT). It needs\n"
+               "no domain: one worker serves any run. Run any number, on any number of machines (same LCM\n"
+               "URL with ttl=1).");
   Common c;
   add_common(app, c);
-  std::string domain = "onion";
   std::int64_t die_after = -1;
-  app.add_option("--domain", domain, "Domain of the trajectories: onion or gridworld")
-      ->check(CLI::IsMember({"onion", "gridworld"}))
-      ->capture_default_str();
   app.add_option("--kill-self-after-blocks", die_after,
                  "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
   CLI11_PARSE(app, argc, argv);
-  const Mdp mdp = domain_mdp(domain);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sampler";
-  SamplerWorker worker(*bus, mdp, c.id.empty() ? default_id("sampler") : c.id, counters);
+  SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters);
   while (!stop_requested()) {
     if (worker.handle(100) < 0) break;
     if (die_after >= 0 && worker.blocks_computed() >= die_after) {
@@ -216,6 +246,9 @@ int optimiser(int argc, char** argv) {
   add_common(app, c);
   OptimiserOptions o;
   std::string out;
+  DomainArgs d;
+  add_domain_options(app, d, "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
+                              "the EPISODE markers name; a domain file must be given here)");
   app.add_option("--workers", o.workers, "Sampler workers to wait for before learning (0: compute here)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
@@ -244,6 +277,7 @@ int optimiser(int argc, char** argv) {
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
   parse_alpha_update(update, o.learning.update);
+  if (!d.spec.empty()) o.domain = open_domain_args(d);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "optimiser";
@@ -262,7 +296,7 @@ int optimiser(int argc, char** argv) {
   nlohmann::json j;
   j["theta"] = std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
   j["domain"] = result->data.domain;
-  j["feature_names"] = domain_names(result->data.domain).features;
+  j["feature_names"] = domain_of(result->data, o.domain)->names(1).features;
   if (const auto& w = result->data.true_weights) j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
   if (result->learned.ile) j["ile"] = *result->learned.ile;
   j["log_likelihood"] = result->learned.log_likelihood;

@@ -6,9 +6,9 @@
 #include <random>
 #include <stdexcept>
 
+#include "learner/digest.hpp"
 #include "learner/input_error.hpp"
 #include "learner/soft_value_iteration.hpp"
-#include "sim_driver/gridworld_observations.hpp"
 
 namespace hbirl::services {
 
@@ -22,33 +22,42 @@ bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
 std::uint64_t numerics_fingerprint() {
   static const std::uint64_t fingerprint = [] {
-    Rng rng(20211);
-    const GridworldTask task = make_gridworld_task({}, 3, 6, rng);
-    const Eigen::MatrixXd subject = gridworld_subject_observation_model(5, 1.0);
-    GridworldObservationOptions observe;
-    observe.confounders = 2;
-    observe.per_step = 5;
-    const std::vector<ObservedTrajectory> observed =
-        observe_gridworld(task.mdp, task.trajectories, subject, random_confounder_observation_model(2, rng), observe, rng).trajectories;
+    // Four states in a ring, two actions (stay, or move on with probability 0.7), two
+    // symbols, one confounding element, two short observed trajectories.
+    std::vector<TransitionEntry> transitions;
+    for (int s = 0; s < 4; ++s) {
+      transitions.push_back({s, 0, s, 1.0});
+      transitions.push_back({s, 1, (s + 1) % 4, 0.7});
+      transitions.push_back({s, 1, s, 0.3});
+    }
+    const Mdp mdp = make_mdp(4, 2, 1, transitions, {{1, 1, 0, 1.0}, {3, 0, 0, 0.5}}, Eigen::Vector4d(0.4, 0.3, 0.2, 0.1), {}, 0.9);
+    std::vector<ObservedTrajectory> observed(2);
+    const int symbols[2][6] = {{0, 1, 1, 0, 1, 0}, {1, 1, 0, 0, 0, 1}};
+    for (int i = 0; i < 2; ++i) {
+      observed[static_cast<size_t>(i)].eta.resize(6, 2);
+      for (int k = 0; k < 6; ++k) {
+        observed[static_cast<size_t>(i)].symbols.push_back(symbols[i][k]);
+        observed[static_cast<size_t>(i)].eta.row(k) << 0.3 + 0.1 * k, 0.7 - 0.1 * k;
+        if (k % 2 == 1) observed[static_cast<size_t>(i)].step_begin.push_back(k + 1);
+      }
+    }
     ObservationPrior prior;
-    prior.num_symbols = 4;
-    prior.num_confounders = 2;
-    prior.subject_alpha = subject.array() * 3.0 + 0.5;
-    prior.confounder_alpha = Eigen::MatrixXd::Ones(2, 4);
-    const ObservationEStep estep(task.mdp, observed, prior, {});
-    const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(Eigen::Vector4d(0.3, -0.2, 0.1, 1.0)));
+    prior.num_symbols = 2;
+    prior.num_confounders = 1;
+    prior.subject_alpha = Eigen::MatrixXd::Constant(8, 2, 0.5);
+    prior.subject_alpha.col(0).array() += Eigen::ArrayXd::LinSpaced(8, 0.1, 3.0);
+    prior.confounder_alpha = Eigen::MatrixXd::Ones(1, 2);
+    const ObservationEStep estep(mdp, observed, prior, {});
+    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Constant(1, 1.3)));
     const EStepStatistics stats = estep.block_statistics(policy, dirichlet_mean(prior), 1, {0}).front();
-    std::uint64_t h = 14695981039346656037ull;  // FNV-1a over the bits of every result
-    const auto mix = [&h](const double* x, Eigen::Index n) {
-      const auto* bytes = reinterpret_cast<const unsigned char*>(x);
-      for (size_t i = 0; i < static_cast<size_t>(n) * sizeof(double); ++i) h = (h ^ bytes[i]) * 1099511628211ull;
-    };
+    Fnv1a h;  // over the bits of every result
+    const auto mix = [&h](const double* x, Eigen::Index n) { h.add(x, static_cast<size_t>(n) * sizeof(double)); };
     mix(policy.log_policy.data(), policy.log_policy.size());
     mix(stats.counts.data(), stats.counts.size());
     mix(stats.alpha_dot.subject.data(), stats.alpha_dot.subject.size());
     mix(stats.alpha_dot.confounders.data(), stats.alpha_dot.confounders.size());
     mix(&stats.log_likelihood, 1);
-    return h;
+    return h.value();
   }();
   return fingerprint;
 }
@@ -111,8 +120,10 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
 
 // ---- the worker ----------------------------------------------------------------------
 
-SamplerWorker::SamplerWorker(Bus& bus, const Mdp& mdp, std::string id, Counters& counters)
-    : bus_(bus), mdp_(mdp), id_(std::move(id)), counters_(counters) {
+SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters)
+    : bus_(bus), id_(std::move(id)), counters_(counters) {
+  subs_.add(bus_, subscribe<hbirl::mdp_t>(bus_, channels::kMdp, counters_,
+                                          [this](const hbirl::mdp_t& m, const Message&) { on_mdp(m); }, 10000));
   // A whole data set may arrive between two handle() calls; only the newest requests matter.
   subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::kTrajectory, counters_,
                                                  [this](const hbirl::trajectory_t& m, const Message&) { on_trajectory(m); }, 100000));
@@ -142,8 +153,19 @@ void SamplerWorker::publish_status(const std::string& state) {
   s.trajectories = static_cast<std::int32_t>(trajectories_.size());
   s.dataset_digest = static_cast<std::int64_t>(digest_);
   s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
+  s.mdp_digest = static_cast<std::int64_t>(mdp_digest_.load());
   s.detail = counters_.last_problem;
   publish(bus_, channels::kStatus, s, counters_);
+}
+
+void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
+  if (static_cast<std::uint64_t>(m.mdp_digest) == mdp_digest_ && mdp_) return;  // have it already
+  std::optional<Mdp> mdp = incoming_mdp_.add(m);
+  if (!mdp) return;
+  estep_.reset();  // it computes on the old MDP
+  mdp_ = std::move(mdp);
+  mdp_digest_ = static_cast<std::uint64_t>(m.mdp_digest);
+  publish_status();  // tell the optimiser at once
 }
 
 void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
@@ -176,8 +198,9 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
 void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   if (!answered_.insert({m.request_id, m.attempt}).second) return;  // a repeat: answered already
   while (answered_.size() > 256) answered_.erase(answered_.begin());
-  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_ || trajectories_.empty()) {
-    publish_status();  // the optimiser sees our digest and sends its data set
+  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_ || trajectories_.empty() ||
+      static_cast<std::uint64_t>(m.mdp_digest) != mdp_digest_ || !mdp_) {
+    publish_status();  // the optimiser sees our digests and sends its MDP and data set
     return;
   }
   std::vector<int> mine;
@@ -185,9 +208,9 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     if (m.assigned_worker[static_cast<size_t>(b)] == id_) mine.push_back(b);
   }
   if (mine.empty()) return;
-  const int P = mdp_.num_pairs(), W = m.num_symbols, E = m.num_confounders;
+  const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
   if (m.engine != "exact") throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
-  if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not this domain's |S||A| = " + std::to_string(P));
+  if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not the MDP's |S||A| = " + std::to_string(P));
   if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
   if (m.num_trajectories != static_cast<int>(trajectories_.size())) throw InputError("estep_request.num_trajectories", "differs");
   if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
@@ -203,7 +226,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     shape.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
     ObservationEStepOptions options;
     options.max_kinds = m.max_kinds;
-    estep_.emplace(mdp_, trajectories_, shape, options);
+    estep_.emplace(*mdp_, trajectories_, shape, options);
     estep_symbols_ = W;
     estep_confounders_ = E;
   }
@@ -256,9 +279,11 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
 
 // ---- the optimiser's executor --------------------------------------------------------
 
-BusBlockExecutor::BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dataset, Counters& counters,
-                                   BusExecutorOptions options)
+BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, std::vector<ObservedTrajectory> dataset,
+                                   Counters& counters, BusExecutorOptions options)
     : bus_(bus),
+      mdp_messages_(to_messages(mdp, domain)),
+      mdp_digest_(dynamics_digest(mdp)),
       dataset_(std::move(dataset)),
       digest_(dataset_digest(dataset_)),
       counters_(counters),
@@ -280,6 +305,7 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dat
 
 void BusBlockExecutor::publish_dataset() const {
   last_dataset_sent_ = Clock::now();
+  for (const auto& m : mdp_messages_) publish(bus_, channels::kMdp, m, counters_);
   const int n = static_cast<int>(dataset_.size());
   for (int i = 0; i < n; ++i) publish(bus_, channels::kTrajectory, to_message(dataset_[static_cast<size_t>(i)], i, n, digest_), counters_);
 }
@@ -293,6 +319,7 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   }
   Worker& w = workers_[m.id];
   w.digest = static_cast<std::uint64_t>(m.dataset_digest);
+  w.mdp_digest = static_cast<std::uint64_t>(m.mdp_digest);
   w.trajectories = m.trajectories;
   w.last_seen = Clock::now();
   const auto numerics = static_cast<std::uint64_t>(m.numerics);
@@ -303,8 +330,8 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
                    (options_.same_numerics_only ? ": it gets no work" : ": theta may differ from a one-process run in the last bits"));
   }
   w.numerics = numerics;
-  // A worker without our data set: send it (not more than twice a second).
-  if (w.digest != digest_ && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
+  // A worker without our MDP or data set: send them (not more than twice a second).
+  if ((w.digest != digest_ || w.mdp_digest != mdp_digest_) && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
 }
 
 void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
@@ -355,7 +382,7 @@ std::vector<std::string> BusBlockExecutor::live_workers() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
   for (const auto& [id, w] : workers_) {
-    if (w.digest == digest_ && !w.suspect && (!options_.same_numerics_only || w.numerics == numerics_) &&
+    if (w.digest == digest_ && w.mdp_digest == mdp_digest_ && !w.suspect && (!options_.same_numerics_only || w.numerics == numerics_) &&
         std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
       out.push_back(id);
     }
@@ -392,6 +419,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   if (dataset_digest(estep.trajectories()) != merged_digest_) {
     throw std::logic_error("BusBlockExecutor: the E-step's trajectories are not the data set the workers have");
   }
+  if (dynamics_digest(estep.mdp()) != mdp_digest_) throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
   if (!estep.options().engine(estep.mdp())->exact()) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
   ++request_id_;
   ++stats_.requests;
@@ -406,6 +434,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   request.utime = 0;
   request.request_id = request_id_;
   request.dataset_digest = static_cast<std::int64_t>(digest_);
+  request.mdp_digest = static_cast<std::int64_t>(mdp_digest_);
   request.num_trajectories = static_cast<std::int32_t>(dataset_.size());
   request.block_size = ObservationEStep::kBlockSize;
   request.num_blocks = blocks_;

@@ -1,69 +1,28 @@
 #include "services/learning.hpp"
 
-#include "learner/controlled_prior.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
-#include "perception/labeller.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/onion.hpp"
 
 namespace hbirl::services {
 
-namespace {
-[[noreturn]] void unknown_domain(const std::string& domain) {
-  throw InputError("domain", "'" + domain + "' is not a domain hbirl's services know (onion, gridworld)");
-}
-}  // namespace
-
-Mdp domain_mdp(const std::string& domain) {
-  if (domain == "onion") return onion::make_onion_mdp();
-  if (domain == "gridworld") return make_gridworld();
-  unknown_domain(domain);
+std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data) {
+  std::optional<Eigen::VectorXd> w = data.true_weights ? data.true_weights : domain.true_weights();
+  if (w && w->size() != domain.mdp().num_features()) return std::nullopt;
+  return w;
 }
 
-DomainNames domain_names(const std::string& domain, int num_sources) {
-  DomainNames n;
-  if (domain == "onion") {
-    n.states = onion::state_names();
-    n.actions = onion::action_names();
-    n.features = onion::feature_names();
-    for (int r = 0; r < perception::kRegionRows; ++r) {
-      for (int c = 0; c < perception::kRegionColumns; ++c) n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
-    }
-    n.symbols.push_back("bright onion");
-    n.symbols.push_back("dark onion");
-    n.sources = {"subject (expert)", "blue-shirt person", "other onions", "foreground person"};
-  } else if (domain == "gridworld") {
-    n.states = gridworld_state_names(GridworldOptions{}.size);
-    n.actions = gridworld_action_names();
-    n.features = gridworld_feature_names();
-    for (const auto& f : n.features) n.symbols.push_back("near " + f);
-    n.sources = {"subject (expert)"};
-  } else {
-    unknown_domain(domain);
-  }
-  for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e) n.sources.push_back("element " + std::to_string(e));
-  return n;
-}
-
-Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
-                              const std::vector<ObservedTrajectory>& observed, int num_symbols) {
-  if (domain == "onion") {
-    if (num_symbols != perception::kNumSymbols) throw InputError("observations.num_symbols", "differs from the domain's");
-    return controlled_run_prior(mdp, truth, observed, num_symbols, onion::controlled_prior_options());
-  }
-  if (domain != "gridworld") unknown_domain(domain);
-  return controlled_run_prior(mdp, truth, observed, num_symbols);
-}
-
-Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOptions& options,
+Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
                            std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
   if (data.observed.empty()) throw InputError("demonstrations", "none received");
-  if (data.controlled_observed.empty()) throw InputError("controlled run", "no controlled episodes: no subject prior");
+  const Mdp& mdp = domain.mdp();
+  if (domain.num_symbols() > 0 && data.num_symbols != domain.num_symbols()) {
+    throw InputError("observations.num_symbols", std::to_string(data.num_symbols) + " differs from the domain's " +
+                                                     std::to_string(domain.num_symbols()));
+  }
   ObservationPrior prior;
   prior.num_symbols = data.num_symbols;
   prior.num_confounders = data.num_sources - 1;
-  prior.subject_alpha = subject_prior(data.domain, mdp, data.controlled_truth, data.controlled_observed, data.num_symbols);
+  prior.subject_alpha = domain.subject_prior(data.controlled_truth, data.controlled_observed, data.num_symbols);
   prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
   use_alpha_update(prior, options.update);
   // The bus carries the stated eta only: remote workers cannot compute with learned eta.
@@ -90,9 +49,7 @@ Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOp
   out.em_iterations = result.restarts[static_cast<size_t>(result.selected_restart)].em_iterations;
   out.trajectories = static_cast<int>(data.observed.size());
   out.digest = dataset_digest(data.observed);
-  if (data.true_weights && data.true_weights->size() == mdp.num_features()) {  // else: no ILE
-    out.ile = inverse_learning_error(mdp, *data.true_weights, out.theta).ile;
-  }
+  if (const auto truth = true_weights_of(domain, data)) out.ile = inverse_learning_error(mdp, *truth, out.theta).ile;
   return out;
 }
 

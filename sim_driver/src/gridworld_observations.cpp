@@ -43,7 +43,8 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
     std::vector<int> truth;
     observed.symbols.reserve(trajectory.size() * static_cast<size_t>(options.per_step));
     for (const StateAction& step : trajectory) {
-      for (int i = 0; i < options.per_step; ++i) {
+      const bool occluded = options.occlusion > 0.0 && rng.uniform() < options.occlusion;
+      for (int i = 0; i < (occluded ? 0 : options.per_step); ++i) {
         const int z = rng.uniform_int(sources);
         observed.symbols.push_back(z == 0 ? rng.categorical(subject_o.row(mdp.pair(step.state, step.action)).transpose())
                                           : rng.categorical(confounder_o.row(z - 1).transpose()));
@@ -70,6 +71,10 @@ void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, 
       switch (kind) {
         case EtaKind::kSubject:
           observed.eta(row, 0) = 1.0;
+          break;
+        case EtaKind::kTrue:
+          observed.eta.row(row).setZero();
+          observed.eta(row, truth[static_cast<size_t>(row)]) = 1.0;
           break;
         case EtaKind::kUniform:
           observed.eta.row(row).setConstant(1.0 / sources);

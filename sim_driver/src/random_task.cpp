@@ -282,6 +282,7 @@ const char* eta_kind_name(EtaKind kind) {
     case EtaKind::kUniform: return "uniform";
     case EtaKind::kPlausible: return "plausible";
     case EtaKind::kSubject: return "subject";
+    case EtaKind::kTrue: return "true";
   }
   return "?";
 }

@@ -6,23 +6,24 @@
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
+#include "services/channels.hpp"
 #include "services/memory_bus.hpp"
-#include "services/pipeline.hpp"
 
 namespace hbirl::dashboard {
 namespace {
 
 TEST(DashboardNames, OfEachDomain) {
-  const DomainNames onion = domain_names("onion", 4);
+  const DomainNames onion = builtin_domain("onion")->names(4);
   EXPECT_EQ(onion.states.size(), 27u);
   EXPECT_EQ(onion.actions.size(), 6u);
   EXPECT_EQ(onion.symbols.size(), 22u);
   EXPECT_EQ(onion.sources.size(), 4u);
   EXPECT_EQ(onion.symbols[21], "dark onion");
-  const DomainNames grid = domain_names("gridworld", 4);
+  const DomainNames grid = builtin_domain("gridworld")->names(4);
   EXPECT_EQ(grid.states.size(), 25u);
   EXPECT_EQ(grid.sources, (std::vector<std::string>{"subject (expert)", "element 1", "element 2", "element 3"}));
-  EXPECT_THROW(domain_names("chess", 1), InputError);
+  EXPECT_EQ(builtin_domain("chess"), nullptr);
+  EXPECT_EQ(builtin_domain("gridworld:7")->names(1).states.size(), 49u);
 }
 
 // A camera frame, its detections and its observations (in that order, as perception and

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "learner/input_error.hpp"
+
 #include <atomic>
 #include <thread>
 
@@ -75,12 +77,12 @@ void expect_identical(const LearnResult& a, const LearnResult& b) {
 }
 
 WorkerThread::WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after)
-    : testing::WorkerThread(std::move(hub), task().task.mdp, id, die_after) {}
+    : testing::WorkerThread(std::move(hub), id, die_after) {}
 
 struct Optimiser {
   explicit Optimiser(std::shared_ptr<MemoryHub> hub, BusExecutorOptions options = {})
       : bus(std::move(hub)), counters(quiet("optimiser")),
-        executor(std::make_shared<BusBlockExecutor>(bus, task().observed, counters, options)) {}
+        executor(std::make_shared<BusBlockExecutor>(bus, task().task.mdp, "gridworld", task().observed, counters, options)) {}
   MemoryBus bus;
   Counters counters;
   std::shared_ptr<BusBlockExecutor> executor;
@@ -103,6 +105,66 @@ TEST(EStepService, TrajectoriesRoundTrip) {
 
 // The learned theta is bit-identical to learning without the bus, with 1, 2 and 4
 // workers: every block is computed by the same code and summed in block order.
+// The MDP goes over the bus in chunks and comes back identical; a chunk that does not
+// fit, a digest that does not match or dynamics that are not an MDP are refused naming
+// the field, and the assembler takes the next MDP afterwards.
+TEST(EStepService, MdpRoundTripsInChunksAndBadOnesAreRefused) {
+  const Mdp& mdp = task().task.mdp;
+  const std::vector<hbirl::mdp_t> chunks = to_messages(mdp, "gridworld", 100);
+  ASSERT_EQ(chunks.size(), static_cast<size_t>((mdp.transitions.nonZeros() + 99) / 100));
+  MdpAssembler assembler;
+  std::optional<Mdp> got;
+  for (auto it = chunks.rbegin(); it != chunks.rend(); ++it) {  // any order, repeats ignored
+    ASSERT_FALSE(got.has_value());
+    got = assembler.add(*it);
+    if (!got && it != chunks.rbegin()) {
+      EXPECT_FALSE(assembler.add(*it).has_value());
+    }
+  }
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(dynamics_digest(*got), dynamics_digest(mdp));
+  EXPECT_TRUE(got->transitions.isApprox(mdp.transitions, 0.0));
+  EXPECT_EQ(got->start, mdp.start);
+  const auto refused = [](std::vector<hbirl::mdp_t> messages, const std::string& field) {
+    MdpAssembler a;
+    try {
+      for (const auto& m : messages) a.add(m);
+      ADD_FAILURE() << field << ": accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), field) << e.what();
+    }
+  };
+  auto bad = chunks;
+  bad[0].num_states = -3;
+  refused(bad, "mdp.num_states");
+  bad = chunks;
+  bad[1].chunk = 99;
+  refused(bad, "mdp.chunk");
+  bad = chunks;
+  bad[1].next_state[0] = 25;
+  refused(bad, "mdp.transition[0]");
+  bad = chunks;
+  bad[0].probability[0] = std::nan("");
+  refused(bad, "mdp.transition[0]");
+  bad = chunks;
+  bad[0].probability[0] *= 0.5;  // its row no longer sums to 1
+  refused(bad, "mdp.transitions");
+  bad = chunks;
+  for (auto& m : bad) m.mdp_digest ^= 1;
+  refused(bad, "mdp.mdp_digest");
+  bad = chunks;
+  bad[0].num_start = 2;
+  refused(bad, "mdp.num_start");
+  // After a refusal, a good MDP is taken.
+  MdpAssembler again;
+  hbirl::mdp_t broken = chunks[0];
+  broken.next_state[0] = -1;
+  EXPECT_THROW(again.add(broken), InputError);
+  std::optional<Mdp> second;
+  for (const auto& m : chunks) second = again.add(m);
+  EXPECT_TRUE(second.has_value());
+}
+
 TEST(EStepService, SameThetaWithOneTwoOrFourWorkers) {
   for (int n : {1, 2, 4}) {
     auto hub = std::make_shared<MemoryHub>();

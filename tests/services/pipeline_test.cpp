@@ -1,4 +1,7 @@
-#include "services/pipeline.hpp"
+#include "services/labeller_service.hpp"
+#include "services/optimiser.hpp"
+#include "services/perception_service.hpp"
+#include "services/sim_driver.hpp"
 
 #include <gtest/gtest.h>
 
@@ -27,10 +30,10 @@ using testing::WorkerThread;
 
 SimDriverOptions small_run() {
   SimDriverOptions o;
-  o.scene.fps = 5;  // 10 frames per step: a short run
-  o.controlled_sorts = 6;
-  o.sorts = 4;
-  o.seed = 3;
+  o.simulation.scene.fps = 5;  // 10 frames per step: a short run
+  o.simulation.controlled_sorts = 6;
+  o.simulation.sorts = 4;
+  o.simulation.seed = 3;
   o.max_frames_per_second = 0;
   return o;
 }
@@ -38,11 +41,11 @@ SimDriverOptions small_run() {
 // The simulator publishes the run once the optimiser listens, then serves FRAME_REQUEST
 // until the optimiser is done; returns what the optimiser learned (and how many frames
 // the simulator sent again).
-std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const SimDriverOptions& run,
+std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const Domain& domain, const SimDriverOptions& run,
                                                     int resend_after_ms, std::int64_t* resent = nullptr) {
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
-  SimDriver driver(sim_bus, run, sim_counters);
+  SimDriver driver(sim_bus, domain, run, sim_counters);
   std::atomic<bool> done{false};
   std::promise<void> listening;
   std::thread sim([&] {
@@ -90,13 +93,13 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
     });
     ServiceThread<PerceptionService> perception(hub, "perception");
     ServiceThread<LabellerService> labeller(hub, "labeller");
-    WorkerThread w1(hub, mdp, "sampler-1"), w2(hub, mdp, "sampler-2");
+    WorkerThread w1(hub, "sampler-1"), w2(hub, "sampler-2");
     MemoryBus sim_bus(hub);
     Counters sim_counters = quiet("sim_driver");
     std::promise<void> listening;
     std::thread sim([&] {
       listening.get_future().wait();  // the optimiser must hear the run from its first message
-      run_sim_driver(sim_bus, run, sim_counters, nullptr);
+      run_sim_driver(sim_bus, *builtin_domain("onion"), run, sim_counters, nullptr);
     });
     MemoryBus opt_bus(hub);
     Counters opt_counters = quiet("optimiser");
@@ -119,16 +122,16 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   // Independent truth for the data: the same sorts rendered, perceived and labelled in
   // one process, without the bus, give the same observations bit for bit.
   onion::SceneConfig controlled = onion::SceneConfig::controlled();
-  controlled.fps = run.scene.fps;
+  controlled.fps = run.simulation.scene.fps;
   onion::DemonstrationOptions controlled_sorts;
-  controlled_sorts.sorts = run.controlled_sorts;
-  const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.seed + 1);
+  controlled_sorts.sorts = run.simulation.controlled_sorts;
+  const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.simulation.seed + 1);
   double end = 0.0;
-  for (const auto& t : c.truth) end += static_cast<double>(t.size()) * run.scene.step_seconds;
+  for (const auto& t : c.truth) end += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
   onion::DemonstrationOptions demo_sorts;
-  demo_sorts.sorts = run.sorts;
+  demo_sorts.sorts = run.simulation.sorts;
   demo_sorts.start_time = end;
-  const onion::OnionDemonstration d = onion::demonstrate(mdp, run.scene, demo_sorts, run.seed);
+  const onion::OnionDemonstration d = onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed);
   EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(d.observed));
   EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed));
   EXPECT_EQ(live->data.truth, d.truth);
@@ -139,7 +142,7 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   Dataset same = live->data;
   same.observed = d.observed;
   same.controlled_observed = c.observed;
-  const Learned local = learn_from_dataset(mdp, same, LearningOptions{});
+  const Learned local = learn_from_dataset(*builtin_domain("onion"), same, LearningOptions{});
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
   // The recorded log replays to the same data and the same theta.
   Counters replay_counters = quiet("replay");
@@ -164,22 +167,22 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   ServiceThread<PerceptionService> perception(hub, "perception");
   ServiceThread<LabellerService> labeller(hub, "labeller");
   std::int64_t resent = 0;
-  const auto live = run_serving_requests(hub, run, 200, &resent);
+  const auto live = run_serving_requests(hub, *builtin_domain("onion"), run, 200, &resent);
   ASSERT_TRUE(live.has_value());
   EXPECT_GT(hub->dropped(), 0);
   EXPECT_GT(live->frame_requests, 0);
   EXPECT_GT(resent, 0);
   EXPECT_EQ(live->missing_frames, 0);
   onion::DemonstrationOptions demo_sorts;
-  demo_sorts.sorts = run.sorts;
+  demo_sorts.sorts = run.simulation.sorts;
   demo_sorts.start_time = 0.0;
   onion::SceneConfig controlled = onion::SceneConfig::controlled();
-  controlled.fps = run.scene.fps;
+  controlled.fps = run.simulation.scene.fps;
   onion::DemonstrationOptions controlled_sorts;
-  controlled_sorts.sorts = run.controlled_sorts;
-  const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.seed + 1);
-  for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.scene.step_seconds;
-  EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.scene, demo_sorts, run.seed).observed));
+  controlled_sorts.sorts = run.simulation.controlled_sorts;
+  const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.simulation.seed + 1);
+  for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
+  EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed).observed));
   EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed))
       << live->data.controlled_observed.size() << " controlled episodes (" << live->data.skipped_controlled << " left out) vs "
       << c.observed.size();
@@ -187,11 +190,10 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
 
 SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int controlled) {
   SimDriverOptions run;
-  run.domain = "gridworld";
-  run.seed = seed;
+  run.simulation.seed = seed;
   run.max_frames_per_second = 0;
-  run.gridworld.trajectories = trajectories;
-  run.gridworld.controlled_trajectories = controlled;
+  run.simulation.trajectories = trajectories;
+  run.simulation.controlled_trajectories = controlled;
   return run;
 }
 
@@ -201,13 +203,13 @@ SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int control
 // learning on the same data in one process (same bits), and against the true goal.
 TEST(Pipeline, GridworldFromSimulatorToReward) {
   SimDriverOptions run = gridworld_run(5, 20, 10);
-  run.gridworld.confounders = 3;
-  const Mdp mdp = domain_mdp("gridworld");
+  run.simulation.confounders = 3;
+  const Mdp mdp = builtin_domain("gridworld")->mdp();
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread w1(hub, mdp, "sampler-1"), w2(hub, mdp, "sampler-2");
+  WorkerThread w1(hub, "sampler-1"), w2(hub, "sampler-2");
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
-  SimDriver driver(sim_bus, run, sim_counters);
+  SimDriver driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters);
   EXPECT_EQ(driver.listeners(), std::vector<std::string>{"optimiser"});
   std::promise<void> listening;
   std::thread sim([&] {
@@ -243,7 +245,7 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   ASSERT_TRUE(live->data.true_weights.has_value());
   EXPECT_EQ(live->data.true_weights->sum(), 1.0);  // one goal corner
   // Same bits as learning in one process; the goal corner is the learned reward's best.
-  const Learned local = learn_from_dataset(mdp, live->data, LearningOptions{});
+  const Learned local = learn_from_dataset(*builtin_domain("gridworld"), live->data, LearningOptions{});
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
   Eigen::Index goal = 0, best = 0;
   live->data.true_weights->maxCoeff(&goal);
@@ -253,11 +255,48 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   EXPECT_LT(*live->learned.ile, 0.5) << "theta " << live->learned.theta.transpose();
 }
 
+// Any size of Gridworld is a domain (--domain gridworld --size 10): the simulator, the
+// markers (named gridworld:10), the workers (sent the 100-state MDP over the bus) and the
+// optimiser agree on it, and the learned reward's best corner is the goal.
+TEST(Pipeline, GridworldOfSizeTenLearnsTheGoal) {
+  DomainOptions ten;
+  ten.gridworld_size = 10;
+  const std::shared_ptr<const Domain> domain = open_domain("gridworld", ten);
+  SimDriverOptions run = gridworld_run(3, 30, 15);
+  run.simulation.length = 25;  // corner to corner is 18 moves
+  run.simulation.confounders = 1;
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, "sampler-1");
+  MemoryBus sim_bus(hub);
+  Counters sim_counters = quiet("sim_driver");
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    run_sim_driver(sim_bus, *domain, run, sim_counters, nullptr);
+  });
+  MemoryBus opt_bus(hub);
+  Counters opt_counters = quiet("optimiser");
+  OptimiserOptions options;
+  options.workers = 1;
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  sim.join();
+  ASSERT_TRUE(live.has_value());
+  EXPECT_EQ(live->data.domain, "gridworld:10");
+  EXPECT_EQ(live->workers, 1);
+  EXPECT_GT(live->estep.remote_blocks, 0);
+  EXPECT_EQ(worker.worker().mdp_digest(), dynamics_digest(domain->mdp()));
+  ASSERT_TRUE(live->data.true_weights.has_value());
+  Eigen::Index goal = 0, best = 0;
+  live->data.true_weights->maxCoeff(&goal);
+  live->learned.theta.maxCoeff(&best);
+  EXPECT_EQ(best, goal) << "theta " << live->learned.theta.transpose();
+}
+
 // Ground truth lost on the way (every 5th message, and again when sent again): the
 // controlled run's prior needs every step's, so the optimiser asks for those steps again
 // and learns exactly what it learns without loss.
 TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
-  const Mdp mdp = domain_mdp("gridworld");
+  const Mdp mdp = builtin_domain("gridworld")->mdp();
   const auto run_with = [&](bool lossy) {
     auto hub = std::make_shared<MemoryHub>();
     if (lossy) {
@@ -267,7 +306,7 @@ TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
         return t.decode(data, 0, size) > 0 && t.seq % 5 == 0;
       });
     }
-    auto result = run_serving_requests(hub, gridworld_run(11, 6, 5), 100);
+    auto result = run_serving_requests(hub, *builtin_domain("gridworld"), gridworld_run(11, 6, 5), 100);
     EXPECT_EQ(hub->dropped() > 0, lossy);
     EXPECT_EQ(result->frame_requests > 0, lossy);
     return *result;
@@ -283,9 +322,9 @@ TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
 // next E-step -- also while waiting for a worker's answer -- publishes no reward and
 // leaves the caller's bus without its subscriptions: the caller may go on handling it.
 TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
-  const Mdp mdp = domain_mdp("gridworld");
+  const Mdp mdp = builtin_domain("gridworld")->mdp();
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread worker(hub, mdp, "sampler-1");
+  WorkerThread worker(hub, "sampler-1");
   MemoryBus sim_bus(hub), watch_bus(hub);
   Counters sim_counters = quiet("sim_driver"), watch_counters = quiet("watch");
   std::atomic<int> progress{0}, rewards{0};
@@ -300,7 +339,7 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   std::promise<void> listening;
   std::thread sim([&] {
     listening.get_future().wait();
-    run_sim_driver(sim_bus, run, sim_counters, nullptr);
+    run_sim_driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
   });
   MemoryBus opt_bus(hub);
   Counters opt_counters = quiet("optimiser");
@@ -318,7 +357,7 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   std::promise<void> again;
   std::thread sim2([&] {
     again.get_future().wait();
-    run_sim_driver(sim_bus, run, sim_counters, nullptr);
+    run_sim_driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
   });
   const auto learned = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { again.set_value(); });
   sim2.join();

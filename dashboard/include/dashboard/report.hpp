@@ -2,8 +2,11 @@
 // `hbirl report --log FILE --out DIR`: the dashboard's views of a finished run as a static
 // page for papers and lab notebooks -- DIR/index.html with the figures as PNG and SVG
 // (gnuplot), the last annotated camera frame, and DIR/state.json (the dashboard's data).
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "sim_driver/domain.hpp"
 
 namespace hbirl::dashboard {
 
@@ -15,6 +18,7 @@ struct Report {
 };
 
 // Throws InputError for a log that cannot be read or a folder that cannot be written.
-Report write_report(const std::string& log_path, const std::string& out_dir);
+// `domain`: the run's domain file, when it is one (else the built-in domain it names).
+Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain = nullptr);
 
 }  // namespace hbirl::dashboard

@@ -9,6 +9,7 @@
 // Thread-safe: the bus thread feeds it, the web server's threads read it.
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -27,16 +28,17 @@
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
 #include "services/bus.hpp"
-#include "services/learning.hpp"
 #include "services/typed.hpp"
+#include "sim_driver/domain.hpp"
 
 namespace hbirl::dashboard {
 
-using services::domain_names;  // the names the page labels things with
-using services::DomainNames;
-
 class DashboardState {
  public:
+  // The page labels things with the names of the domain the EPISODE markers name: `given`
+  // when it is that one (a domain file), else a built-in domain from the registry.
+  explicit DashboardState(std::shared_ptr<const Domain> given = nullptr) : given_(std::move(given)) {}
+
   // Subscribes to every channel it shows; bad messages are counted in `counters`.
   void subscribe(services::Bus& bus, services::Counters& counters);
 
@@ -101,6 +103,8 @@ class DashboardState {
 
   mutable std::mutex mutex_;
   std::int64_t version_ = 0;
+  std::shared_ptr<const Domain> given_;
+  std::shared_ptr<const Domain> domain_object_;  // of domain_
   std::string domain_;
   int num_sources_ = 0;
   // The run.

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "plot/gnuplot.hpp"
+
 namespace hbirl {
 
 struct SummaryRow {
@@ -36,13 +38,5 @@ struct FigureSpec {
 // Writes the gnuplot script and runs gnuplot on it. Returns an empty string on success,
 // else why the figure was not drawn (gnuplot missing or failing); the script is kept.
 std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& spec);
-
-// A gnuplot single-quoted string (a quote inside is written twice).
-std::string gnuplot_quoted(const std::string& s);
-
-// Any figure: writes <stem>.gp -- `data` (e.g. inline data blocks and settings) once, then
-// `plot` drawn to <stem>.png and again to <stem>.svg -- and runs gnuplot on it. Returns
-// as draw_figure does.
-std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width, int height);
 
 }  // namespace hbirl

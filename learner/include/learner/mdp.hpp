@@ -10,6 +10,7 @@
 // timestep, take no action, collect no reward and have value 0.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <vector>
 
 namespace hbirl {
@@ -57,6 +58,10 @@ struct Mdp {
   // [0, 1), non-finite features.
   void validate() const;
 };
+
+// A digest of the dynamics -- sizes, transitions, start, terminal states, discount; not the
+// features -- which is what an E-step computes with (the reward reaches it as a policy).
+std::uint64_t dynamics_digest(const Mdp& mdp);
 
 // Builds an MDP from entry lists (duplicate transition entries are summed).
 // Indices are checked; call validate() for the probabilistic properties.

@@ -12,6 +12,7 @@ inline const std::string kGroundTruth = "GROUND_TRUTH";           // ground_trut
 inline const std::string kDetections = "DETECTIONS";              // detections_t: the blobs of one frame
 inline const std::string kObservations = "OBSERVATIONS";          // observations_t: symbols and eta
 // The learning side.
+inline const std::string kMdp = "MDP";                            // mdp_t: the MDP the samplers compute on
 inline const std::string kTrajectory = "TRAJECTORY";              // trajectory_t: the data set the samplers serve
 inline const std::string kEStepRequest = "ESTEP_REQUEST";         // estep_request_t: one block of an E-step
 inline const std::string kEStepResult = "ESTEP_RESULT";           // estep_result_t: a block's counts

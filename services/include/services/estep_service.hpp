@@ -5,10 +5,13 @@
 // a run without workers, with 1, 2 or 4 of them, and when one dies mid-run.
 //
 // Protocol (channels in the README's table):
+//   MDP            optimiser -> workers: the MDP's dynamics (mdp_message.hpp), with its
+//                  digest. Re-sent when a worker reports another digest: workers need
+//                  no domain of their own.
 //   TRAJECTORY     optimiser -> workers: its data set, one trajectory_t each, with the
 //                  data set's digest. Re-sent when a worker reports another digest.
 //   STATUS         every service, about once a second: service_status_t; a sampler's
-//                  carries its data set's digest and size.
+//                  carries its MDP's and its data set's digests.
 //   ESTEP_REQUEST  optimiser -> workers: request id, attempt, the policy and the
 //                  observation model, and which worker computes which block.
 //   ESTEP_RESULT   worker -> optimiser: one block's statistics, echoing the request id.
@@ -16,7 +19,7 @@
 // that has answered (a new attempt of the same request), and after max_attempts
 // computes what is still missing itself: learning never stalls. Answers to other
 // requests, for blocks it already has, or from workers with another data set are
-// counted and ignored. Workers answer only when their digest equals the request's.
+// counted and ignored. Workers answer only when their digests equal the request's.
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -35,6 +38,7 @@
 #include "learner/estep_observations.hpp"
 #include "services/bus.hpp"
 #include "services/channels.hpp"
+#include "services/mdp_message.hpp"
 #include "services/typed.hpp"
 
 namespace hbirl::services {
@@ -45,7 +49,7 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m);
 
 
 // A fingerprint of this build's floating-point results: the bits of a fixed small E-step
-// pass (gridworld, exact engine). Workers built or run differently (another compiler,
+// pass (a four-state task written here, exact engine). Workers built or run differently (another compiler,
 // flags, CPU features, Eigen version) compute sums that differ in the last bits; their
 // fingerprints then differ, and theta is no longer bit-identical to a one-process run.
 std::uint64_t numerics_fingerprint();
@@ -54,7 +58,8 @@ std::uint64_t numerics_fingerprint();
 // blocks assigned to it. Call handle() from one thread; it also sends the heartbeat.
 class SamplerWorker {
  public:
-  SamplerWorker(Bus& bus, const Mdp& mdp, std::string id, Counters& counters);
+  // It learns the MDP from the bus (MDP) and the data set (TRAJECTORY).
+  SamplerWorker(Bus& bus, std::string id, Counters& counters);
   // Handles what the bus has (waiting up to timeout_ms) and publishes the heartbeat when
   // one is due. Returns the bus's answer (-1: the bus has ended).
   int handle(int timeout_ms);
@@ -62,14 +67,18 @@ class SamplerWorker {
   void publish_status(const std::string& state = "");
   const std::string& id() const { return id_; }
   std::uint64_t digest() const { return digest_; }
+  std::uint64_t mdp_digest() const { return mdp_digest_; }
   std::int64_t blocks_computed() const { return blocks_computed_; }
 
  private:
+  void on_mdp(const hbirl::mdp_t& m);
   void on_trajectory(const hbirl::trajectory_t& m);
   void on_request(const hbirl::estep_request_t& m);
 
   Bus& bus_;
-  const Mdp& mdp_;
+  MdpAssembler incoming_mdp_;
+  std::optional<Mdp> mdp_;
+  std::atomic<std::uint64_t> mdp_digest_{0};  // read by tests from another thread
   std::string id_;
   Counters& counters_;
   // The data set being received (by index) and the complete one.
@@ -109,13 +118,16 @@ struct BusExecutorOptions {
 // optimiser's process must not handle the same bus elsewhere at the same time.
 class BusBlockExecutor final : public BlockExecutor {
  public:
-  BusBlockExecutor(Bus& bus, std::vector<ObservedTrajectory> dataset, Counters& counters, BusExecutorOptions options = {});
+  // `mdp` and `dataset`: what the workers are sent and must hold to get work; `domain`
+  // names the MDP in its messages.
+  BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, std::vector<ObservedTrajectory> dataset,
+                   Counters& counters, BusExecutorOptions options = {});
   std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
                                    std::uint64_t seed) const override;
 
-  // Publishes the data set (all trajectories) now.
+  // Publishes the MDP and the data set (all trajectories) now.
   void publish_dataset() const;
-  // Handles the bus until `count` workers with this data set are live, or timeout_ms
+  // Handles the bus until `count` workers with this MDP and data set are live, or timeout_ms
   // passes; returns how many are.
   int wait_for_workers(int count, int timeout_ms) const;
   std::uint64_t digest() const { return digest_; }
@@ -131,6 +143,7 @@ class BusBlockExecutor final : public BlockExecutor {
  private:
   struct Worker {
     std::uint64_t digest = 0;
+    std::uint64_t mdp_digest = 0;
     int trajectories = 0;
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
@@ -141,6 +154,8 @@ class BusBlockExecutor final : public BlockExecutor {
   std::vector<std::string> live_workers() const;
 
   Bus& bus_;
+  std::vector<hbirl::mdp_t> mdp_messages_;
+  std::uint64_t mdp_digest_;
   std::vector<ObservedTrajectory> dataset_;
   std::uint64_t digest_;
   std::uint64_t merged_digest_ = 0;  // of the data set as ObservationEStep holds it

@@ -1,8 +1,8 @@
 #pragma once
 // Learning the reward from a data set assembled off the bus (dataset.hpp), the same way
 // live (hbirl-optimiser, with sampler workers) and offline (hbirl learn --log): the
-// partially-controlled model with the labeller's eta, the subject prior from the run's
-// controlled episodes, uninformative priors for the confounding elements.
+// partially-controlled model with the sensor's eta, the subject prior the domain gives
+// (from the run's controlled episodes), uninformative priors for the confounding elements.
 #include <functional>
 #include <memory>
 #include <optional>
@@ -10,28 +10,9 @@
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "services/dataset.hpp"
+#include "sim_driver/domain.hpp"
 
 namespace hbirl::services {
-
-// The domains the services know: "onion" (paper §Experiments B, from camera frames) and "gridworld"
-// (the paper's 5x5 Gridworld; its simulator publishes the observations itself).
-// Each throws InputError("domain", ...) for any other name.
-Mdp domain_mdp(const std::string& domain);
-// The names of a domain's states, actions, reward features, observation symbols and
-// sources (the subject, then `num_sources` - 1 confounding elements in all). Onion
-// symbols: "R2C3" is the gripper seen in the field of view's region row 2, column 3 (of
-// 4 x 5); "bright onion", "dark onion".
-struct DomainNames {
-  std::vector<std::string> states, actions, features, symbols, sources;
-};
-DomainNames domain_names(const std::string& domain, int num_sources = 1);
-// The informative prior for the subject's observation model from the controlled run's
-// observations and true steps (learner/controlled_prior.hpp): onion, the symbol counts
-// per visit of (s, a) plus 1 (hbirl experiment onion); gridworld, the symbol counts plus 1
-// (hbirl experiment gridworld, paper §Experiments A). Throws InputError for true steps or
-// symbols outside the domain.
-Eigen::MatrixXd subject_prior(const std::string& domain, const Mdp& mdp, const std::vector<Trajectory>& truth,
-                              const std::vector<ObservedTrajectory>& observed, int num_symbols);
 
 struct LearningOptions {
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
@@ -56,9 +37,13 @@ struct Learned {
 // model's refined Dirichlet parameters.
 using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&)>;
 
+// The expert's true weights, for the ILE: the ground truth's, else the domain's; none when
+// they do not fit the domain's features.
+std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data);
+
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
-// controlled run).
-Learned learn_from_dataset(const Mdp& mdp, const Dataset& data, const LearningOptions& options,
+// subject prior, symbols outside the domain).
+Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
                            std::shared_ptr<const BlockExecutor> executor = nullptr, ProgressFn progress = nullptr);
 
 }  // namespace hbirl::services

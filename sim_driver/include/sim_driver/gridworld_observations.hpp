@@ -16,6 +16,7 @@ enum class EtaKind {
   kUniform,    // eta = 1 / (1 + |E|) for every source
   kPlausible,  // with probability 0.8 the true source gets 0.6, else a random source does; the rest evenly
   kSubject,    // eta = (1, 0, ..., 0): every observation treated as the subject's ("Ignore CE")
+  kTrue,       // all of eta on the true source (a perfect labeller)
 };
 
 struct GridworldObservationOptions {
@@ -23,6 +24,7 @@ struct GridworldObservationOptions {
   int per_step = 40;
   double decay = 1.0;
   EtaKind eta = EtaKind::kPlausible;
+  double occlusion = 0.0;  // chance that a step has no observations (no draw when 0)
 };
 
 // The subject's true O, one row per (s, a) pair (identical across actions).
@@ -35,7 +37,8 @@ struct GridworldObservations {
   std::vector<std::vector<int>> true_sources;  // per trajectory, per observation: 0 subject, e + 1 element e
 };
 
-// Observes trajectories: each observation's source is drawn uniformly from the subject and
+// Observes trajectories: each step is occluded with probability options.occlusion, else
+// `per_step` observations are made; each observation's source is drawn uniformly from the subject and
 // the elements; the symbol from that source's O. eta by `options.eta` (kSubject makes eta
 // a single entry, as for a model without confounders).
 GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajectory>& trajectories,

@@ -1,120 +1,19 @@
-#include "services/pipeline.hpp"
+// The optimiser service (optimiser.hpp).
+#include "services/optimiser.hpp"
 
 #include <chrono>
-#include <cmath>
-#include <opencv2/imgcodecs.hpp>
-#include <thread>
 
-#include "learner/input_error.hpp"
 #include "learner/estep_exact.hpp"
+#include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
-#include "perception/labeller.hpp"
 #include "services/log_bus.hpp"
-#include "sim_driver/onion.hpp"
-#include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
 
 namespace {
 using Clock = std::chrono::steady_clock;
 }  // namespace
-
-// ---- perception ----
-
-PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), counters_(counters) {
-  // Frames come at camera rate; a queue of a few seconds' worth rides out a slow moment.
-  subs_.add(bus_, subscribe<hbirl::camera_frame_t>(bus_, channels::kCamera, counters_,
-                                                   [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000));
-}
-
-void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
-  counters_.gaps += frames_.see(m.seq);
-  if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
-  if (m.size <= 0) throw InputError("camera_frame.data", "is empty");
-  if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096) {
-    throw InputError("camera_frame.width", "the frame must be between 1x1 and 4096x4096");  // before decoding it
-  }
-  const cv::Mat frame = cv::imdecode(cv::Mat(1, m.size, CV_8UC1, const_cast<std::uint8_t*>(m.data.data())), cv::IMREAD_COLOR);
-  if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);
-  if (frame.cols != m.width || frame.rows != m.height) {
-    throw InputError("camera_frame.width", "the image is " + std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
-                                               ", the message says " + std::to_string(m.width) + "x" + std::to_string(m.height));
-  }
-  const std::vector<perception::Detection> found = detector_.detect(frame);
-  hbirl::detections_t d{};
-  d.utime = m.utime;
-  d.seq = ++seq_;
-  d.episode = m.episode;
-  d.step = m.step;
-  d.frame = m.frame;
-  d.width = m.width;
-  d.height = m.height;
-  d.n = static_cast<std::int32_t>(found.size());
-  for (const auto& x : found) {
-    d.cls.push_back(x.cls == perception::BlobClass::kGripper ? hbirl::detections_t::CLASS_GRIPPER : hbirl::detections_t::CLASS_ONION);
-    d.x.push_back(static_cast<float>(x.x));
-    d.y.push_back(static_cast<float>(x.y));
-    d.area.push_back(x.area);
-    d.box_x.push_back(static_cast<std::int16_t>(x.box.x));
-    d.box_y.push_back(static_cast<std::int16_t>(x.box.y));
-    d.box_w.push_back(static_cast<std::int16_t>(x.box.width));
-    d.box_h.push_back(static_cast<std::int16_t>(x.box.height));
-    d.dark_share.push_back(static_cast<float>(x.dark_share));
-  }
-  publish(bus_, channels::kDetections, d, counters_);
-}
-
-// ---- labeller ----
-
-LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
-    : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
-  subs_.add(bus_, subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
-                                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
-}
-
-void LabellerService::on_detections(const hbirl::detections_t& m) {
-  counters_.gaps += detections_.see(m.seq);
-  onion::SceneConfig config;
-  config.width = m.width;
-  config.validate();
-  if (m.height != config.height()) throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
-  std::vector<perception::Detection> found(static_cast<size_t>(m.n));
-  for (int i = 0; i < m.n; ++i) {
-    auto& d = found[static_cast<size_t>(i)];
-    const auto k = static_cast<size_t>(i);
-    if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
-      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
-    }
-    if (!(m.x[k] >= 0.0f && m.x[k] < m.width) || !(m.y[k] >= 0.0f && m.y[k] < m.height) || m.area[k] <= 0 ||
-        !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
-      throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
-    }
-    d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper : perception::BlobClass::kOnion;
-    d.x = m.x[k];
-    d.y = m.y[k];
-    d.area = m.area[k];
-    d.box = cv::Rect(m.box_x[k], m.box_y[k], m.box_w[k], m.box_h[k]);
-    d.dark_share = m.dark_share[k];
-  }
-  const std::vector<perception::Observation> obs = perception::label(found, onion::labeller_options(config, uniform_eta_));
-  hbirl::observations_t o{};
-  o.utime = m.utime;
-  o.seq = ++seq_;
-  o.episode = m.episode;
-  o.step = m.step;
-  o.frame = m.frame;
-  o.num_symbols = perception::kNumSymbols;
-  o.num_sources = perception::kNumSources;
-  o.n = static_cast<std::int32_t>(obs.size());
-  for (const auto& x : obs) {
-    o.symbol.push_back(static_cast<std::int16_t>(x.symbol));
-    o.eta.emplace_back(x.eta.begin(), x.eta.end());
-  }
-  publish(bus_, channels::kObservations, o, counters_);
-}
-
-// ---- optimiser ----
 
 namespace {
 
@@ -220,25 +119,23 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   result.data = builder.build();
   result.missing_frames = builder.missing_frames();
   result.frame_requests = result_requests;
-  const Mdp mdp = domain_mdp(result.data.domain);
+  const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
+  const Mdp& mdp = domain->mdp();
   BusExecutorOptions executor_options = options.executor;
   if (!executor_options.stop) executor_options.stop = stop;
-  auto executor = std::make_shared<BusBlockExecutor>(bus, result.data.observed, counters, executor_options);
+  auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), result.data.observed, counters, executor_options);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
       std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");
   if (options.workers > 0) {
     result.workers = executor->wait_for_workers(options.workers, options.wait_workers_ms);
     say(std::to_string(result.workers) + " of " + std::to_string(options.workers) + " sampler workers ready");
   }
-  std::optional<Eigen::VectorXd> truth = result.data.true_weights;
-  if (truth && truth->size() != mdp.num_features()) {
-    say("the ground truth's true weights do not fit the domain's features: no ILE");
-    truth.reset();
-  }
+  const std::optional<Eigen::VectorXd> truth = true_weights_of(*domain, result.data);
+  if (!truth) say("no true weights that fit the domain's features: no ILE");
   const auto start = Clock::now();
   const std::int64_t utime = result.data.last_utime;
   try {
-    result.learned = learn_from_dataset(mdp, result.data, options.learning, executor,
+    result.learned = learn_from_dataset(*domain, result.data, options.learning, executor,
                                         [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha) {
                                           if (stop && stop()) throw Stopped();  // also when computing alone
                                           if (options.beat) options.beat("learning");
@@ -283,7 +180,23 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   return result;
 }
 
-OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters) {
+std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<const Domain> given) {
+  if (given) {
+    if (!data.domain.empty() && data.domain != given->name()) {
+      throw InputError("episode_marker.domain", "'" + data.domain + "' is not the domain learned on ('" + given->name() + "')");
+    }
+    return given;
+  }
+  if (data.domain.empty()) throw InputError("episode_marker.domain", "no episode markers: the domain is unknown");
+  std::shared_ptr<const Domain> builtin = builtin_domain(data.domain);
+  if (!builtin) {
+    throw InputError("episode_marker.domain", "'" + data.domain + "' is not a built-in domain: give its domain file (--domain FILE)");
+  }
+  return builtin;
+}
+
+OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
+                               std::shared_ptr<const Domain> domain) {
   LogBus bus(path);
   DatasetBuilder builder;
   builder.subscribe(bus, counters);
@@ -293,8 +206,7 @@ OptimiserResult learn_from_log(const std::string& path, const LearningOptions& o
   OptimiserResult result;
   result.data = builder.build();
   result.missing_frames = builder.missing_frames();
-  const Mdp mdp = domain_mdp(result.data.domain.empty() ? std::string("?") : result.data.domain);
-  result.learned = learn_from_dataset(mdp, result.data, options);
+  result.learned = learn_from_dataset(*domain_of(result.data, std::move(domain)), result.data, options);
   return result;
 }
 

@@ -1,0 +1,169 @@
+#include "problem/domain_file.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "problem/json_node.hpp"
+#include "readers.hpp"
+
+namespace hbirl {
+
+namespace {
+
+constexpr double kSumTolerance = 1e-6;  // as for problem files: rounded probabilities are renormalised
+constexpr int kMaxCount = 100000;
+
+std::vector<std::string> read_names(const JsonNode& node, int expected, const std::string& what) {
+  if (static_cast<int>(node.size()) != expected) {
+    node.fail("has " + std::to_string(node.size()) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
+  }
+  std::vector<std::string> names;
+  for (size_t i = 0; i < node.size(); ++i) names.push_back(node[i].as_string());
+  return names;
+}
+
+// A marker's domain field: short, printable, no spaces (it names the run on the bus).
+std::string read_name(const JsonNode& node) {
+  const std::string name = node.as_string();
+  if (name.empty() || name.size() > 64) node.fail("must have 1 to 64 characters");
+  for (const char c : name) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+    if (!ok) node.fail("may hold letters, digits, '_', '-' and '.' only");
+  }
+  return name;
+}
+
+// Rows of probabilities given as tuples (key..., symbol, p); listed rows must sum to 1,
+// unlisted rows stay uniform. `key_of` maps a tuple to its row, validating the key.
+template <typename KeyOf>
+Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, int symbols, size_t tuple, const char* shape,
+                                      KeyOf key_of) {
+  Eigen::MatrixXd o = Eigen::MatrixXd::Constant(rows, symbols, 1.0 / symbols);
+  std::vector<double> sum(static_cast<size_t>(rows), -1.0);  // -1: not listed
+  std::vector<size_t> first(static_cast<size_t>(rows), 0);
+  std::set<std::pair<Eigen::Index, int>> seen;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const JsonNode e = list[i];
+    e.expect_tuple(tuple, shape);
+    const Eigen::Index r = key_of(e);
+    const int w = static_cast<int>(e[tuple - 2].as_int(0, symbols - 1));
+    const double p = e[tuple - 1].as_number(0.0, 1.0);
+    if (!seen.emplace(r, w).second) e.fail("repeats an entry of the same row and symbol");
+    auto& s = sum[static_cast<size_t>(r)];
+    if (s < 0.0) {
+      s = 0.0;
+      first[static_cast<size_t>(r)] = i;
+      o.row(r).setZero();
+    }
+    o(r, w) = p;
+    s += p;
+  }
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const double s = sum[static_cast<size_t>(r)];
+    if (s < 0.0) continue;
+    if (std::abs(s - 1.0) > kSumTolerance) {
+      list[first[static_cast<size_t>(r)]].fail("its row's probabilities sum to " + std::to_string(s) + ", expected 1");
+    }
+    o.row(r) /= s;
+  }
+  return o;
+}
+
+SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vector<std::string>* warnings) {
+  node.check_keys({"subject_observation", "confounder_observation", "observations_per_step", "eta", "occlusion", "trajectories",
+                   "length", "controlled_trajectories", "step_seconds"},
+                  warnings);
+  if (!domain.observation_model) node.fail("needs observation_model (num_symbols and num_confounders) in the domain");
+  if (!domain.true_weights) node.fail("needs true_weights in the domain (the simulated expert's reward)");
+  const Mdp& mdp = domain.mdp;
+  const int symbols = domain.num_symbols();
+  const int elements = domain.num_sources() - 1;
+  SensorSpec s;
+  s.subject_o = Eigen::MatrixXd::Constant(mdp.num_pairs(), symbols, 1.0 / symbols);
+  if (auto list = node.find("subject_observation")) {
+    s.subject_o = read_probability_rows(*list, mdp.num_pairs(), symbols, 4, "[state, action, symbol, probability]",
+                                        [&mdp](const JsonNode& e) {
+                                          const int st = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
+                                          const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
+                                          return static_cast<Eigen::Index>(mdp.pair(st, a));
+                                        });
+  }
+  s.confounder_o = Eigen::MatrixXd::Constant(elements, symbols, 1.0 / symbols);
+  if (auto list = node.find("confounder_observation")) {
+    if (elements == 0 && list->size() > 0) (*list)[0].fail("observation_model.num_confounders is 0");
+    s.confounder_o = read_probability_rows(*list, elements, symbols, 3, "[element, symbol, probability]",
+                                           [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
+  }
+  if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(0, kMaxCount));
+  if (auto e = node.find("eta")) {
+    s.eta = e->as_string();
+    if (s.eta != "plausible" && s.eta != "uniform" && s.eta != "true") {
+      e->fail("expected \"plausible\", \"uniform\" or \"true\", got \"" + s.eta + "\"");
+    }
+  }
+  if (auto o = node.find("occlusion")) {
+    s.occlusion = o->as_number(0.0, 1.0);
+    if (s.occlusion >= 1.0) o->fail("must be below 1 (every step occluded: nothing to learn from)");
+  }
+  if (auto n = node.find("trajectories")) s.trajectories = static_cast<int>(n->as_int(1, kMaxCount));
+  if (auto n = node.find("length")) s.length = static_cast<int>(n->as_int(1, kMaxCount));
+  if (auto n = node.find("controlled_trajectories")) s.controlled_trajectories = static_cast<int>(n->as_int(1, kMaxCount));
+  if (auto t = node.find("step_seconds")) {
+    s.step_seconds = t->as_number(1e-6, 1e6);
+  }
+  return s;
+}
+
+DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& default_name, std::vector<std::string>* warnings) {
+  const JsonNode root(doc, "");
+  if (!doc.is_object()) root.fail("the domain file must be a JSON object");
+  // "demonstration": a problem file is a domain too; its data are not the domain's.
+  root.check_keys({"name", "mdp", "observation_model", "symbol_names", "source_names", "true_weights", "sensor", "demonstration"},
+                  warnings);
+  DomainSpec d;
+  Problem names;
+  d.mdp = detail::read_mdp(root.at("mdp"), names, warnings);
+  d.state_names = std::move(names.state_names);
+  d.action_names = std::move(names.action_names);
+  d.feature_names = std::move(names.feature_names);
+  if (auto n = root.find("name")) {
+    d.name = read_name(*n);
+  } else {
+    d.name = default_name;
+    if (d.name.empty()) root.fail("has no \"name\"");
+  }
+  if (auto om = root.find("observation_model")) d.observation_model = detail::read_observation_model(*om, d.mdp, warnings);
+  if (auto names_node = root.find("symbol_names")) {
+    if (!d.observation_model) names_node->fail("needs observation_model (num_symbols)");
+    d.symbol_names = read_names(*names_node, d.num_symbols(), "symbol");
+  }
+  if (auto names_node = root.find("source_names")) {
+    if (!d.observation_model) names_node->fail("needs observation_model (num_confounders)");
+    d.source_names = read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
+  }
+  if (auto tw = root.find("true_weights")) d.true_weights = detail::read_true_weights(*tw, d.mdp);
+  if (auto sensor = root.find("sensor")) d.sensor = read_sensor(*sensor, d, warnings);
+  return d;
+}
+
+// A name for a file: its stem, kept to the characters a domain name may hold.
+std::string stem_name(const std::string& path) {
+  std::string stem = std::filesystem::path(path).stem().string();
+  for (char& c : stem) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) c = '_';
+  }
+  return stem.substr(0, 64);
+}
+
+}  // namespace
+
+DomainSpec parse_domain(const std::string& text, const std::string& default_name, std::vector<std::string>* warnings) {
+  return parse_domain_document(detail::parse_json_text(text), default_name, warnings);
+}
+
+DomainSpec read_domain_file(const std::string& path, std::vector<std::string>* warnings) {
+  return parse_domain(detail::read_text_file(path), stem_name(path), warnings);
+}
+
+}  // namespace hbirl

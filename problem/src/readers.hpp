@@ -1,0 +1,24 @@
+#pragma once
+// The readers problem files and domain files share (problem_file.cpp): each validates its
+// part of the document and throws InputError naming the field.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "problem/json_node.hpp"
+#include "problem/problem_file.hpp"
+
+namespace hbirl::detail {
+
+// "mdp": the MDP, and its state, action and feature names into `problem`.
+Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings);
+// "observation_model": the Dirichlet priors and how they are learned.
+ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, std::vector<std::string>* warnings);
+// "true_weights": one per feature.
+Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp);
+// The JSON document of `text`; malformed JSON is InputError("", "malformed JSON: ...").
+nlohmann::json parse_json_text(const std::string& text);
+// The whole file; unreadable files are InputError("", ...).
+std::string read_text_file(const std::string& path);
+
+}  // namespace hbirl::detail

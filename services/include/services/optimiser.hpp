@@ -1,0 +1,64 @@
+#pragma once
+// The optimiser service (README.md "Services and channels"): the data set off the bus (dataset.hpp),
+// HiddenDataEM with the E-step on the sampler workers (estep_service.hpp), EM_PROGRESS,
+// OBSERVATION_MODEL and POSTERIOR while it learns, and the final REWARD.
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "hbirl/em_progress_t.hpp"
+#include "hbirl/frame_request_t.hpp"
+#include "hbirl/observation_model_t.hpp"
+#include "hbirl/posterior_t.hpp"
+#include "hbirl/reward_t.hpp"
+#include "services/channels.hpp"
+#include "services/dataset.hpp"
+#include "services/estep_service.hpp"
+#include "services/learning.hpp"
+#include "sim_driver/domain.hpp"
+
+namespace hbirl::services {
+
+struct OptimiserOptions {
+  // The domain learned on; null: the built-in domain the EPISODE markers name (a domain
+  // file must be given: a name off the bus never opens a file).
+  std::shared_ptr<const Domain> domain;
+  LearningOptions learning;
+  BusExecutorOptions executor;
+  int workers = 0;              // wait for this many sampler workers before learning
+  int wait_workers_ms = 10000;
+  int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
+  int quiet_ms = 5000;          // ... and learn without them when still none came for this long
+  // Called often (every ~100 ms while collecting, every EM iteration) with what the
+  // optimiser is doing ("collecting", "learning"): the process beats its heartbeat there,
+  // so services that wait for it (the simulator) and the dashboard hear it throughout.
+  std::function<void(const std::string&)> beat;
+};
+struct OptimiserResult {
+  Learned learned;
+  Dataset data;
+  std::int64_t missing_frames = 0;   // never came, even when asked for again
+  int frame_requests = 0;            // FRAME_REQUEST messages sent
+  int workers = 0;
+  BusBlockExecutor::Stats estep;
+};
+// Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
+// to stop first.
+// `ready` is called once it listens (so a simulator may start).
+std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
+                                             const std::function<bool()>& stop,
+                                             const std::function<void(const std::string&)>& log = nullptr,
+                                             const std::function<void()>& ready = nullptr);
+
+// Learns offline from a recorded log (hbirl learn --log): the same data set and the same
+// learning as the live optimiser, computed here. `domain` as OptimiserOptions::domain.
+// Throws InputError for unusable logs.
+OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
+                               std::shared_ptr<const Domain> domain = nullptr);
+
+// The domain a data set was collected in: `given` when not null (the markers must name
+// it), else the built-in domain the markers name. Throws InputError("episode_marker.domain", ...).
+std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<const Domain> given);
+
+}  // namespace hbirl::services

@@ -1,0 +1,71 @@
+#pragma once
+// The simulator service (README.md "Services and channels"): a domain's simulated run on the bus, as a
+// camera or a sensor would publish it.
+#include <functional>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "hbirl/camera_frame_t.hpp"
+#include "hbirl/episode_marker_t.hpp"
+#include "hbirl/frame_request_t.hpp"
+#include "hbirl/ground_truth_t.hpp"
+#include "hbirl/observations_t.hpp"
+#include "services/bus.hpp"
+#include "services/channels.hpp"
+#include "services/typed.hpp"
+#include "sim_driver/domain.hpp"
+
+namespace hbirl::services {
+
+struct SimDriverOptions {
+  SimulationOptions simulation;          // the run (sim_driver/domain.hpp)
+  std::string encoding = "png";          // a camera's frames; lossless: replay and live see the same pixels
+  double max_frames_per_second = 300.0;  // pacing, wall clock (0: as fast as it renders)
+};
+// The simulator of a domain (sim_driver/domain.hpp): publishes the whole run (EPISODE,
+// GROUND_TRUTH, and CAMERA frames for a domain with a camera, OBSERVATIONS with their
+// eta for one with a sensor), then END_RUN, and afterwards answers
+// FRAME_REQUEST by publishing the asked frames again, with their steps' ground truth (the
+// run is deterministic: the same pixels, the same observations) -- so frames and ground
+// truth lost on the way can be recovered.
+class SimDriver {
+ public:
+  // Throws InputError for a domain without a simulator or options it cannot run.
+  SimDriver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters);
+  ~SimDriver();
+  // Returns false if asked to stop first. `idle` runs after every frame.
+  bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
+  std::int64_t frames_resent() const { return resent_; }
+  // Publishes every END_EPISODE marker and END_RUN again (receivers take repeats as one):
+  // the learner must not wait forever for an end marker lost on the way.
+  void republish_end_markers();
+  // Which services must listen before the run starts (perception and the labeller only
+  // for a camera).
+  std::vector<std::string> listeners() const;
+
+ private:
+  hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;
+  hbirl::episode_marker_t end_marker(int episode);
+  void on_request(const hbirl::frame_request_t& m);
+  void publish_truth(int episode, int step);
+  void publish_frame(int episode, int step, int frame);
+  Bus& bus_;
+  SimDriverOptions options_;
+  Counters& counters_;
+  std::string domain_;
+  std::unique_ptr<Simulation> run_;
+  std::int64_t marker_seq_ = 0, truth_seq_ = 0, frame_seq_ = 0;
+  cv::Mat frame_;
+  std::vector<unsigned char> bytes_;
+  std::int64_t resent_ = 0;
+  Subscriptions subs_;  // last: ends first
+};
+
+// Publishes the run with a SimDriver (the in-process tests' way).
+bool run_sim_driver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters,
+                    const std::function<bool()>& stop,
+                    const std::function<void()>& idle = nullptr);
+
+}  // namespace hbirl::services

@@ -1,0 +1,54 @@
+// The labeller service (labeller_service.hpp).
+#include "services/labeller_service.hpp"
+
+#include "learner/input_error.hpp"
+#include "perception/labeller.hpp"
+#include "sim_driver/onion_scene.hpp"
+
+namespace hbirl::services {
+
+LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
+    : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
+  subs_.add(bus_, subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
+                                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
+}
+
+void LabellerService::on_detections(const hbirl::detections_t& m) {
+  counters_.gaps += detections_.see(m.seq);
+  onion::SceneConfig config;
+  config.width = m.width;
+  config.validate();
+  if (m.height != config.height()) throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
+  std::vector<perception::Detection> found(static_cast<size_t>(m.n));
+  for (int i = 0; i < m.n; ++i) {
+    auto& d = found[static_cast<size_t>(i)];
+    const auto k = static_cast<size_t>(i);
+    if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
+      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
+    }
+    if (!(m.x[k] >= 0.0f && m.x[k] < m.width) || !(m.y[k] >= 0.0f && m.y[k] < m.height) || m.area[k] <= 0 ||
+        !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
+      throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
+    }
+    d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper : perception::BlobClass::kOnion;
+    d.x = m.x[k];
+    d.y = m.y[k];
+    d.area = m.area[k];
+    d.box = cv::Rect(m.box_x[k], m.box_y[k], m.box_w[k], m.box_h[k]);
+    d.dark_share = m.dark_share[k];
+  }
+  const std::vector<perception::Observation> obs = perception::label(found, onion::labeller_options(config, uniform_eta_));
+  hbirl::observations_t o{};
+  same_frame(m, o);
+  o.seq = ++seq_;
+  o.num_symbols = perception::kNumSymbols;
+  o.num_sources = perception::kNumSources;
+  o.n = static_cast<std::int32_t>(obs.size());
+  for (const auto& x : obs) {
+    o.symbol.push_back(static_cast<std::int16_t>(x.symbol));
+    o.eta.emplace_back(x.eta.begin(), x.eta.end());
+  }
+  publish(bus_, channels::kObservations, o, counters_);
+}
+
+}  // namespace hbirl::services

@@ -1,0 +1,120 @@
+#pragma once
+// A domain: everything hbirl knows about one task, in one place (README.md "Your own
+// task"). The services, the dashboard, the CLI and the experiments look a domain up in
+// the registry below and never test its name.
+//
+// Three kinds: the onion sorter (paper §Experiments B, simulated by a camera), the
+// paper's Gridworld (§Experiments A, any size, simulated by its own sensor) and any
+// domain file (problem/domain_file.hpp, simulated by the sensor its "sensor" section
+// describes).
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "learner/controlled_prior.hpp"
+#include "learner/mdp.hpp"
+#include "learner/observations.hpp"
+#include "learner/trajectory.hpp"
+#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/onion_scene.hpp"
+
+namespace cv {
+class Mat;
+}
+
+namespace hbirl {
+
+// The names the dashboard, reports and results label things with.
+struct DomainNames {
+  std::vector<std::string> states, actions, features, symbols, sources;
+};
+
+// How a simulator runs; each domain reads the options that concern it.
+struct SimulationOptions {
+  std::uint64_t seed = 1;
+  // onion: the demonstrations' scene, sorts in the controlled scene, then demonstrated
+  onion::SceneConfig scene;
+  int controlled_sorts = 20;
+  int sorts = 6;
+  // gridworld: the paper's sensor
+  int confounders = 3;               // |E|
+  int per_step = 40;                 // observations per step, drawn equally from the subject and each element
+  int trajectories = 20;             // demonstrations
+  int controlled_trajectories = 20;  // controlled run: the subject alone, true states known
+  int length = 10;                   // steps per trajectory
+  EtaKind eta = EtaKind::kPlausible;
+  double step_seconds = 1.0;         // sim time per step
+};
+
+// A simulated run, planned up front so any frame can be produced again, identical: the
+// controlled run's episodes first (true steps known, the subject alone), then the
+// demonstrations. A camera's frames are images for perception and the labeller; a
+// sensor's frames (one per step) are observations with their eta.
+class Simulation {
+ public:
+  struct Episode {
+    bool controlled = false;
+    double start_time = 0.0;  // sim seconds
+    Trajectory steps;
+    bool ends_in_terminal = false;
+  };
+  virtual ~Simulation() = default;
+
+  std::vector<Episode> episodes;
+  int frames_per_step = 1;
+  double step_seconds = 1.0;
+  Eigen::VectorXd true_weights;
+  int num_symbols = 0;  // a sensor's
+  int num_sources = 1;  // a sensor's: the subject and its confounding elements
+
+  virtual bool camera() const = 0;
+  // A camera's frame k of step t of episode `id`; returns its sim time.
+  virtual double render(int id, int t, int k, cv::Mat& frame) const;
+  // A sensor's observations of episode `id` (one frame per step).
+  virtual const ObservedTrajectory& observed(int id) const;
+};
+
+class Domain {
+ public:
+  virtual ~Domain() = default;
+  // The name EPISODE markers carry; the registry opens a built-in domain by it.
+  virtual const std::string& name() const = 0;
+  virtual const Mdp& mdp() const = 0;
+  // The observation symbols, when the domain fixes them (0: whatever the sensor sends).
+  virtual int num_symbols() const = 0;
+  // Names of states, actions, features, symbols and `num_sources` sources (the subject,
+  // then the confounding elements).
+  virtual DomainNames names(int num_sources) const = 0;
+  virtual std::optional<Eigen::VectorXd> true_weights() const { return std::nullopt; }
+  // Its simulator is a camera (frames for perception and the labeller), not a sensor.
+  virtual bool has_camera() const { return false; }
+  // The subject's Dirichlet prior (paper §Experiments): from a controlled run's observations and true steps.
+  // Throws InputError when there is none and the domain states no prior of its own, or for
+  // steps or symbols outside the domain.
+  virtual Eigen::MatrixXd subject_prior(const std::vector<Trajectory>& truth, const std::vector<ObservedTrajectory>& observed,
+                                        int num_symbols) const;
+  // A simulated run; throws InputError("domain", ...) for a domain without a simulator.
+  virtual std::unique_ptr<Simulation> simulate(const SimulationOptions& options) const = 0;
+
+ protected:
+  virtual ControlledPriorOptions controlled_prior_options() const { return {}; }
+};
+
+struct DomainOptions {
+  int gridworld_size = 5;
+};
+
+// A domain by spec: "onion"; "gridworld" (options.gridworld_size cells a side) or
+// "gridworld:N"; otherwise the path of a domain file. Throws InputError naming the field
+// ("domain", or the file and its field). File warnings go to *warnings.
+std::unique_ptr<Domain> open_domain(const std::string& spec, const DomainOptions& options = {},
+                                    std::vector<std::string>* warnings = nullptr);
+// A built-in domain by the name its EPISODE markers carry -- never a file, since the name
+// came off the bus; nullptr when there is none by that name.
+std::unique_ptr<Domain> builtin_domain(const std::string& name);
+// A domain described by a file's contents (what open_domain does with a path).
+std::unique_ptr<Domain> file_domain(const std::string& path, std::vector<std::string>* warnings = nullptr);
+
+}  // namespace hbirl
