@@ -15,6 +15,8 @@ Command add_generate(CLI::App& app);
 Command add_experiment(CLI::App& app);
 Command add_render(CLI::App& app);
 Command add_report(CLI::App& app);
+Command add_publish(CLI::App& app);
+Command add_export(CLI::App& app);
 
 // Print a JSON result to stdout, or to `path` when it is not empty.
 void emit(const std::string& text, const std::string& path);

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "learner/controlled_prior.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
@@ -37,6 +38,7 @@ struct LearnArgs {
   AlphaUpdate update = AlphaUpdate::kPosterior;
   bool update_given = false;  // --alpha-update overrides the file's observation_model.update
   bool verbose = false;
+  std::string eta = "file";  // "stated", "learned", or as the file's observation_model.learn_eta says
   std::string out;
 };
 
@@ -47,16 +49,33 @@ std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, cons
   if (!problem.observation_model) {
     throw in_file(args.problem, InputError("observation_model", "missing; learning from observations needs it (or use --from truth)"));
   }
-  std::vector<ObservedTrajectory> trajectories;
+  std::vector<ObservedTrajectory> trajectories, controlled_observed;
+  std::vector<Trajectory> controlled_truth;
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
+    if (problem.demonstration[i].controlled) {  // the subject prior's, below
+      controlled_observed.push_back(*problem.demonstration[i].steps);
+      controlled_truth.push_back(*problem.demonstration[i].truth);
+      continue;
+    }
     if (!problem.demonstration[i].steps) {
       throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps",
                                              "missing; learning from observations needs it for every trajectory"));
     }
     trajectories.push_back(*problem.demonstration[i].steps);
   }
+  if (trajectories.empty()) throw in_file(args.problem, InputError("demonstration", "has only controlled-run trajectories"));
   ObservationPrior prior = *problem.observation_model;
+  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/domain.hpp).
+  if (!controlled_observed.empty()) {
+    try {
+      prior.subject_alpha = controlled_run_prior(problem.mdp, controlled_truth, controlled_observed, prior.num_symbols);
+    } catch (const InputError& e) {
+      throw in_file(args.problem, e);
+    }
+  }
   if (args.update_given) use_alpha_update(prior, args.update);
+  if (args.eta == "stated") prior.learn_eta = false;
+  if (args.eta == "learned") prior.learn_eta = true;
   ObservationEStepOptions options;
   options.engine = engine_factory(args.engine);
   options.alpha_tolerance = args.alpha_tolerance;
@@ -305,6 +324,12 @@ Command add_learn(CLI::App& app) {
       ->capture_default_str();
   CLI::Option* update = add_alpha_update_option(cmd, args->update);
   update->default_str("the file's observation_model.update");
+  cmd->add_option("--eta", args->eta,
+                  "'stated': take every observation's eta as given; 'learned': learn it per context (docs/MODEL.md); "
+                  "'file': as the file's observation_model.learn_eta says (default: learned). The service set takes eta "
+                  "as stated: use 'stated' to learn what hbirl-optimiser learns from the same data")
+      ->check(CLI::IsMember({"file", "stated", "learned"}))
+      ->capture_default_str();
   cmd->add_flag("--verbose,-v", args->verbose, "Report every EM iteration on stderr");
   cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");
   return [args, update] {

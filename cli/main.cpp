@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   remember(hbirl::cli::add_experiment(app));
   remember(hbirl::cli::add_render(app));
   remember(hbirl::cli::add_report(app));
+  remember(hbirl::cli::add_publish(app));
+  remember(hbirl::cli::add_export(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,6 +1,9 @@
 #include "learner/observations.hpp"
 
 #include <algorithm>
+#include <string>
+#include <limits>
+#include <cmath>
 #include <map>
 #include <numeric>
 
@@ -29,6 +32,20 @@ std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories
     }
   }
   return h.value();
+}
+
+std::string normalise_eta(double* eta, int n, double tolerance) {
+  if (n < 1) return "is empty";
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(eta[i]) || eta[i] < 0.0) return "entry " + std::to_string(i) + " is not a probability";
+    sum += eta[i];
+  }
+  if (!(std::abs(sum - 1.0) <= tolerance)) return "sums to " + std::to_string(sum) + ", expected 1";
+  if (std::abs(sum - 1.0) > 8.0 * n * std::numeric_limits<double>::epsilon()) {
+    for (int i = 0; i < n; ++i) eta[i] /= sum;
+  }
+  return "";
 }
 
 ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory) {

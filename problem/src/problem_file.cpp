@@ -359,14 +359,9 @@ ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<Observa
         obs.fail("eta has " + std::to_string(m) + " entries, expected " + std::to_string(sources) +
                  " (the subject and " + std::to_string(prior->num_confounders) + " confounders)");
       }
-      double sum = 0.0;
-      for (size_t j = 0; j < m; ++j) {
-        const double p = eta[j].as_number(0.0, 1.0);
-        out.eta(row, static_cast<Eigen::Index>(j)) = p;
-        sum += p;
-      }
-      if (std::abs(sum - 1.0) > kFileSumTolerance) obs.fail("eta sums to " + fmt(sum) + ", expected 1");
-      out.eta.row(row) /= sum;
+      for (size_t j = 0; j < m; ++j) out.eta(row, static_cast<Eigen::Index>(j)) = eta[j].as_number(0.0, 1.0);
+      const std::string wrong = normalise_eta(out.eta.row(row).data(), static_cast<int>(m), kFileSumTolerance);
+      if (!wrong.empty()) obs.fail("eta " + wrong);
       out.symbols.push_back(symbol);
       ++row;
     }
@@ -415,7 +410,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
   if (count == 0) demo.fail("is empty; give at least one trajectory");
   for (size_t i = 0; i < count; ++i) {
     const JsonNode item = demo[i];
-    item.check_keys({"steps", "truth", "ends_in_terminal"}, warnings);
+    item.check_keys({"steps", "truth", "ends_in_terminal", "controlled"}, warnings);
     DemonstratedTrajectory trajectory;
     trajectory.ends_in_terminal = has_terminal;
     if (auto e = item.find("ends_in_terminal")) {
@@ -441,6 +436,12 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
       }
     }
     if (!trajectory.steps && !trajectory.truth) item.fail("has neither \"steps\" nor \"truth\"");
+    if (auto c = item.find("controlled")) {
+      trajectory.controlled = c->as_bool();
+      if (trajectory.controlled && (!trajectory.steps || !trajectory.truth)) {
+        c->fail("a controlled-run trajectory needs both \"steps\" and \"truth\" (its prior counts symbols per true step)");
+      }
+    }
     if (trajectory.steps && trajectory.truth &&
         static_cast<size_t>(trajectory.steps->length()) != trajectory.truth->size()) {
       item.at("truth").fail("has " + std::to_string(trajectory.truth->size()) + " steps but \"steps\" has " +
@@ -457,6 +458,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
 std::vector<Trajectory> Problem::truth_trajectories() const {
   std::vector<Trajectory> out;
   for (size_t i = 0; i < demonstration.size(); ++i) {
+    if (demonstration[i].controlled) continue;
     if (!demonstration[i].truth) {
       throw InputError("demonstration[" + std::to_string(i) + "].truth", "missing (learning from the truth needs it for every trajectory)");
     }
@@ -554,6 +556,7 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
   for (const auto& trajectory : problem.demonstration) {
     J item;
     if (has_terminal && !trajectory.ends_in_terminal) item["ends_in_terminal"] = false;
+    if (trajectory.controlled) item["controlled"] = true;
     if (trajectory.steps) {
       const ObservedTrajectory& o = *trajectory.steps;
       J steps = J::array();

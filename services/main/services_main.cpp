@@ -135,44 +135,8 @@ int sim_driver(int argc, char** argv) {
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
   SimDriver driver(*bus, *domain, o, counters);
-  // Wait until the services downstream listen (their first heartbeat), at most --start-delay.
-  std::set<std::string> waiting;
-  for (const auto& l : driver.listeners()) waiting.insert(l);
-  subscribe<hbirl::service_status_t>(*bus, channels::kStatus, counters, [&waiting](const hbirl::service_status_t& s, const Message&) {
-    waiting.erase(s.service);
-  }, 1000);
-  const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                            std::chrono::duration<double>(delay));
-  while (!waiting.empty() && std::chrono::steady_clock::now() < until && !stop_requested()) {
-    bus->handle(50);
-    heartbeat.tick("starting");
-  }
-  if (!waiting.empty()) {
-    std::string names;
-    for (const auto& w : waiting) names += " " + w;
-    std::fprintf(stderr, "hbirl-sim-driver: starting without hearing from:%s\n", names.c_str());
-  }
-  const bool finished = driver.publish_run(stop_requested, [&] {
-    bus->handle(0);
-    heartbeat.tick("running");
-  });
-  std::fprintf(stderr, "hbirl-sim-driver: %s; %lld messages published\n", finished ? "run published" : "stopped",
-               static_cast<long long>(counters.messages_out));
-  // Then stay to send frames again that were lost on the way (FRAME_REQUEST), until the
-  // optimiser has published its reward or we are stopped.
-  bool learned = false;
-  subscribe<hbirl::reward_t>(*bus, channels::kReward, counters, [&learned](const hbirl::reward_t& r, const Message&) {
-    learned = learned || r.final;
-  });
-  auto next_markers = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-  while (finished && !learned && !stop_requested()) {
-    bus->handle(100);
-    heartbeat.tick("serving lost frames");
-    if (std::chrono::steady_clock::now() >= next_markers) {  // in case the end markers were lost
-      driver.republish_end_markers();
-      next_markers = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-    }
-  }
+  const bool finished = driver.serve(stop_requested, delay, [&heartbeat](const std::string& state) { heartbeat.tick(state); },
+                                     [](const std::string& s) { std::fprintf(stderr, "hbirl-sim-driver: %s\n", s.c_str()); });
   heartbeat.tick(finished ? "done" : "stopped", true);
   std::fprintf(stderr, "hbirl-sim-driver: done; %lld frames sent again on request, %lld bad messages\n",
                static_cast<long long>(driver.frames_resent()), static_cast<long long>(counters.bad_messages));
@@ -266,17 +230,23 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
-  std::string update = alpha_update_name(o.learning.update);
-  app.add_option("--alpha-update", update, "Observation-model learning: posterior (keeps the prior; docs/MODEL.md) or paper")
-      ->check(CLI::IsMember({"posterior", "paper"}))
-      ->capture_default_str();
-  app.add_option("--c", o.learning.c, "The paper's step size (--alpha-update paper only)")
-      ->check(CLI::Range(1e-6, 1.0))
-      ->capture_default_str();
+  std::string update;
+  double step_size = 0.0;
+  app.add_option("--alpha-update", update,
+                 "Observation-model learning: posterior (keeps the prior; docs/MODEL.md) or paper (default: the\n"
+                 "domain file's observation_model.update, else posterior)")
+      ->check(CLI::IsMember({"posterior", "paper"}));
+  CLI::Option* c_option = app.add_option("--c", step_size, "The paper's step size (--alpha-update paper only; default: the domain's, else 0.1)")
+                              ->check(CLI::Range(1e-6, 1.0));
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
-  parse_alpha_update(update, o.learning.update);
+  if (!update.empty()) {
+    AlphaUpdate u = AlphaUpdate::kPosterior;
+    parse_alpha_update(update, u);
+    o.learning.update = u;
+  }
+  if (c_option->count() > 0) o.learning.c = step_size;
   if (!d.spec.empty()) o.domain = open_domain_args(d);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;

@@ -83,14 +83,11 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   for (int i = 0; i < m.n; ++i) {
     const int s = m.symbol[static_cast<size_t>(i)];
     if (s < 0 || s >= m.num_symbols) throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
-    double sum = 0.0;
-    for (double x : m.eta[static_cast<size_t>(i)]) {
-      if (!std::isfinite(x) || x < 0.0) throw InputError("observations.eta[" + std::to_string(i) + "]", "must be finite and >= 0");
-      sum += x;
-    }
-    if (!(sum > 0.0)) throw InputError("observations.eta[" + std::to_string(i) + "]", "sums to 0");
+    std::vector<double> eta = m.eta[static_cast<size_t>(i)];
+    const std::string wrong = normalise_eta(eta.data(), m.num_sources);
+    if (!wrong.empty()) throw InputError("observations.eta[" + std::to_string(i) + "]", wrong);
     f.symbols.push_back(s);
-    f.eta.insert(f.eta.end(), m.eta[static_cast<size_t>(i)].begin(), m.eta[static_cast<size_t>(i)].end());
+    f.eta.insert(f.eta.end(), eta.begin(), eta.end());
   }
   num_symbols_ = m.num_symbols;
   num_sources_ = m.num_sources;

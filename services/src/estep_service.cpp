@@ -9,14 +9,13 @@
 #include "learner/digest.hpp"
 #include "learner/input_error.hpp"
 #include "learner/soft_value_iteration.hpp"
+#include "services/lcm_arrays.hpp"
 
 namespace hbirl::services {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-bool finite_nonnegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
 }  // namespace
 
@@ -75,10 +74,7 @@ hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count
   m.n = t.num_observations();
   for (int s : t.symbols) m.symbol.push_back(static_cast<std::int16_t>(s));
   m.num_sources = static_cast<std::int32_t>(t.eta.cols());
-  m.eta.resize(static_cast<size_t>(m.n));
-  for (int i = 0; i < m.n; ++i) {
-    m.eta[static_cast<size_t>(i)].assign(t.eta.row(i).data(), t.eta.row(i).data() + t.eta.cols());
-  }
+  m.eta = lcm_rows(t.eta);
   m.num_weights = static_cast<std::int32_t>(t.weights.size());
   m.weights = t.weights;
   return m;
@@ -101,13 +97,10 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
     if (m.symbol[static_cast<size_t>(i)] < 0) throw InputError("trajectory.symbol[" + std::to_string(i) + "]", "is negative");
     t.symbols.push_back(m.symbol[static_cast<size_t>(i)]);
   }
-  t.eta.resize(m.n, m.num_sources);
+  t.eta = eigen_rows<RowMatrix>(m.eta, m.num_sources);
   for (int i = 0; i < m.n; ++i) {
-    for (int e = 0; e < m.num_sources; ++e) {
-      const double x = m.eta[static_cast<size_t>(i)][static_cast<size_t>(e)];
-      if (!finite_nonnegative(x)) throw InputError("trajectory.eta[" + std::to_string(i) + "]", "must be finite and >= 0");
-      t.eta(i, e) = x;
-    }
+    const std::string wrong = normalise_eta(t.eta.row(i).data(), m.num_sources);
+    if (!wrong.empty()) throw InputError("trajectory.eta[" + std::to_string(i) + "]", wrong);
   }
   if (m.num_weights != 0 && m.num_weights != m.n) throw InputError("trajectory.num_weights", "must be 0 or n");
   for (double w : m.weights) {
@@ -232,17 +225,11 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   }
   if (m.num_blocks != estep_->num_blocks()) throw InputError("estep_request.num_blocks", "differs from this worker's");
   SoftSolution policy;
-  policy.log_policy = Eigen::Map<const Eigen::VectorXd>(m.log_policy.data(), P);
-  policy.policy = Eigen::Map<const Eigen::VectorXd>(m.policy.data(), P);
+  policy.log_policy = eigen_vector(m.log_policy);
+  policy.policy = eigen_vector(m.policy);
   ObservationModel model;
-  model.subject.resize(P, W);
-  for (int r = 0; r < P; ++r) {
-    for (int w = 0; w < W; ++w) model.subject(r, w) = m.subject_o[static_cast<size_t>(r)][static_cast<size_t>(w)];
-  }
-  model.confounders.resize(E, W);
-  for (int e = 0; e < E; ++e) {
-    for (int w = 0; w < W; ++w) model.confounders(e, w) = m.confounder_o[static_cast<size_t>(e)][static_cast<size_t>(w)];
-  }
+  model.subject = eigen_rows(m.subject_o, W);
+  model.confounders = eigen_rows(m.confounder_o, W);
   if (!model.subject.allFinite() || !model.confounders.allFinite() || (model.subject.array() < 0).any() ||
       (model.confounders.array() < 0).any()) {
     throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
@@ -258,17 +245,11 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     r.dataset_digest = static_cast<std::int64_t>(digest_);
     r.block = block;
     r.num_pairs = P;
-    r.counts.assign(s.counts.data(), s.counts.data() + P);
+    r.counts = lcm_vector(s.counts);
     r.num_symbols = W;
     r.num_confounders = E;
-    r.alpha_subject.assign(static_cast<size_t>(P), std::vector<double>(static_cast<size_t>(W)));
-    for (int i = 0; i < P; ++i) {
-      for (int w = 0; w < W; ++w) r.alpha_subject[static_cast<size_t>(i)][static_cast<size_t>(w)] = s.alpha_dot.subject(i, w);
-    }
-    r.alpha_confounder.assign(static_cast<size_t>(E), std::vector<double>(static_cast<size_t>(W)));
-    for (int e = 0; e < E; ++e) {
-      for (int w = 0; w < W; ++w) r.alpha_confounder[static_cast<size_t>(e)][static_cast<size_t>(w)] = s.alpha_dot.confounders(e, w);
-    }
+    r.alpha_subject = lcm_rows(s.alpha_dot.subject);
+    r.alpha_confounder = lcm_rows(s.alpha_dot.confounders);
     r.log_likelihood = s.log_likelihood;
     r.impossible = s.impossible;
     r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -356,15 +337,9 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     return;
   }
   EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_);
-  s.counts = Eigen::Map<const Eigen::VectorXd>(m.counts.data(), pairs_);
-  for (int i = 0; i < pairs_; ++i) {
-    for (int w = 0; w < symbols_; ++w) s.alpha_dot.subject(i, w) = m.alpha_subject[static_cast<size_t>(i)][static_cast<size_t>(w)];
-  }
-  for (int e = 0; e < confounders_; ++e) {
-    for (int w = 0; w < symbols_; ++w) {
-      s.alpha_dot.confounders(e, w) = m.alpha_confounder[static_cast<size_t>(e)][static_cast<size_t>(w)];
-    }
-  }
+  s.counts = eigen_vector(m.counts);
+  s.alpha_dot.subject = eigen_rows(m.alpha_subject, symbols_);
+  s.alpha_dot.confounders = eigen_rows(m.alpha_confounder, symbols_);
   if (!s.counts.allFinite() || !s.alpha_dot.subject.allFinite() || !s.alpha_dot.confounders.allFinite() ||
       (s.counts.array() < 0).any() || (s.alpha_dot.subject.array() < 0).any() || (s.alpha_dot.confounders.array() < 0).any()) {
     throw InputError("estep_result.counts", "must be finite and >= 0");
@@ -442,18 +417,12 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   request.engine = "exact";
   request.max_kinds = estep.options().max_kinds;
   request.num_pairs = pairs_;
-  request.log_policy.assign(policy.log_policy.data(), policy.log_policy.data() + pairs_);
-  request.policy.assign(policy.policy.data(), policy.policy.data() + pairs_);
+  request.log_policy = lcm_vector(policy.log_policy);
+  request.policy = lcm_vector(policy.policy);
   request.num_symbols = symbols_;
   request.num_confounders = confounders_;
-  request.subject_o.assign(static_cast<size_t>(pairs_), std::vector<double>(static_cast<size_t>(symbols_)));
-  for (int r = 0; r < pairs_; ++r) {
-    for (int w = 0; w < symbols_; ++w) request.subject_o[static_cast<size_t>(r)][static_cast<size_t>(w)] = model.subject(r, w);
-  }
-  request.confounder_o.assign(static_cast<size_t>(confounders_), std::vector<double>(static_cast<size_t>(symbols_)));
-  for (int e = 0; e < confounders_; ++e) {
-    for (int w = 0; w < symbols_; ++w) request.confounder_o[static_cast<size_t>(e)][static_cast<size_t>(w)] = model.confounders(e, w);
-  }
+  request.subject_o = lcm_rows(model.subject);
+  request.confounder_o = lcm_rows(model.confounders);
 
   const auto missing = [this] {
     std::vector<int> out;

@@ -11,33 +11,44 @@ std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Datas
   return w;
 }
 
-Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
-                           std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
-  if (data.observed.empty()) throw InputError("demonstrations", "none received");
-  const Mdp& mdp = domain.mdp();
+ObservationPrior observation_prior(const Domain& domain, const Dataset& data, const LearningOptions& options) {
   if (domain.num_symbols() > 0 && data.num_symbols != domain.num_symbols()) {
     throw InputError("observations.num_symbols", std::to_string(data.num_symbols) + " differs from the domain's " +
                                                      std::to_string(domain.num_symbols()));
   }
+  const std::optional<ObservationPrior> stated = domain.stated_prior();
   ObservationPrior prior;
-  prior.num_symbols = data.num_symbols;
-  prior.num_confounders = data.num_sources - 1;
-  prior.subject_alpha = domain.subject_prior(data.controlled_truth, data.controlled_observed, data.num_symbols);
-  prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
-  use_alpha_update(prior, options.update);
-  // The bus carries the stated eta only: remote workers cannot compute with learned eta.
-  prior.learn_eta = false;
-  prior.c = options.c;
+  if (stated) {
+    prior = *stated;
+    if (data.num_sources != 1 + prior.num_confounders) {
+      throw InputError("observations.num_sources", std::to_string(data.num_sources) + " differs from the domain's " +
+                                                       std::to_string(1 + prior.num_confounders));
+    }
+  } else {
+    prior.num_symbols = data.num_symbols;
+    prior.num_confounders = data.num_sources - 1;
+    prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
+  }
+  if (!stated || !data.controlled_observed.empty()) {
+    prior.subject_alpha = domain.subject_prior(data.controlled_truth, data.controlled_observed, data.num_symbols);
+  }
+  if (options.update) use_alpha_update(prior, *options.update);
+  if (options.c) prior.c = *options.c;
+  prior.learn_eta = false;  // the bus carries the stated eta only
+  return prior;
+}
+
+Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
+                           std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
+  if (data.observed.empty()) throw InputError("demonstrations", "none received");
+  const Mdp& mdp = domain.mdp();
+  ObservationPrior prior = observation_prior(domain, data, options);
   ObservationEStepOptions estep_options;
-  estep_options.max_alpha_iterations = options.max_alpha_iterations;
-  estep_options.alpha_tolerance = options.alpha_tolerance;
   estep_options.executor = std::move(executor);
   const ObservationEStep estep(mdp, data.observed, prior, estep_options);
   LearnOptions learn;
   learn.seed = options.seed;
-  learn.threads = 1;  // one E-step at a time on the bus
-  learn.theta_tolerance = options.theta_tolerance;
-  learn.likelihood_tolerance = options.likelihood_tolerance;
+  learn.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)
   if (progress) {
     learn.on_iteration = [&progress, &prior](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult&,
                                              const ObservationPrior* alpha) { progress(iteration, ll, theta, alpha ? *alpha : prior); };

@@ -7,6 +7,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
+#include "services/lcm_arrays.hpp"
 #include "services/log_bus.hpp"
 
 namespace hbirl::services {
@@ -31,14 +32,8 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   o.num_pairs = mdp.num_pairs();
   o.num_symbols = model.num_symbols();
   o.num_confounders = model.num_confounders();
-  for (int r = 0; r < o.num_pairs; ++r) {
-    std::vector<double>& row = o.subject.emplace_back(static_cast<size_t>(o.num_symbols));
-    for (int w = 0; w < o.num_symbols; ++w) row[static_cast<size_t>(w)] = model.subject(r, w);
-  }
-  for (int e = 0; e < o.num_confounders; ++e) {
-    std::vector<double>& row = o.confounders.emplace_back(static_cast<size_t>(o.num_symbols));
-    for (int w = 0; w < o.num_symbols; ++w) row[static_cast<size_t>(w)] = model.confounders(e, w);
-  }
+  o.subject = lcm_rows(model.subject);
+  o.confounders = lcm_rows(model.confounders);
   publish(bus, channels::kObservationModel, o, counters);
   if (data.observed.empty()) return;
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(theta));
@@ -52,9 +47,7 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   p.num_states = mdp.num_states;
   p.num_actions = mdp.num_actions;
   p.num_pairs = mdp.num_pairs();
-  for (Eigen::Index t = 0; t < post.marginals.rows(); ++t) {
-    p.marginals.emplace_back(post.marginals.row(t).data(), post.marginals.row(t).data() + post.marginals.cols());
-  }
+  p.marginals = lcm_rows(post.marginals);
   p.log_likelihood = post.log_likelihood;
   publish(bus, channels::kPosterior, p, counters);
 }
@@ -147,7 +140,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                           p.log_likelihood = ll;
                                           p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
                                           p.num_features = static_cast<std::int32_t>(theta.size());
-                                          p.theta.assign(theta.data(), theta.data() + theta.size());
+                                          p.theta = lcm_vector(theta);
                                           const auto s = executor->stats();
                                           p.retries = static_cast<std::int32_t>(s.retried_blocks);
                                           p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
@@ -164,16 +157,13 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   r.domain = result.data.domain;
   r.final = true;
   r.num_features = static_cast<std::int32_t>(result.learned.theta.size());
-  r.theta.assign(result.learned.theta.data(), result.learned.theta.data() + result.learned.theta.size());
+  r.theta = lcm_vector(result.learned.theta);
   r.num_true = truth ? static_cast<std::int32_t>(truth->size()) : 0;
-  if (truth) r.true_theta.assign(truth->data(), truth->data() + truth->size());
+  if (truth) r.true_theta = lcm_vector(*truth);
   const SoftSolution policy = soft_value_iteration(mdp, mdp.features * result.learned.theta);
   r.num_states = mdp.num_states;
   r.num_actions = mdp.num_actions;
-  r.policy.assign(static_cast<size_t>(mdp.num_states), std::vector<double>(static_cast<size_t>(mdp.num_actions)));
-  for (int s = 0; s < mdp.num_states; ++s) {
-    for (int a = 0; a < mdp.num_actions; ++a) r.policy[static_cast<size_t>(s)][static_cast<size_t>(a)] = policy.policy[mdp.pair(s, a)];
-  }
+  r.policy = lcm_rows(RowMatrix::Map(policy.policy.data(), mdp.num_states, mdp.num_actions));  // pairs are s * A + a
   r.log_likelihood = result.learned.log_likelihood;
   r.ile = result.learned.ile.value_or(-1.0);
   publish(bus, channels::kReward, r, counters);
@@ -195,8 +185,7 @@ std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<con
   return builtin;
 }
 
-OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
-                               std::shared_ptr<const Domain> domain) {
+OptimiserResult collect_from_log(const std::string& path, Counters& counters) {
   LogBus bus(path);
   DatasetBuilder builder;
   builder.subscribe(bus, counters);
@@ -206,6 +195,12 @@ OptimiserResult learn_from_log(const std::string& path, const LearningOptions& o
   OptimiserResult result;
   result.data = builder.build();
   result.missing_frames = builder.missing_frames();
+  return result;
+}
+
+OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
+                               std::shared_ptr<const Domain> domain) {
+  OptimiserResult result = collect_from_log(path, counters);
   result.learned = learn_from_dataset(*domain_of(result.data, std::move(domain)), result.data, options);
   return result;
 }

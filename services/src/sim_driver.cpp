@@ -10,6 +10,11 @@
 #include "learner/input_error.hpp"
 #include "services/sim_driver.hpp"
 
+#include "services/lcm_arrays.hpp"
+
+#include "hbirl/reward_t.hpp"
+#include "hbirl/service_status_t.hpp"
+
 namespace hbirl::services {
 
 namespace {
@@ -28,10 +33,9 @@ hbirl::observations_t step_observations(const ObservedTrajectory& tr, int t, int
   m.step = t;
   m.num_symbols = num_symbols;
   m.num_sources = num_sources;
-  for (int n = tr.step_begin[static_cast<size_t>(t)]; n < tr.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-    m.symbol.push_back(static_cast<std::int16_t>(tr.symbols[static_cast<size_t>(n)]));
-    m.eta.emplace_back(tr.eta.row(n).data(), tr.eta.row(n).data() + tr.eta.cols());
-  }
+  const int begin = tr.step_begin[static_cast<size_t>(t)], end = tr.step_begin[static_cast<size_t>(t) + 1];
+  for (int n = begin; n < end; ++n) m.symbol.push_back(static_cast<std::int16_t>(tr.symbols[static_cast<size_t>(n)]));
+  m.eta = lcm_rows(tr.eta.middleRows(begin, end - begin));
   m.n = static_cast<std::int32_t>(m.symbol.size());
   return m;
 }
@@ -39,9 +43,12 @@ hbirl::observations_t step_observations(const ObservedTrajectory& tr, int t, int
 }  // namespace
 
 SimDriver::SimDriver(Bus& bus, const Domain& domain, const SimDriverOptions& o, Counters& counters)
-    : bus_(bus), options_(o), counters_(counters), domain_(domain.name()) {
+    : SimDriver(bus, domain.name(), domain.simulate(o.simulation), o, counters) {}
+
+SimDriver::SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run, const SimDriverOptions& o,
+                     Counters& counters)
+    : bus_(bus), options_(o), counters_(counters), domain_(std::move(domain_name)), run_(std::move(run)) {
   if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
-  run_ = domain.simulate(o.simulation);
   subs_.add(bus_, subscribe<hbirl::frame_request_t>(bus_, channels::kFrameRequest, counters_,
                                                     [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
 }
@@ -114,6 +121,7 @@ void SimDriver::on_request(const hbirl::frame_request_t& m) {
 void SimDriver::publish_truth(int id, int t) {
   const Simulation& p = *run_;
   const Simulation::Episode& e = p.episodes[static_cast<size_t>(id)];
+  if (!e.has_truth) return;
   hbirl::ground_truth_t truth{};
   truth.utime = micros(e.start_time + t * p.step_seconds);
   truth.seq = ++truth_seq_;
@@ -123,7 +131,7 @@ void SimDriver::publish_truth(int id, int t) {
   truth.state = e.steps[static_cast<size_t>(t)].state;
   truth.action = e.steps[static_cast<size_t>(t)].action;
   truth.num_features = static_cast<std::int32_t>(p.true_weights.size());
-  truth.true_weights.assign(p.true_weights.data(), p.true_weights.data() + p.true_weights.size());
+  truth.true_weights = lcm_vector(p.true_weights);
   publish(bus_, channels::kGroundTruth, truth, counters_);
 }
 
@@ -169,6 +177,53 @@ hbirl::episode_marker_t SimDriver::end_marker(int id) {
 void SimDriver::republish_end_markers() {
   for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
   publish(bus_, channels::kEpisode, marker(0, hbirl::episode_marker_t::END_RUN, 0.0), counters_);
+}
+
+bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
+                      const std::function<void(const std::string&)>& beat, const std::function<void(const std::string&)>& log) {
+  const auto say = [&log](const std::string& s) {
+    if (log) log(s);
+  };
+  const auto tick = [&beat](const std::string& state) {
+    if (beat) beat(state);
+  };
+  // The services downstream listen once their first heartbeat is heard.
+  std::set<std::string> waiting;
+  for (const auto& l : listeners()) waiting.insert(l);
+  bool learned = false;
+  Subscriptions subs;
+  subs.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+                                                    [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); },
+                                                    1000));
+  subs.add(bus_, subscribe<hbirl::reward_t>(bus_, channels::kReward, counters_,
+                                            [&learned](const hbirl::reward_t& r, const Message&) { learned = learned || r.final; }));
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(start_delay_s));
+  while (!waiting.empty() && Clock::now() < until && !(stop && stop())) {
+    bus_.handle(50);
+    tick("starting");
+  }
+  if (!waiting.empty()) {
+    std::string names;
+    for (const auto& w : waiting) names += " " + w;
+    say("starting without hearing from:" + names);
+  }
+  const bool finished = publish_run(stop, [&] {
+    bus_.handle(0);
+    tick("running");
+  });
+  say(std::string(finished ? "run published" : "stopped") + "; " + std::to_string(counters_.messages_out) + " messages published");
+  // Then frames lost on the way are sent again, and the end markers repeated in case they
+  // were lost, until the optimiser has published its reward.
+  auto next_markers = Clock::now() + std::chrono::seconds(1);
+  while (finished && !learned && !(stop && stop())) {
+    bus_.handle(100);
+    tick("serving lost frames");
+    if (Clock::now() >= next_markers) {
+      republish_end_markers();
+      next_markers = Clock::now() + std::chrono::seconds(1);
+    }
+  }
+  return finished;
 }
 
 bool run_sim_driver(Bus& bus, const Domain& domain, const SimDriverOptions& o, Counters& counters,

@@ -77,6 +77,7 @@ class FileDomain final : public Domain {
   const Mdp& mdp() const override { return spec_.mdp; }
   int num_symbols() const override { return spec_.num_symbols(); }
   std::optional<Eigen::VectorXd> true_weights() const override { return spec_.true_weights; }
+  std::optional<ObservationPrior> stated_prior() const override { return spec_.observation_model; }
 
   DomainNames names(int num_sources) const override {
     const Mdp& m = spec_.mdp;

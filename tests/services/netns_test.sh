@@ -23,6 +23,18 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 theta() { awk '/"theta": \[/{on=1; next} on && /\]/{exit} on{gsub(/[ ,]/, ""); printf "%s ", $0}' "$1"; }
 ile() { sed -n 's/^ *"ile": \([^,]*\),*$/\1/p' "$1"; }
 # What a result learned from, for failure messages.
+# Two JSON results' learned theta ("theta" or "weights") equal to the last bit.
+same_theta() {
+  python3 - "$1" "$2" <<'PY'
+import json, sys
+def theta(path):
+    d = json.load(open(path))
+    return d.get("theta", d.get("weights"))
+a, b = theta(sys.argv[1]), theta(sys.argv[2])
+print("theta", a, "vs", b)
+sys.exit(0 if a is not None and a == b else 1)
+PY
+}
 data_summary() { grep -E '"(dataset_digest|missing_frames|controlled_episodes|demonstrations)"' "$1" | tr -d ' \n'; }
 launch() {  # launch NAME ARGS...: the demo into $tmp/NAME
   local name="$1"; shift
@@ -80,7 +92,12 @@ case "$case" in
     "$build/hbirl" learn --log "$tmp/wh/run.lcmlog" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_offline.json"
     [ "$(theta "$tmp/wh_offline.json")" = "$(theta "$tmp/wh/result.json")" ] ||
       fail "hbirl learn --log: theta $(theta "$tmp/wh_offline.json") != live $(theta "$tmp/wh/result.json")"
-    echo "warehouse over LCM: theta $(theta "$tmp/wh/result.json"); ILE $(ile "$tmp/wh/result.json")"
+    # A recording becomes a problem file that learns the live theta offline.
+    "$build/hbirl" export --log "$tmp/wh/run.lcmlog" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_export.json"
+    "$build/hbirl" validate --problem "$tmp/wh_export.json" >/dev/null || fail "the exported problem file is not valid"
+    "$build/hbirl" learn --problem "$tmp/wh_export.json" --out "$tmp/wh_export_learned.json"
+    same_theta "$tmp/wh_export_learned.json" "$tmp/wh/result.json" || fail "hbirl learn on the exported problem: another theta"
+    echo "warehouse over LCM: theta $(theta "$tmp/wh/result.json"); ILE $(ile "$tmp/wh/result.json"); exported and learned again: the same"
     ;;
   one_sampler_two_domains)
     # One sampler started with nothing but --url serves a warehouse run, then an onion run:
@@ -105,6 +122,35 @@ case "$case" in
     "$build/hbirl-labeller" --url "$url" >"$tmp/labeller.log" 2>&1 &
     run_set onion onion --sorts 4 --controlled-sorts 6 --fps 5
     kill -0 "$sampler" || { cat "$tmp/sampler.log"; fail "the sampler died"; }
+    ;;
+  publish_problem)
+    # hbirl publish streams a problem file into a live optimiser (with a worker) as a sensor
+    # would: the theta of hbirl learn on the same file with eta as stated, bit for bit.
+    "$build/hbirl-sampler" --url "$url" >"$tmp/sampler.log" 2>&1 &
+    "$build/hbirl-optimiser" --url "$url" --workers 1 --domain "$repo/examples/corridor.json" --out "$tmp/live.json" \
+      >/dev/null 2>"$tmp/optimiser.err" &
+    optimiser=$!
+    "$build/hbirl" publish --problem "$repo/examples/corridor.json" --url "$url" --rate 0 >"$tmp/publish.log" 2>&1 ||
+      { cat "$tmp/publish.log"; fail "hbirl publish failed"; }
+    wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
+    "$build/hbirl" learn --problem "$repo/examples/corridor.json" --eta stated --out "$tmp/offline.json"
+    same_theta "$tmp/live.json" "$tmp/offline.json" || fail "published and learned live: another theta than hbirl learn"
+    grep -q '"remote_blocks": 0,' "$tmp/live.json" && fail "the worker computed nothing"
+    echo "hbirl publish into a live optimiser: the theta of hbirl learn"
+    ;;
+  example_sensor)
+    # examples/sensor/corridor_sensor, a sensor written outside hbirl (LCM and the message
+    # types only), feeds an optimiser and a worker learning on examples/corridor.json:
+    # the learned policy walks to the exit as the true one does (ILE 0).
+    "$build/hbirl-sampler" --url "$url" >"$tmp/sampler.log" 2>&1 &
+    "$build/hbirl-optimiser" --url "$url" --workers 1 --domain "$repo/examples/corridor.json" --out "$tmp/live.json" \
+      >/dev/null 2>"$tmp/optimiser.err" &
+    optimiser=$!
+    "$build/examples/sensor/corridor_sensor" --url "$url" >"$tmp/sensor.log" 2>&1 || { cat "$tmp/sensor.log"; fail "the sensor failed"; }
+    wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
+    grep -qE '"demonstrations": 30,?$' "$tmp/live.json" || fail "not the sensor's 30 episodes: $(data_summary "$tmp/live.json")"
+    awk -v x="$(ile "$tmp/live.json")" 'BEGIN { exit !(x != "" && x + 0 < 1e-9) }' || fail "ILE '$(ile "$tmp/live.json")' is not 0"
+    echo "corridor_sensor -> optimiser: theta $(theta "$tmp/live.json"); ILE $(ile "$tmp/live.json")"
     ;;
   workers_1_vs_4)
     launch one --workers 1

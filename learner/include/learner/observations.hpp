@@ -42,6 +42,13 @@ struct ObservedTrajectory {
 // bit. Two processes with the same digest hold the same data (services/ compares them).
 std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories);
 
+// A source distribution eta as it comes in at the edge (a file, a message), checked and
+// normalised in one place: its n entries must be finite and >= 0 and sum to 1 within
+// `tolerance` (rounded values such as 1/3 as 0.333333 are fine). It is rescaled to sum
+// to 1 only when it is off by more than rounding, so that a distribution written out
+// exactly and read back keeps its bits. Returns what is wrong, empty when nothing is.
+std::string normalise_eta(double* eta, int n, double tolerance = 1e-6);
+
 // The same trajectory with identical (symbol, eta) observations of a step merged into
 // one with a multiplicity: an exact rewrite of the emission product that makes the
 // E-step's cost grow with the number of distinct observations, not all of them.

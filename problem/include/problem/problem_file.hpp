@@ -20,6 +20,10 @@ struct DemonstratedTrajectory {
   // It ended because its last action entered a terminal state (default when the MDP has
   // terminal states); false for a trajectory that was cut off.
   bool ends_in_terminal = false;
+  // Part of a controlled run (the subject alone, its true steps known): it gives the
+  // subject's prior (learner/controlled_prior.hpp) instead of demonstrating; it needs
+  // both steps and truth.
+  bool controlled = false;
 };
 
 struct Problem {
@@ -31,7 +35,8 @@ struct Problem {
   std::vector<DemonstratedTrajectory> demonstration;
   std::optional<Eigen::VectorXd> true_weights;
 
-  // The truth trajectories; throws InputError naming the first trajectory without one.
+  // The truth of the demonstrations (the controlled run's left out); throws InputError
+  // naming the first trajectory without one.
   std::vector<Trajectory> truth_trajectories() const;
 };
 

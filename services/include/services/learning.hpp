@@ -1,8 +1,9 @@
 #pragma once
 // Learning the reward from a data set assembled off the bus (dataset.hpp), the same way
 // live (hbirl-optimiser, with sampler workers) and offline (hbirl learn --log): the
-// partially-controlled model with the sensor's eta, the subject prior the domain gives
-// (from the run's controlled episodes), uninformative priors for the confounding elements.
+// partially-controlled model with the sensor's eta; the observation model the domain
+// states (a domain file's), else uninformative priors for the confounding elements; the
+// subject prior from the run's controlled episodes when there are any (domain.hpp).
 #include <functional>
 #include <memory>
 #include <optional>
@@ -14,14 +15,15 @@
 
 namespace hbirl::services {
 
+// How the optimiser learns: as `hbirl learn` does with the same problem (HiddenDataEM's
+// and the E-step's defaults; the domain's stated observation model when it has one), so
+// a run learned live and the same data learned offline give the same theta. The bus
+// carries the stated eta only (remote workers cannot compute with learned eta), so eta
+// is never learned here.
 struct LearningOptions {
-  AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
-  double c = 0.5;                   // the paper's step size (update paper only)
+  std::optional<AlphaUpdate> update;  // overrides the domain's (default: the posterior update)
+  std::optional<double> c;            // the paper's step size, overriding the domain's
   std::uint64_t seed = 1;
-  int max_alpha_iterations = 1;     // as in hbirl experiment onion
-  double alpha_tolerance = 1e-3;
-  double theta_tolerance = 1e-3;
-  double likelihood_tolerance = 1e-6;
 };
 
 struct Learned {
@@ -40,6 +42,10 @@ using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const
 // The expert's true weights, for the ILE: the ground truth's, else the domain's; none when
 // they do not fit the domain's features.
 std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data);
+
+// The observation prior learned from: see LearningOptions. Throws InputError when the data
+// do not fit the domain (symbols, sources) or there is no subject prior.
+ObservationPrior observation_prior(const Domain& domain, const Dataset& data, const LearningOptions& options);
 
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
 // subject prior, symbols outside the domain).

@@ -51,6 +51,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                              const std::function<void(const std::string&)>& log = nullptr,
                                              const std::function<void()>& ready = nullptr);
 
+// The data set of a recorded log, as the live optimiser collected it (up to the moment
+// the run was complete); `learned` is left empty. Throws InputError for unusable logs.
+OptimiserResult collect_from_log(const std::string& path, Counters& counters);
+
 // Learns offline from a recorded log (hbirl learn --log): the same data set and the same
 // learning as the live optimiser, computed here. `domain` as OptimiserOptions::domain.
 // Throws InputError for unusable logs.

@@ -34,6 +34,10 @@ class SimDriver {
  public:
   // Throws InputError for a domain without a simulator or options it cannot run.
   SimDriver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters);
+  // A run planned elsewhere (e.g. a recorded one, sim_driver/recorded_run.hpp), under the
+  // domain name its markers carry.
+  SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run, const SimDriverOptions& options,
+            Counters& counters);
   ~SimDriver();
   // Returns false if asked to stop first. `idle` runs after every frame.
   bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
@@ -44,6 +48,14 @@ class SimDriver {
   // Which services must listen before the run starts (perception and the labeller only
   // for a camera).
   std::vector<std::string> listeners() const;
+
+  // The whole service: waits until the listeners' heartbeats are heard (at most
+  // `start_delay_s`), publishes the run, then answers FRAME_REQUEST and repeats the end
+  // markers every second until the optimiser's final REWARD comes or `stop` says so.
+  // `beat(state)` is called often (the process's heartbeat), `log` with what happened.
+  // Returns false if stopped before the run was published.
+  bool serve(const std::function<bool()>& stop, double start_delay_s, const std::function<void(const std::string&)>& beat,
+             const std::function<void(const std::string&)>& log);
 
  private:
   hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;

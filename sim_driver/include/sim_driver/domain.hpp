@@ -59,6 +59,7 @@ class Simulation {
     double start_time = 0.0;  // sim seconds
     Trajectory steps;
     bool ends_in_terminal = false;
+    bool has_truth = true;  // its true steps are known (GROUND_TRUTH is published)
   };
   virtual ~Simulation() = default;
 
@@ -88,6 +89,9 @@ class Domain {
   // then the confounding elements).
   virtual DomainNames names(int num_sources) const = 0;
   virtual std::optional<Eigen::VectorXd> true_weights() const { return std::nullopt; }
+  // The observation model the domain states (a domain file's "observation_model": its
+  // priors and how they are learned), if any; learning starts from it.
+  virtual std::optional<ObservationPrior> stated_prior() const { return std::nullopt; }
   // Its simulator is a camera (frames for perception and the labeller), not a sensor.
   virtual bool has_camera() const { return false; }
   // The subject's Dirichlet prior (paper §Experiments): from a controlled run's observations and true steps.

@@ -1,0 +1,97 @@
+// hbirl publish: a problem file's demonstration streamed onto the bus as a sensor would.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "problem/domain_file.hpp"
+#include "services/process.hpp"
+#include "services/sim_driver.hpp"
+#include "sim_driver/recorded_run.hpp"
+
+namespace hbirl::cli {
+
+namespace {
+
+struct PublishArgs {
+  std::string problem;
+  std::string url;
+  double rate = 100.0;
+  double start_delay = 10.0;
+  double linger = 600.0;
+};
+
+int run_publish(const PublishArgs& args) {
+  const Problem problem = load_problem(args.problem);
+  // The markers carry the name the optimiser knows the domain by (the file's "name", else its stem).
+  std::string name;
+  try {
+    name = read_domain_file(args.problem).name;
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
+  std::unique_ptr<Simulation> run;
+  try {
+    run = recorded_run(problem);
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
+  int controlled = 0, steps = 0;
+  for (const auto& e : run->episodes) {
+    controlled += e.controlled;
+    steps += static_cast<int>(e.steps.size());
+  }
+  services::install_stop_handlers();
+  std::unique_ptr<services::Bus> bus = services::open_bus(args.url);
+  services::Counters counters;
+  counters.service = "publish";
+  services::Heartbeat heartbeat(*bus, counters, "publish", services::default_id("publish"));
+  services::SimDriverOptions options;
+  options.max_frames_per_second = args.rate;  // one frame per step
+  services::SimDriver driver(*bus, name, std::move(run), options, counters);
+  std::cerr << "hbirl publish: " << name << ": " << problem.demonstration.size() << " trajectories (" << controlled
+            << " controlled), " << steps << " steps, to " << (args.url.empty() ? "LCM's default URL" : args.url) << "\n";
+  // After the run: frames asked for again and the end markers repeated, until the
+  // optimiser's reward or --linger seconds.
+  std::optional<std::chrono::steady_clock::time_point> published;
+  const auto stop = [&] {
+    return services::stop_requested() ||
+           (published && std::chrono::steady_clock::now() - *published > std::chrono::duration<double>(args.linger));
+  };
+  const bool finished = driver.serve(
+      stop, args.start_delay, [&heartbeat](const std::string& state) { heartbeat.tick(state); },
+      [&](const std::string& s) {
+        if (s.rfind("run published", 0) == 0) published = std::chrono::steady_clock::now();
+        std::cerr << "hbirl publish: " << s << "\n";
+      });
+  heartbeat.tick(finished ? "done" : "stopped", true);
+  std::cerr << "hbirl publish: " << (finished ? "done" : "stopped") << "; " << driver.frames_resent() << " steps sent again on request, "
+            << counters.bad_messages << " bad messages\n";
+  return finished ? 0 : 1;
+}
+
+}  // namespace
+
+Command add_publish(CLI::App& app) {
+  auto args = std::make_shared<PublishArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "publish",
+      "Stream a problem file's demonstration onto the bus exactly as a sensor would (README.md \"Your own task\"):\n"
+      "EPISODE markers, one OBSERVATIONS message per step, and GROUND_TRUTH for the trajectories marked\n"
+      "\"controlled\". A live optimiser started with --domain on the same file learns what `hbirl learn\n"
+      "--problem FILE --eta stated` learns, bit for bit. Waits for the optimiser's heartbeat first, and\n"
+      "afterwards sends steps lost on the way again until the optimiser's reward.");
+  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
+  cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");
+  cmd->add_option("--rate", args->rate, "Steps per second, wall clock (0: as fast as the bus takes them)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  cmd->add_option("--start-delay", args->start_delay, "At most this many seconds to wait for the optimiser's heartbeat")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--linger", args->linger, "After publishing, wait at most this many seconds for the reward")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
+  return [args] { return run_publish(*args); };
+}
+
+}  // namespace hbirl::cli
