@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Every test: install what is missing, build with warnings as errors, run the test
-# suite, then build and run it again under AddressSanitizer + UndefinedBehaviorSanitizer.
-# The benchmarks are built (so they keep compiling) but not run; see docs/BENCHMARKS.md.
+# suite, then build and run it again under AddressSanitizer + UndefinedBehaviorSanitizer,
+# and check that learner/ and problem/ build and pass alone, without OpenCV, LCM, CLI11
+# or cpp-httplib (scripts/learner-only-check.sh). The benchmarks are built (so they keep
+# compiling) but not run; see docs/BENCHMARKS.md.
 set -euo pipefail
 cd "$(dirname "$0")"
 scripts/install-deps.sh
@@ -15,7 +17,8 @@ ctest --test-dir build --output-on-failure -j"$jobs"
 # the sanitizers' reports.
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
       -DHBIRL_WERROR=ON -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
-cmake --build build-sanitize -j"$jobs"
+# What the sanitizer run needs: the test executable, the hbirl command it runs, the bindings it compiles.
+cmake --build build-sanitize -j"$jobs" --target hbirl_tests hbirl hbirl_lcmtypes_bindings
 # Run in the Release build only: the multi-process tests (label multiprocess: whole
 # service sets over LCM in network namespaces; the same service code runs under the
 # sanitizers in the in-process tests), and five statistics-heavy tests that take seconds
@@ -24,3 +27,5 @@ cmake --build build-sanitize -j"$jobs"
 heavy='^(HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate)$'
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"
+
+scripts/learner-only-check.sh build-learner-only "$jobs"

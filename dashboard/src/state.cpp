@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
-#include "services/dataset.hpp"
+#include "services/channels.hpp"
 
 namespace hbirl::dashboard {
 

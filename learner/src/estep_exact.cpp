@@ -7,8 +7,6 @@ namespace hbirl {
 
 namespace {
 
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-
 // v <- exp(v) elementwise, vectorised. Eigen's vectorised exp clamps its argument and maps
 // -inf to the smallest normal double rather than 0: results below 1e-300 are set to
 // exactly 0. Every caller has shifted v so that what matters is at least ~1e-16 (a

@@ -8,8 +8,6 @@ namespace hbirl {
 
 namespace {
 
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-
 double safe_log(double x) { return x > 0.0 ? std::log(x) : kNegInf; }
 
 bool accept(double log_ratio, Rng& rng) {

@@ -6,7 +6,6 @@
 namespace hbirl {
 
 namespace {
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 constexpr int kMaxNewtonSteps = 60;
 }  // namespace
 

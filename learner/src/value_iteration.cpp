@@ -9,7 +9,6 @@
 namespace hbirl {
 
 namespace {
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 constexpr int kMaxPolicyIterations = 1000;
 
 // q = R + gamma T v with -inf on impossible pairs and terminal states.

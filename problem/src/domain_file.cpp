@@ -14,7 +14,7 @@ namespace {
 constexpr double kSumTolerance = 1e-6;  // as for problem files: rounded probabilities are renormalised
 constexpr int kMaxCount = 100000;
 
-std::vector<std::string> read_names(const JsonNode& node, int expected, const std::string& what) {
+std::vector<std::string> read_name_list(const JsonNode& node, int expected, const std::string& what) {
   if (static_cast<int>(node.size()) != expected) {
     node.fail("has " + std::to_string(node.size()) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
   }
@@ -136,11 +136,11 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
   if (auto om = root.find("observation_model")) d.observation_model = detail::read_observation_model(*om, d.mdp, warnings);
   if (auto names_node = root.find("symbol_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_symbols)");
-    d.symbol_names = read_names(*names_node, d.num_symbols(), "symbol");
+    d.symbol_names = read_name_list(*names_node, d.num_symbols(), "symbol");
   }
   if (auto names_node = root.find("source_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_confounders)");
-    d.source_names = read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
+    d.source_names = read_name_list(*names_node, d.num_sources(), "source: the subject, then each confounding element");
   }
   if (auto tw = root.find("true_weights")) d.true_weights = detail::read_true_weights(*tw, d.mdp);
   if (auto sensor = root.find("sensor")) d.sensor = read_sensor(*sensor, d, warnings);

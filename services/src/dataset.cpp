@@ -24,6 +24,14 @@ constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
 constexpr int kMaxFeatures = 100000;
 }  // namespace
 
+void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states, int num_actions) {
+  expected_domain_ = domain;
+  expected_symbols_ = num_symbols;
+  expected_sources_ = num_sources;
+  expected_states_ = num_states;
+  expected_actions_ = num_actions;
+}
+
 DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
   if (id < 0) throw InputError("episode", "is negative");
   return episodes_[id];
@@ -31,6 +39,9 @@ DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
 
 void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
   if (counters_) counters_->gaps += marker_seq_.see(m.seq);
+  if (!expected_domain_.empty() && m.domain != expected_domain_) {
+    throw InputError("episode_marker.domain", "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
+  }
   if (!domain_.empty() && m.domain != domain_) throw InputError("episode_marker.domain", "changed from " + domain_ + " to " + m.domain);
   domain_ = m.domain;
   last_utime_ = std::max(last_utime_, m.utime);
@@ -72,6 +83,13 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   if (counters_) counters_->gaps += observation_seq_.see(m.seq);
   if (m.num_symbols < 1) throw InputError("observations.num_symbols", "must be at least 1");
   if (m.num_sources < 1) throw InputError("observations.num_sources", "must be at least 1");
+  if (expected_symbols_ > 0 && m.num_symbols != expected_symbols_) {
+    throw InputError("observations.num_symbols", std::to_string(m.num_symbols) + ", the domain has " + std::to_string(expected_symbols_));
+  }
+  if (expected_sources_ > 0 && m.num_sources != expected_sources_) {
+    throw InputError("observations.num_sources", std::to_string(m.num_sources) + " (eta's length), the domain has " +
+                                                     std::to_string(expected_sources_) + " sources");
+  }
   if (num_symbols_ && (m.num_symbols != num_symbols_ || m.num_sources != num_sources_)) {
     throw InputError("observations.num_sources", "the alphabet or the sources changed mid-run");
   }
@@ -100,6 +118,10 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (counters_) counters_->gaps += truth_seq_.see(m.seq);
   if (m.step < 0 || m.state < 0 || m.action < 0) throw InputError("ground_truth.step", "step, state and action must be >= 0");
   if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
+  if (expected_states_ > 0 && (m.state >= expected_states_ || m.action >= expected_actions_)) {
+    throw InputError("ground_truth.state", "state " + std::to_string(m.state) + " or action " + std::to_string(m.action) +
+                                               " is not the domain's");
+  }
   if (!domain_.empty() && m.domain != domain_) throw InputError("ground_truth.domain", "is " + m.domain + ", the run's " + domain_);
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");

@@ -59,6 +59,12 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                              const std::function<void(const std::string&)>& log,
                                              const std::function<void()>& ready) {
   DatasetBuilder builder;
+  if (options.domain) {
+    const std::optional<ObservationPrior> stated = options.domain->stated_prior();
+    const Mdp& mdp = options.domain->mdp();
+    builder.expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0, mdp.num_states,
+                   mdp.num_actions);
+  }
   builder.subscribe(bus, counters);
   if (ready) ready();
   const auto say = [&log](const std::string& s) {

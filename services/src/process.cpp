@@ -5,7 +5,7 @@
 #include <atomic>
 #include <csignal>
 
-#include "services/estep_service.hpp"
+#include "services/channels.hpp"
 
 namespace hbirl::services {
 

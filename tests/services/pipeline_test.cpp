@@ -17,8 +17,10 @@
 #include "learner/input_error.hpp"
 #include "services/log_bus.hpp"
 #include "services/memory_bus.hpp"
+#include "services/process.hpp"
 #include "service_threads.hpp"
 #include "sim_driver/onion.hpp"
+#include "sim_driver/recorded_run.hpp"
 
 namespace hbirl::services {
 namespace {
@@ -464,6 +466,114 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   EXPECT_EQ(pc.bad_messages, 3);
   EXPECT_EQ(lc.bad_messages, 2);
   EXPECT_EQ(detections, 1);
+}
+
+}  // namespace
+}  // namespace hbirl::services
+
+namespace hbirl::services {
+namespace {
+
+// examples/corridor.json as a live run: its demonstration published by a SimDriver
+// (hbirl publish's way) into an optimiser that knows the domain. `hostile` runs first on
+// the simulator's bus, once the optimiser listens.
+std::optional<OptimiserResult> corridor_run(const std::function<void(Bus&)>& hostile, Counters& opt_counters) {
+  const std::string path = std::string(HBIRL_SOURCE_DIR) + "/examples/corridor.json";
+  const std::shared_ptr<const Domain> domain = open_domain(path);
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus sim_bus(hub);
+  Counters sim_counters = quiet("publish");
+  SimDriverOptions o;
+  o.max_frames_per_second = 0;
+  SimDriver driver(sim_bus, domain->name(), recorded_run(read_problem_file(path)), o, sim_counters);
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    if (hostile) hostile(sim_bus);
+    driver.publish_run(nullptr);
+  });
+  MemoryBus opt_bus(hub);
+  OptimiserOptions options;
+  options.domain = domain;
+  auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  sim.join();
+  return result;
+}
+
+// A sensor that does not fit the domain -- symbols outside its alphabet, eta of the wrong
+// length, true states it does not have, another domain's markers -- is refused message by
+// message, each reported naming the field; the optimiser learns from the rest exactly what
+// it learns without them.
+TEST(Pipeline, MessagesThatDoNotFitTheDomainAreRefusedOneByOne) {
+  Counters clean_counters = quiet("optimiser");
+  const auto clean = corridor_run(nullptr, clean_counters);
+  ASSERT_TRUE(clean.has_value());
+  EXPECT_EQ(clean_counters.bad_messages, 0);
+  Counters opt_counters = quiet("optimiser");
+  const auto hostile = [](Bus& bus) {
+    Counters c = quiet("hostile");
+    hbirl::observations_t symbol{};
+    symbol.episode = 0;
+    symbol.num_symbols = 2;
+    symbol.num_sources = 2;
+    symbol.n = 1;
+    symbol.symbol = {7};  // the corridor has 2 symbols
+    symbol.eta = {{0.5, 0.5}};
+    publish(bus, channels::kObservations, symbol, c);
+    hbirl::observations_t eta = symbol;
+    eta.symbol = {1};
+    eta.num_sources = 3;  // the corridor has the subject and one element
+    eta.eta = {{0.2, 0.3, 0.5}};
+    publish(bus, channels::kObservations, eta, c);
+    hbirl::observations_t wide = eta;
+    wide.num_symbols = 5;
+    wide.num_sources = 2;
+    wide.eta = {{0.2, 0.8}};
+    publish(bus, channels::kObservations, wide, c);
+    hbirl::ground_truth_t truth{};
+    truth.domain = "corridor";
+    truth.state = 9;  // 4 states
+    publish(bus, channels::kGroundTruth, truth, c);
+    hbirl::episode_marker_t marker{};
+    marker.domain = "warehouse";
+    marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+    marker.frames_per_step = 1;
+    publish(bus, channels::kEpisode, marker, c);
+  };
+  const auto attacked = corridor_run(hostile, opt_counters);
+  ASSERT_TRUE(attacked.has_value());
+  EXPECT_EQ(opt_counters.bad_messages, 5);
+  EXPECT_NE(opt_counters.last_problem.find("episode_marker.domain"), std::string::npos) << opt_counters.last_problem;
+  EXPECT_EQ(attacked->learned.digest, clean->learned.digest);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(attacked->learned.theta[k], clean->learned.theta[k]);
+}
+
+// The simulator as a whole service (SimDriver::serve): it starts once the optimiser's
+// heartbeat is heard, publishes the run, and returns once the optimiser's reward came.
+TEST(Pipeline, SimulatorWaitsForTheOptimiserAndStopsAtItsReward) {
+  const std::shared_ptr<const Domain> domain = builtin_domain("gridworld");
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus sim_bus(hub), opt_bus(hub);
+  Counters sim_counters = quiet("sim_driver"), opt_counters = quiet("optimiser");
+  SimDriver driver(sim_bus, *domain, gridworld_run(4, 6, 4), sim_counters);
+  std::vector<std::string> said;
+  std::atomic<bool> served{false};
+  std::thread sim([&] {
+    const auto start = std::chrono::steady_clock::now();
+    served = driver.serve(nullptr, 30.0, nullptr, [&said](const std::string& s) { said.push_back(s); });
+    // It did not sit out its 30 s start delay: it heard the optimiser.
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+  });
+  Heartbeat heartbeat(opt_bus, opt_counters, "optimiser", "optimiser-test");
+  OptimiserOptions options;
+  options.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };
+  const auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { heartbeat.tick("starting", true); });
+  sim.join();
+  ASSERT_TRUE(result.has_value());
+  EXPECT_TRUE(served);
+  ASSERT_FALSE(said.empty());
+  EXPECT_EQ(said.front().rfind("run published", 0), 0u) << said.front();  // no "starting without hearing from"
+  EXPECT_EQ(result->data.observed.size(), 6u);
 }
 
 }  // namespace

@@ -11,11 +11,15 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace hbirl {
 
 using SparseRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+
+// log 0: an impossible action's Q and log-probability, a never-occupied state's.
+inline constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
 struct TransitionEntry {
   int state;

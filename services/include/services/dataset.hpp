@@ -39,6 +39,11 @@ class DatasetBuilder {
  public:
   // Subscribes to the three channels; bad messages are counted in `counters`.
   void subscribe(Bus& bus, Counters& counters);
+  // The domain learned on, when known before the run: its name in the markers, its
+  // symbols and (if it states them) its sources, its states and actions in the ground
+  // truth are checked on every message (0: any), so a sensor that does not fit is refused
+  // message by message, not after the run.
+  void expect(const std::string& domain, int num_symbols, int num_sources, int num_states, int num_actions);
   // Each throws InputError naming the field of a message that does not fit.
   void on_marker(const hbirl::episode_marker_t& m);
   void on_observations(const hbirl::observations_t& m);
@@ -78,6 +83,8 @@ class DatasetBuilder {
   Episode& episode(int id);
 
   std::string domain_;
+  std::string expected_domain_;
+  int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;
