@@ -48,7 +48,7 @@ void add_engine_options(CLI::App* cmd, EngineArgs& args);
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update);
 EngineFactory engine_factory(const EngineArgs& args);
 
-// --domain SPEC and --size N: a domain from the registry (sim_driver/domain.hpp).
+// --domain onion|gridworld|FILE and --size N: a domain from the registry (sim_driver/domain.hpp).
 struct DomainArgs {
   std::string spec;
   DomainOptions options;

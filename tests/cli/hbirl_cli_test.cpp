@@ -92,7 +92,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, HelpForEveryCommand) {
   for (const char* args : {"--help", "learn --help", "validate --help", "generate --help",
-                           "generate gridworld --help", "report --help"}) {
+                           "generate gridworld --help", "report --help", "publish --help", "export --help"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 0) << args;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << args;
@@ -155,6 +155,35 @@ TEST_F(Cli, ValidateSummarises) {
   EXPECT_EQ(out["trajectories"], 6);
   EXPECT_EQ(out["observations"], 20);
   EXPECT_EQ(out["occluded_steps"], 4);
+}
+
+// Domain files (README.md "Your own task"): the example validates with its sensor; a bad
+// one is one stderr line naming the file and the field, exit 2, for each of the
+// services' and commands' ways in.
+TEST_F(Cli, ValidatesDomainFiles) {
+  Outcome r = run("validate --domain '" + example("warehouse.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["name"], "warehouse");
+  EXPECT_EQ(out["num_sources"], 3);
+  EXPECT_EQ(out["sensor"]["eta"], "plausible");
+  std::ifstream in(example("warehouse.json"));
+  json bad = json::parse(in);
+  bad["sensor"]["occlusion"] = 1.5;
+  const fs::path p = write("bad_domain.json", bad.dump());
+  for (const std::string& args : {"validate --domain '" + p.string() + "'", "learn --log x.lcmlog --domain '" + p.string() + "'",
+                                   "report --log x.lcmlog --out x --domain '" + p.string() + "'"}) {
+    r = run(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_EQ(r.out, "") << args;
+    EXPECT_EQ(r.err_lines(), 1) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(p.string() + ": sensor.occlusion: "), std::string::npos) << r.err;
+  }
+  bad = json::parse(std::ifstream(example("warehouse.json")));
+  bad["name"] = "onion";
+  r = run("validate --domain '" + write("onion.json", bad.dump()).string() + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("built-in domain's name"), std::string::npos) << r.err;
 }
 
 TEST_F(Cli, GenerateThenLearn) {
