@@ -87,6 +87,10 @@ EStepStatistics& EStepStatistics::operator+=(const EStepStatistics& other) {
   }
   log_likelihood += other.log_likelihood;
   impossible += other.impossible;
+  if (other.watched.size() > 0) {
+    watched = other.watched;
+    watched_log_likelihood = other.watched_log_likelihood;
+  }
   return *this;
 }
 
@@ -246,16 +250,19 @@ TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const Obs
 }
 
 template <typename PerObservation>
-void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out,
+void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out, bool watch,
                                 PerObservation&& per_observation) {
+  if (watch) out.watched_log_likelihood = ll;
   if (ll == kNegInf) {
     ++out.impossible;
     return;
   }
   out.log_likelihood += ll;
+  if (watch) out.watched.resize(trajectory.length(), marginal_.size());
   for (int t = 0; t < trajectory.length(); ++t) {
     marginal(t, ll);
     out.counts += marginal_;
+    if (watch) out.watched.row(t) = marginal_.transpose();
     for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
       per_observation(n);
     }
@@ -263,9 +270,9 @@ void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll,
 }
 
 void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel& model,
-                             const ObservedTrajectory& trajectory, EStepStatistics& out) {
+                             const ObservedTrajectory& trajectory, EStepStatistics& out, bool watch) {
   const double ll = forward_backward(policy, model, trajectory);
-  add_marginals(trajectory, ll, out, [&](int n) {
+  add_marginals(trajectory, ll, out, watch, [&](int n) {
     const int w = trajectory.symbols[static_cast<size_t>(n)];
     ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / p_.row(n).transpose().array(), 0.0);
     const double weight = trajectory.weight(n);
@@ -285,10 +292,10 @@ void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel&
 void ExactEngine::accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory,
                              const std::vector<int>& kinds_of, const KindEmissions& emissions_table,
                              EStepStatistics& out, RowMatrix& kind_gamma, std::vector<char>& seen,
-                             std::vector<int>& touched) {
+                             std::vector<int>& touched, bool watch) {
   emissions(trajectory, kinds_of, emissions_table);
   const double ll = passes(policy, trajectory, true);
-  add_marginals(trajectory, ll, out, [&](int n) {
+  add_marginals(trajectory, ll, out, watch, [&](int n) {
     const int k = kinds_of[static_cast<size_t>(n)];
     if (!seen[static_cast<size_t>(k)]) {
       seen[static_cast<size_t>(k)] = 1;

@@ -148,13 +148,18 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
       std::vector<int> touched;
       for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
         exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds->of[static_cast<size_t>(i)], *table, out,
-                          kind_gamma, seen, touched);
+                          kind_gamma, seen, touched, i == options_.watch);
       }
       add_kind_alpha_dot(model, *kinds, *table, kind_gamma, touched, out.alpha_dot, out.source_counts);
       return;
     }
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
+      if (i == options_.watch && engine->exact()) {  // the same sums, and the posterior kept
+        const ObservedTrajectory& t = trajectories_[static_cast<size_t>(i)];
+        engine->exact()->accumulate(policy, model, eta ? with_eta(t, *eta) : t, out, true);
+        continue;
+      }
       if (eta) {
         engine->accumulate(policy, model, with_eta(trajectories_[static_cast<size_t>(i)], *eta), rng, out);
       } else {
@@ -230,6 +235,8 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
   }
   result.counts = std::move(stats.counts);
   result.impossible_trajectories = stats.impossible;
+  result.watched = std::move(stats.watched);
+  result.watched_log_likelihood = stats.watched_log_likelihood;
   return result;
 }
 

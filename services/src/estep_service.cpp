@@ -211,7 +211,9 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   for (const auto& t : trajectories_) {
     if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the data set's eta");
   }
-  if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds) {
+  if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
+  if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds ||
+      estep_->options().watch != m.watch) {
     ObservationPrior shape;  // the worker never refines alpha: only its shape matters here
     shape.num_symbols = W;
     shape.num_confounders = E;
@@ -219,6 +221,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     shape.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
     ObservationEStepOptions options;
     options.max_kinds = m.max_kinds;
+    options.watch = m.watch;
     estep_.emplace(*mdp_, trajectories_, shape, options);
     estep_symbols_ = W;
     estep_confounders_ = E;
@@ -253,6 +256,9 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     r.log_likelihood = s.log_likelihood;
     r.impossible = s.impossible;
     r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    r.num_watched_steps = static_cast<std::int32_t>(s.watched.rows());
+    r.watched = lcm_rows(s.watched);
+    r.watched_log_likelihood = s.watched_log_likelihood;
     publish(bus_, channels::kEStepResult, r, counters_);
     ++blocks_computed_;
   }
@@ -345,6 +351,16 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     throw InputError("estep_result.counts", "must be finite and >= 0");
   }
   if (m.impossible < 0 || m.impossible > ObservationEStep::kBlockSize) throw InputError("estep_result.impossible", "out of range");
+  if (m.num_watched_steps != 0) {  // only from the block that holds the watched trajectory, all its steps
+    if (watch_ < 0 || m.block != watch_ / ObservationEStep::kBlockSize || m.num_watched_steps != watch_steps_) {
+      throw InputError("estep_result.num_watched_steps", "is not the watched trajectory's length");
+    }
+    s.watched = eigen_rows<RowMatrix>(m.watched, pairs_);
+    if (!s.watched.allFinite() || (s.watched.array() < 0.0).any() || (s.watched.array() > 1.0 + 1e-9).any()) {
+      throw InputError("estep_result.watched", "marginals must be probabilities");
+    }
+    s.watched_log_likelihood = m.watched_log_likelihood;
+  }
   s.log_likelihood = m.log_likelihood;
   s.impossible = m.impossible;
   slot = std::move(s);
@@ -416,6 +432,9 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   request.seed = static_cast<std::int64_t>(seed);
   request.engine = "exact";
   request.max_kinds = estep.options().max_kinds;
+  request.watch = estep.options().watch;
+  watch_ = request.watch;
+  watch_steps_ = watch_ >= 0 ? estep.trajectories()[static_cast<size_t>(watch_)].length() : 0;
   request.num_pairs = pairs_;
   request.log_policy = lcm_vector(policy.log_policy);
   request.policy = lcm_vector(policy.policy);

@@ -45,13 +45,14 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const Lear
   ObservationPrior prior = observation_prior(domain, data, options);
   ObservationEStepOptions estep_options;
   estep_options.executor = std::move(executor);
+  if (progress) estep_options.watch = static_cast<int>(data.observed.size()) - 1;  // the newest demonstration, for display
   const ObservationEStep estep(mdp, data.observed, prior, estep_options);
   LearnOptions learn;
   learn.seed = options.seed;
   learn.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)
   if (progress) {
-    learn.on_iteration = [&progress, &prior](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult&,
-                                             const ObservationPrior* alpha) { progress(iteration, ll, theta, alpha ? *alpha : prior); };
+    learn.on_iteration = [&progress, &prior](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e,
+                                             const ObservationPrior* alpha) { progress(iteration, ll, theta, alpha ? *alpha : prior, e); };
   }
   const LearnResult result = learn_reward(mdp, estep, learn);
   Learned out;

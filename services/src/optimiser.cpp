@@ -3,7 +3,6 @@
 
 #include <chrono>
 
-#include "learner/estep_exact.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
@@ -18,10 +17,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// For the dashboard: the learned observation model, and the posterior of the newest
-// demonstration under it and theta.
+// For the dashboard: the learned observation model, and the newest demonstration's
+// posterior as the E-step's last pass computed it (nothing is computed again here).
 void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& data, std::int64_t utime, int iteration,
-                   const Eigen::VectorXd& theta, const ObservationPrior& alpha) {
+                   const ObservationPrior& alpha, const EStepResult& estep) {
   const ObservationModel model = dirichlet_mean(alpha);
   hbirl::observation_model_t o{};
   o.utime = utime;
@@ -35,20 +34,18 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   o.subject = lcm_rows(model.subject);
   o.confounders = lcm_rows(model.confounders);
   publish(bus, channels::kObservationModel, o, counters);
-  if (data.observed.empty()) return;
-  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(theta));
-  const TrajectoryPosterior post = ExactEngine(mdp).posterior(policy, model, data.observed.back());
+  if (data.observed.empty() || estep.watched.rows() == 0) return;  // an impossible trajectory has none
   hbirl::posterior_t p{};
   p.utime = utime;
   p.domain = data.domain;
   p.iteration = iteration;
   p.episode = data.episodes.back();
-  p.num_steps = static_cast<std::int32_t>(post.marginals.rows());
+  p.num_steps = static_cast<std::int32_t>(estep.watched.rows());
   p.num_states = mdp.num_states;
   p.num_actions = mdp.num_actions;
   p.num_pairs = mdp.num_pairs();
-  p.marginals = lcm_rows(post.marginals);
-  p.log_likelihood = post.log_likelihood;
+  p.marginals = lcm_rows(estep.watched);
+  p.log_likelihood = estep.watched_log_likelihood;
   publish(bus, channels::kPosterior, p, counters);
 }
 
@@ -135,10 +132,11 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const std::int64_t utime = result.data.last_utime;
   try {
     result.learned = learn_from_dataset(*domain, result.data, options.learning, executor,
-                                        [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha) {
+                                        [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha,
+                                            const EStepResult& estep) {
                                           if (stop && stop()) throw Stopped();  // also when computing alone
                                           if (options.beat) options.beat("learning");
-                                          publish_model(bus, counters, mdp, result.data, utime, iteration, theta, alpha);
+                                          publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep);
                                           hbirl::em_progress_t p{};
                                           p.utime = utime;
                                           p.restart = 0;

@@ -84,6 +84,36 @@ TEST(ObservationEStep, SameBitsWhateverTheThreadCount) {
   EXPECT_EQ(x.alpha_dot.subject, y.alpha_dot.subject);
 }
 
+// A watched trajectory's posterior comes out of the E-step's pass, with the kinds table
+// and without it (max_kinds 0), equal to the engine's posterior of that trajectory
+// computed alone; watching changes none of the sums.
+TEST(ObservationEStep, WatchedTrajectoryIsThePosteriorOfThatTrajectory) {
+  const ObservedGridworld g = observed_gridworld(3, 2, 10, EtaKind::kPlausible);
+  ObservationPrior fixed = g.prior;
+  fixed.learn = false;  // one pass, at the prior's mean
+  fixed.learn_eta = false;
+  const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d(0.3, 0, 0, 0.2)));
+  const ObservationModel model = dirichlet_mean(fixed);
+  const int watched = 17;
+  const TrajectoryPosterior alone = ExactEngine(g.task.mdp).posterior(policy, model, g.observations.trajectories[watched]);
+  for (int max_kinds : {1024, 0}) {
+    ObservationEStepOptions plain, watching;
+    plain.max_kinds = watching.max_kinds = max_kinds;
+    watching.watch = watched;
+    const ObservationEStep a(g.task.mdp, g.observations.trajectories, fixed, plain);
+    const ObservationEStep b(g.task.mdp, g.observations.trajectories, fixed, watching);
+    EStepState sa, sb;
+    const EStepResult x = a.expect(policy, sa), y = b.expect(policy, sb);
+    EXPECT_EQ(x.counts, y.counts);
+    EXPECT_EQ(x.log_likelihood, y.log_likelihood);
+    EXPECT_EQ(x.watched.rows(), 0);
+    ASSERT_EQ(y.watched.rows(), alone.marginals.rows()) << max_kinds;
+    ASSERT_EQ(y.watched.cols(), g.task.mdp.num_pairs());
+    EXPECT_LT((y.watched - alone.marginals).cwiseAbs().maxCoeff(), 1e-12) << max_kinds;
+    EXPECT_NEAR(y.watched_log_likelihood, alone.log_likelihood, 1e-9 * std::abs(alone.log_likelihood));
+  }
+}
+
 // Merging identical observations is an exact rewrite of the emission product.
 TEST(ObservationEStep, MergingIdenticalObservationsChangesNothing) {
   const ObservedGridworld g = observed_gridworld(4, 2, 12, EtaKind::kUniform);

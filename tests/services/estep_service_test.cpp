@@ -165,6 +165,29 @@ TEST(EStepService, MdpRoundTripsInChunksAndBadOnesAreRefused) {
   EXPECT_TRUE(second.has_value());
 }
 
+// The watched trajectory's posterior (what the optimiser shows of its E-step) comes back
+// from the worker whose block holds it, bit for bit what the E-step computes in one process.
+TEST(EStepService, WatchedPosteriorComesBackFromTheWorkers) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread a(hub, "sampler-a"), b(hub, "sampler-b");
+  Optimiser opt(hub);
+  ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
+  const Task& t = task();
+  const SoftSolution policy = soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights));
+  for (int watch : {39, 3}) {  // in the last block, in the first
+    ObservationEStepOptions here, there;
+    here.watch = there.watch = watch;
+    there.executor = opt.executor;
+    EStepState s1, s2;
+    const EStepResult local_result = ObservationEStep(t.task.mdp, t.observed, t.prior, here).expect(policy, s1);
+    const EStepResult remote = ObservationEStep(t.task.mdp, t.observed, t.prior, there).expect(policy, s2);
+    ASSERT_EQ(remote.watched.rows(), t.observed[static_cast<size_t>(watch)].length()) << watch;
+    EXPECT_EQ(remote.watched, local_result.watched) << watch;
+    EXPECT_EQ(remote.watched_log_likelihood, local_result.watched_log_likelihood);
+  }
+  EXPECT_EQ(opt.executor->stats().local_blocks, 0);
+}
+
 TEST(EStepService, SameThetaWithOneTwoOrFourWorkers) {
   for (int n : {1, 2, 4}) {
     auto hub = std::make_shared<MemoryHub>();

@@ -26,6 +26,10 @@ struct EStepResult {
   int alpha_iterations = 0;     // observation-model refinements made by this call
   bool alpha_converged = true;
   int impossible_trajectories = 0;  // probability 0 under the model: left out
+  // The watched trajectory's posterior from the E-step's last pass (observation E-steps
+  // with a watch, estep_observations.hpp): (s, a) marginals per step, empty when none.
+  RowMatrix watched;
+  double watched_log_likelihood = 0.0;
 };
 
 // What an E-step carries from one EM iteration to the next: the refined Dirichlet

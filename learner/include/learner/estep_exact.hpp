@@ -33,6 +33,10 @@ struct EStepStatistics {
   RowMatrix source_counts;
   double log_likelihood = 0.0;
   int impossible = 0;           // trajectories with probability 0 under the model (skipped)
+  // The watched trajectory's posterior (ObservationEStepOptions::watch), when this sum
+  // holds it: its (s, a) marginals per step (steps x pairs) and its log-likelihood.
+  RowMatrix watched;
+  double watched_log_likelihood = 0.0;
 
   static EStepStatistics zero(int pairs, int confounders, int symbols, int contexts = 0);
   EStepStatistics& operator+=(const EStepStatistics& other);
@@ -67,9 +71,10 @@ class ExactEngine {
                         const ObservedTrajectory& trajectory) {
     return forward_backward(policy, model, trajectory, false);
   }
-  // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out`.
+  // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out` (and,
+  // when `watch`, its marginals and log-likelihood as out.watched).
   void accumulate(const SoftSolution& policy, const ObservationModel& model,
-                  const ObservedTrajectory& trajectory, EStepStatistics& out);
+                  const ObservedTrajectory& trajectory, EStepStatistics& out, bool watch = false);
   // The same with the emissions of the trajectory's observation kinds (`kinds_of`, one per
   // observation row) precomputed: adds the expected visits and the log-likelihood to
   // `out`, and weight_n * gamma_t to row kinds_of[n] of kind_gamma (kinds x pairs), from
@@ -77,7 +82,7 @@ class ExactEngine {
   // in `seen`) are appended to `touched`.
   void accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
                   const KindEmissions& emissions, EStepStatistics& out, RowMatrix& kind_gamma,
-                  std::vector<char>& seen, std::vector<int>& touched);
+                  std::vector<char>& seen, std::vector<int>& touched, bool watch = false);
 
  private:
   // Fills log_emission_, log_alpha_ and (with_backward) log_beta_; returns the
@@ -94,7 +99,7 @@ class ExactEngine {
   // marginals to `out`, calling per_observation(n) for each observation with marginal_
   // holding its step's marginals.
   template <typename PerObservation>
-  void add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out,
+  void add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out, bool watch,
                      PerObservation&& per_observation);
   // gamma_t = exp(log_alpha_t + log_beta_t - ll) into marginal_.
   void marginal(int t, double log_likelihood);

@@ -81,6 +81,9 @@ struct ObservationEStepOptions {
   int max_kinds = 1024;
   // Where the blocks of a pass are computed: null = here, on `threads` threads.
   std::shared_ptr<const BlockExecutor> executor;
+  // Keep this trajectory's posterior from every pass (the exact engine; -1: none): what a
+  // display shows of the E-step without computing it again (EStepResult::watched).
+  int watch = -1;
 };
 
 class ObservationEStep final : public EStep {

@@ -169,6 +169,7 @@ class BusBlockExecutor final : public BlockExecutor {
   // The pass in flight.
   mutable std::int64_t request_id_ = 0;
   mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0;
+  mutable int watch_ = -1, watch_steps_ = 0;  // the pass's watched trajectory and its length
   mutable std::vector<std::optional<EStepStatistics>> received_;
   mutable std::set<std::string> answered_;  // workers that answered this request
   mutable Stats stats_;

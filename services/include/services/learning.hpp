@@ -35,9 +35,10 @@ struct Learned {
   std::uint64_t digest = 0;          // of the demonstrations learned from
 };
 
-// Called after every EM iteration: iteration, log-likelihood, theta, and the observation
-// model's refined Dirichlet parameters.
-using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&)>;
+// Called after every EM iteration: iteration, log-likelihood, theta, the observation
+// model's refined Dirichlet parameters, and the E-step's result, whose `watched` is the
+// newest demonstration's posterior from the E-step's last pass.
+using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&, const EStepResult&)>;
 
 // The expert's true weights, for the ILE: the ground truth's, else the domain's; none when
 // they do not fit the domain's features.
