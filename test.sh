@@ -21,10 +21,10 @@ cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS
 cmake --build build-sanitize -j"$jobs" --target hbirl_tests hbirl hbirl_lcmtypes_bindings
 # Run in the Release build only: the multi-process tests (label multiprocess: whole
 # service sets over LCM in network namespaces; the same service code runs under the
-# sanitizers in the in-process tests), and six statistics-heavy tests that take seconds
+# sanitizers in the in-process tests), and nine statistics-heavy tests that take seconds
 # in Release and minutes under the sanitizers (the E-step, EM and the experiment runners
 # they drive run under the sanitizers in the other tests).
-heavy='^(HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal)$'
+heavy='^(HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal|ObservationEStep\.LearnedEtaRecoversTheLabellersCalibration|Cli\.EveryGeneratedRandomTaskValidates|Cli\.OnionExperimentAtSmallScale)$'
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"
 

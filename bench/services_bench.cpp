@@ -9,6 +9,7 @@
 
 #include "services/estep_service.hpp"
 #include "services/memory_bus.hpp"
+#include "services/sampler_worker.hpp"
 #include "sim_driver/gridworld.hpp"
 #include "sim_driver/gridworld_observations.hpp"
 

@@ -9,16 +9,22 @@ build="$1"
 jobs="${2:-$(nproc)}"
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 if [ -z "${HBIRL_HIDDEN:-}" ]; then
-  exec unshare -rm env HBIRL_HIDDEN=1 bash "$0" "$@"
+  if unshare -rm true 2>/dev/null; then
+    exec unshare -rm env HBIRL_HIDDEN=1 bash "$0" "$@"
+  fi
+  echo "learner-only: no private mount namespaces here (unshare -rm): building without hiding the other packages" >&2
+  export HBIRL_HIDDEN=0
 fi
 empty="$(mktemp -d)"
 hidden=()
+if [ "$HBIRL_HIDDEN" = 1 ]; then
 for dir in /usr/include/opencv4 /usr/include/lcm /usr/include/CLI; do
   [ -d "$dir" ] && mount --bind "$empty" "$dir" && hidden+=("$dir")
 done
 for file in /usr/include/httplib.h /usr/lib/*/liblcm.so* /usr/lib/*/libopencv_*; do
   [ -f "$file" ] && mount --bind /dev/null "$file" && hidden+=("$file")
 done
+fi
 echo "learner-only: hidden ${#hidden[@]} headers and libraries of OpenCV, LCM, CLI11, cpp-httplib"
 # -O1: the point is what it needs, not its speed (the Release build runs the same tests).
 cmake -S "$repo" -B "$build" -DHBIRL_LEARNER_ONLY=ON -DHBIRL_WERROR=ON -DHBIRL_BUILD_BENCH=OFF \

@@ -20,6 +20,9 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
     : mdp_(mdp), prior_(std::move(prior)), options_(std::move(options)) {
   for (const auto& t : trajectories) trajectories_.push_back(merge_identical_observations(t));
   if (trajectories_.empty()) throw InputError("demonstration", "no trajectories with observations");
+  if (options_.watch < -1 || options_.watch >= static_cast<int>(trajectories_.size())) {
+    throw InputError("watch", std::to_string(options_.watch) + " is not a trajectory of the data");
+  }
   if (prior_.subject_alpha.rows() != mdp.num_pairs() || prior_.subject_alpha.cols() != prior_.num_symbols ||
       prior_.confounder_alpha.rows() != prior_.num_confounders || prior_.confounder_alpha.cols() != prior_.num_symbols) {
     throw InputError("observation_model", "alpha has the wrong shape");

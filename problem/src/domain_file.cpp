@@ -1,5 +1,6 @@
 #include "problem/domain_file.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -13,6 +14,7 @@ namespace {
 
 constexpr double kSumTolerance = 1e-6;  // as for problem files: rounded probabilities are renormalised
 constexpr int kMaxCount = 100000;
+constexpr double kMaxObservations = 1e8;
 
 std::vector<std::string> read_name_list(const JsonNode& node, int expected, const std::string& what) {
   if (static_cast<int>(node.size()) != expected) {
@@ -95,7 +97,7 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
     s.confounder_o = read_probability_rows(*list, elements, symbols, 3, "[element, symbol, probability]",
                                            [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
   }
-  if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(0, kMaxCount));
+  if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto e = node.find("eta")) {
     s.eta = e->as_string();
     if (s.eta != "plausible" && s.eta != "uniform" && s.eta != "true") {
@@ -111,6 +113,12 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
   if (auto n = node.find("controlled_trajectories")) s.controlled_trajectories = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto t = node.find("step_seconds")) {
     s.step_seconds = t->as_number(1e-6, 1e6);
+  }
+  // What a simulation holds in memory: every observation of the run.
+  const double observations = static_cast<double>(s.trajectories + s.controlled_trajectories) * s.length * s.observations_per_step;
+  if (observations > kMaxObservations) {
+    node.fail("(trajectories + controlled_trajectories) * length * observations_per_step is " + std::to_string(observations) +
+              ", more than " + std::to_string(kMaxObservations) + " observations to simulate");
   }
   return s;
 }

@@ -19,6 +19,7 @@
 #include "services/optimiser.hpp"
 #include "services/perception_service.hpp"
 #include "services/process.hpp"
+#include "services/sampler_worker.hpp"
 #include "services/sim_driver.hpp"
 
 namespace hbirl::services {

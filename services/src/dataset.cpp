@@ -123,6 +123,9 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
                                                " is not the domain's");
   }
   if (!domain_.empty() && m.domain != domain_) throw InputError("ground_truth.domain", "is " + m.domain + ", the run's " + domain_);
+  if (!expected_domain_.empty() && m.domain != expected_domain_) {
+    throw InputError("ground_truth.domain", "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
+  }
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
   }

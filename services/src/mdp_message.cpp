@@ -42,6 +42,15 @@ std::vector<hbirl::mdp_t> to_messages(const Mdp& mdp, const std::string& domain,
   return out;
 }
 
+void MdpAssembler::forget() {
+  // swap, not clear: a large half-received MDP must not keep its memory
+  std::vector<char>().swap(have_);
+  std::vector<TransitionEntry>().swap(transitions_);
+  std::vector<int>().swap(terminal_);
+  start_.resize(0);
+  received_ = 0;
+}
+
 std::optional<Mdp> MdpAssembler::add(const hbirl::mdp_t& m) {
   if (m.num_states < 1 || m.num_states > kMaxStates) throw InputError("mdp.num_states", "must be in [1, " + std::to_string(kMaxStates) + "]");
   if (m.num_actions < 1 || m.num_actions > kMaxActions) {
@@ -70,11 +79,8 @@ std::optional<Mdp> MdpAssembler::add(const hbirl::mdp_t& m) {
     num_states_ = m.num_states;
     num_actions_ = m.num_actions;
     discount_ = m.discount;
+    forget();
     have_.assign(static_cast<size_t>(m.num_chunks), 0);
-    received_ = 0;
-    start_.resize(0);
-    terminal_.clear();
-    transitions_.clear();
   }
   if (have_[static_cast<size_t>(m.chunk)]) return std::nullopt;  // a repeat
   if (static_cast<long long>(transitions_.size()) + m.num_transitions > kMaxTransitions) {
@@ -94,8 +100,7 @@ std::optional<Mdp> MdpAssembler::add(const hbirl::mdp_t& m) {
   }
   if (received_ < num_chunks_) return std::nullopt;
   Mdp mdp = make_mdp(num_states_, num_actions_, 0, transitions_, {}, start_, terminal_, discount_);
-  have_.clear();
-  transitions_.clear();
+  forget();
   digest_ = 0;
   num_chunks_ = 0;
   mdp.validate();  // InputError naming what is wrong

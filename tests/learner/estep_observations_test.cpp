@@ -4,6 +4,7 @@
 
 #include "brute_force_posterior.hpp"
 #include "learner/hidden_data_em.hpp"
+#include "learner/input_error.hpp"
 #include "tiny_observed_problem.hpp"
 #include "sim_driver/gridworld_observations.hpp"
 
@@ -112,6 +113,9 @@ TEST(ObservationEStep, WatchedTrajectoryIsThePosteriorOfThatTrajectory) {
     EXPECT_LT((y.watched - alone.marginals).cwiseAbs().maxCoeff(), 1e-12) << max_kinds;
     EXPECT_NEAR(y.watched_log_likelihood, alone.log_likelihood, 1e-9 * std::abs(alone.log_likelihood));
   }
+  ObservationEStepOptions outside;
+  outside.watch = static_cast<int>(g.observations.trajectories.size());
+  EXPECT_THROW(ObservationEStep(g.task.mdp, g.observations.trajectories, fixed, outside), InputError);
 }
 
 // Merging identical observations is an exact rewrite of the emission product.

@@ -99,6 +99,12 @@ TEST(DomainFile, BadFilesNameTheField) {
       {[](json& d) { d["sensor"]["eta"] = "perfect"; }, "sensor.eta: expected \"plausible\", \"uniform\" or \"true\""},
       {[](json& d) { d["sensor"]["occlusion"] = 1.0; }, "sensor.occlusion: must be below 1"},
       {[](json& d) { d["sensor"]["observations_per_step"] = -1; }, "sensor.observations_per_step"},
+      {[](json& d) { d["sensor"]["observations_per_step"] = 0; }, "sensor.observations_per_step"},
+      {[](json& d) {
+         d["sensor"]["trajectories"] = 100000;
+         d["sensor"]["length"] = 100000;
+       },
+       "sensor: (trajectories + controlled_trajectories) * length * observations_per_step is"},
       {[](json& d) { d["sensor"]["trajectories"] = 0; }, "sensor.trajectories"},
       {[](json& d) { d["sensor"]["length"] = "ten"; }, "sensor.length"},
       {[](json& d) { d["sensor"]["controlled_trajectories"] = 0; }, "sensor.controlled_trajectories"},

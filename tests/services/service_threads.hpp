@@ -8,6 +8,7 @@
 
 #include "services/estep_service.hpp"
 #include "services/memory_bus.hpp"
+#include "services/sampler_worker.hpp"
 
 namespace hbirl::services::testing {
 

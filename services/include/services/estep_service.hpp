@@ -1,5 +1,5 @@
 #pragma once
-// The E-step as a service (hbirl-sampler, README.md "Services and channels"): the optimiser's HiddenDataEM asks
+// The E-step over the bus (README.md "Services and channels"): the optimiser's HiddenDataEM asks
 // sampler workers, over the bus, for the statistics of the blocks of trajectories each
 // is assigned, and sums them in block order -- so the learned theta is bit-identical to
 // a run without workers, with 1, 2 or 4 of them, and when one dies mid-run.
@@ -20,6 +20,8 @@
 // computes what is still missing itself: learning never stalls. Answers to other
 // requests, for blocks it already has, or from workers with another data set are
 // counted and ignored. Workers answer only when their digests equal the request's.
+// Here: the messages both sides share and the optimiser's side (BusBlockExecutor); the
+// workers' side is sampler_worker.hpp.
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -53,48 +55,6 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m);
 // flags, CPU features, Eigen version) compute sums that differ in the last bits; their
 // fingerprints then differ, and theta is no longer bit-identical to a one-process run.
 std::uint64_t numerics_fingerprint();
-
-// A sampler worker: holds the optimiser's data set and answers E-step requests for the
-// blocks assigned to it. Call handle() from one thread; it also sends the heartbeat.
-class SamplerWorker {
- public:
-  // It learns the MDP from the bus (MDP) and the data set (TRAJECTORY).
-  SamplerWorker(Bus& bus, std::string id, Counters& counters);
-  // Handles what the bus has (waiting up to timeout_ms) and publishes the heartbeat when
-  // one is due. Returns the bus's answer (-1: the bus has ended).
-  int handle(int timeout_ms);
-  // The heartbeat; `state` overrides "starting"/"running" (e.g. "done" on the way out).
-  void publish_status(const std::string& state = "");
-  const std::string& id() const { return id_; }
-  std::uint64_t digest() const { return digest_; }
-  std::uint64_t mdp_digest() const { return mdp_digest_; }
-  std::int64_t blocks_computed() const { return blocks_computed_; }
-
- private:
-  void on_mdp(const hbirl::mdp_t& m);
-  void on_trajectory(const hbirl::trajectory_t& m);
-  void on_request(const hbirl::estep_request_t& m);
-
-  Bus& bus_;
-  MdpAssembler incoming_mdp_;
-  std::optional<Mdp> mdp_;
-  std::atomic<std::uint64_t> mdp_digest_{0};  // read by tests from another thread
-  std::string id_;
-  Counters& counters_;
-  // The data set being received (by index) and the complete one.
-  std::uint64_t incoming_digest_ = 0;
-  std::vector<std::optional<ObservedTrajectory>> incoming_;
-  std::vector<ObservedTrajectory> trajectories_;
-  std::atomic<std::uint64_t> digest_{0};  // read by tests from another thread
-  int max_symbol_ = -1;
-  std::optional<ObservationEStep> estep_;
-  int estep_symbols_ = -1, estep_confounders_ = -1;
-  std::set<std::pair<std::int64_t, int>> answered_;  // (request id, attempt): idempotent
-  std::atomic<std::int64_t> blocks_computed_{0};
-  std::int64_t status_seq_ = 0;
-  std::chrono::steady_clock::time_point next_status_{};
-  Subscriptions subs_;  // last: ends first
-};
 
 // Thrown by BusBlockExecutor::run when its `stop` says so: learning ends there.
 struct Stopped : std::runtime_error {

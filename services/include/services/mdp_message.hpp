@@ -22,7 +22,7 @@ class MdpAssembler {
   static constexpr int kMaxActions = 100'000;
   static constexpr long long kMaxPairs = 50'000'000;
   static constexpr int kMaxChunks = 100'000;
-  static constexpr long long kMaxTransitions = 200'000'000;
+  static constexpr long long kMaxTransitions = 50'000'000;  // ~1.2 GB while assembling
 
   // Takes one chunk; returns the MDP once every chunk of its digest has come (then
   // forgets it). Throws InputError naming the field of a chunk that does not fit, or of
@@ -38,6 +38,7 @@ class MdpAssembler {
   Eigen::VectorXd start_;
   std::vector<int> terminal_;
   std::vector<TransitionEntry> transitions_;
+  void forget();  // the MDP being assembled, memory and all
 };
 
 }  // namespace hbirl::services
