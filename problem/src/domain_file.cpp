@@ -16,15 +16,6 @@ constexpr double kSumTolerance = 1e-6;  // as for problem files: rounded probabi
 constexpr int kMaxCount = 100000;
 constexpr double kMaxObservations = 1e8;
 
-std::vector<std::string> read_name_list(const JsonNode& node, int expected, const std::string& what) {
-  if (static_cast<int>(node.size()) != expected) {
-    node.fail("has " + std::to_string(node.size()) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
-  }
-  std::vector<std::string> names;
-  for (size_t i = 0; i < node.size(); ++i) names.push_back(node[i].as_string());
-  return names;
-}
-
 // A marker's domain field: short, printable, no spaces (it names the run on the bus).
 std::string read_name(const JsonNode& node) {
   const std::string name = node.as_string();
@@ -144,11 +135,11 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
   if (auto om = root.find("observation_model")) d.observation_model = detail::read_observation_model(*om, d.mdp, warnings);
   if (auto names_node = root.find("symbol_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_symbols)");
-    d.symbol_names = read_name_list(*names_node, d.num_symbols(), "symbol");
+    d.symbol_names = detail::read_names(*names_node, d.num_symbols(), "symbol");
   }
   if (auto names_node = root.find("source_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_confounders)");
-    d.source_names = read_name_list(*names_node, d.num_sources(), "source: the subject, then each confounding element");
+    d.source_names = detail::read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
   }
   if (auto tw = root.find("true_weights")) d.true_weights = detail::read_true_weights(*tw, d.mdp);
   if (auto sensor = root.find("sensor")) d.sensor = read_sensor(*sensor, d, warnings);

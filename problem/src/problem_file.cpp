@@ -34,15 +34,6 @@ std::string pair_name(int s, int a) {
   return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")";
 }
 
-std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what) {
-  const size_t n = node.size();
-  if (static_cast<long long>(n) != expected) {
-    node.fail("has " + std::to_string(n) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
-  }
-  std::vector<std::string> names;
-  for (size_t i = 0; i < n; ++i) names.push_back(node[i].as_string());
-  return names;
-}
 
 // Fails on the first repeated key, naming both entries.
 template <typename Key>
@@ -66,6 +57,16 @@ struct Sizes {
 }  // namespace
 
 namespace detail {
+
+std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what) {
+  const size_t n = node.size();
+  if (static_cast<long long>(n) != expected) {
+    node.fail("has " + std::to_string(n) + " names, expected " + std::to_string(expected) + " (one per " + what + ")");
+  }
+  std::vector<std::string> names;
+  for (size_t i = 0; i < n; ++i) names.push_back(node[i].as_string());
+  return names;
+}
 
 Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
   node.check_keys({"num_states", "num_actions", "num_features", "transitions", "start", "features",
