@@ -181,13 +181,23 @@ int sampler(int argc, char** argv) {
   Common c;
   add_common(app, c);
   std::int64_t die_after = -1;
+  std::int64_t max_dataset_mb = SamplerWorker::kDefaultMaxDatasetBytes >> 20;
+  app.add_option("--max-dataset-mb", max_dataset_mb,
+                 "The most memory the data set (TRAJECTORY) may take on this worker, in MB; a data set that would\n"
+                 "take more is refused (counted as bad) and its partial copy dropped, whatever a sender declares")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 20));
+  bool lie = false;
+  app.add_flag("--testing-lie", lie, "Testing: add 1 to the first count of every answer (a worker that lies, for the optimiser's\n"
+                                     "spot check to catch)");
   app.add_option("--kill-self-after-blocks", die_after,
                  "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
   CLI11_PARSE(app, argc, argv);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sampler";
-  SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters);
+  SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters, max_dataset_mb << 20);
+  if (lie) worker.lie_for_testing();
   while (!stop_requested()) {
     if (worker.handle(100) < 0) break;
     if (die_after >= 0 && worker.blocks_computed() >= die_after) {
@@ -231,6 +241,10 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
+  bool no_spot_check = false;
+  app.add_flag("--no-spot-check", no_spot_check,
+               "Do not recompute one worker-computed block per E-step pass here (by default a worker whose block\n"
+               "differs from the optimiser's own is reported, gets no more work, and its blocks are computed here)");
   std::string update;
   double step_size = 0.0;
   app.add_option("--alpha-update", update,
@@ -248,6 +262,7 @@ int optimiser(int argc, char** argv) {
     o.learning.update = u;
   }
   if (c_option->count() > 0) o.learning.c = step_size;
+  o.executor.spot_check = !no_spot_check;
   if (!d.spec.empty()) o.domain = open_domain_args(d);
   std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
@@ -281,6 +296,8 @@ int optimiser(int argc, char** argv) {
   j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
                 {"local_blocks", result->estep.local_blocks}, {"retried_blocks", result->estep.retried_blocks},
                 {"stale", result->estep.stale},               {"duplicates", result->estep.duplicates},
+                {"unassigned_answers", result->estep.unassigned},
+                {"spot_checks", result->estep.spot_checks},   {"workers_caught_lying", result->estep.liars},
                 {"workers_with_other_numerics", result->estep.other_numerics},
                 {"round_trip_seconds", result->estep.round_trip_s}};
   j["bad_messages"] = counters.bad_messages;

@@ -142,12 +142,21 @@ void BusBlockExecutor::publish_dataset() const {
   for (int i = 0; i < n; ++i) publish(bus_, channels::kTrajectory, to_message(dataset_[static_cast<size_t>(i)], i, n, digest_), counters_);
 }
 
+namespace {
+constexpr size_t kMaxWorkers = 4096;  // workers remembered at once (a sender can make up any number of names)
+}  // namespace
+
 void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   if (m.service != "sampler") return;
   if (m.id.empty()) throw InputError("status.id", "is empty");
   if (m.state == "done") {  // a worker on its way out: no more work for it
     workers_.erase(m.id);
     return;
+  }
+  if (!workers_.count(m.id) && workers_.size() >= kMaxWorkers) {  // heartbeats under ever new names: forget the longest silent
+    const auto oldest = std::min_element(workers_.begin(), workers_.end(),
+                                         [](const auto& a, const auto& b) { return a.second.last_seen < b.second.last_seen; });
+    workers_.erase(oldest);
   }
   Worker& w = workers_[m.id];
   w.digest = static_cast<std::uint64_t>(m.dataset_digest);
@@ -187,6 +196,10 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     ++stats_.duplicates;
     return;
   }
+  if (!assigned_[static_cast<size_t>(m.block)].count(m.worker)) {  // only the worker given the block is believed
+    ++stats_.unassigned;
+    throw InputError("estep_result.worker", "'" + m.worker + "' was not given block " + std::to_string(m.block));
+  }
   EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_);
   s.counts = eigen_vector(m.counts);
   s.alpha_dot.subject = eigen_rows(m.alpha_subject, symbols_);
@@ -211,7 +224,10 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
   s.impossible = m.impossible;
   slot = std::move(s);
   answered_.insert(m.worker);
-  workers_[m.worker].suspect = false;  // it does answer
+  answered_by_[static_cast<size_t>(m.block)] = m.worker;
+  Worker& w = workers_[m.worker];
+  w.suspect = false;  // it does answer
+  ++w.answers;
   ++stats_.remote_blocks;
 }
 
@@ -219,7 +235,7 @@ std::vector<std::string> BusBlockExecutor::live_workers() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
   for (const auto& [id, w] : workers_) {
-    if (w.digest == digest_ && w.mdp_digest == mdp_digest_ && !w.suspect && (!options_.same_numerics_only || w.numerics == numerics_) &&
+    if (w.digest == digest_ && w.mdp_digest == mdp_digest_ && !w.suspect && !w.distrusted && (!options_.same_numerics_only || w.numerics == numerics_) &&
         std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
       out.push_back(id);
     }
@@ -236,6 +252,56 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
     if (bus_.handle(20) < 0) break;
   }
   return static_cast<int>(live_workers().size());
+}
+
+// Blocks to workers, round robin -- except that while some workers have proven themselves
+// (answered before), each one that has not gets at most one block, and no more of them
+// than there are proven ones: heartbeats from processes that never answer (a crashed
+// build, a forger) cost a pass one timeout, not the whole pass.
+std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& todo, std::vector<std::string> workers) const {
+  std::vector<std::string> proven, unproven;
+  for (const auto& w : workers) (workers_.at(w).answers > 0 ? proven : unproven).push_back(w);
+  if (!proven.empty()) {
+    unproven.resize(std::min(unproven.size(), proven.size()));
+    workers = proven;
+  }
+  std::vector<std::string> out(static_cast<size_t>(blocks_));
+  size_t k = 0;
+  if (!proven.empty()) {
+    for (; k < todo.size() && k < unproven.size(); ++k) out[static_cast<size_t>(todo[k])] = unproven[k];
+  }
+  for (size_t r = 0; k < todo.size(); ++k, ++r) out[static_cast<size_t>(todo[k])] = workers[r % workers.size()];
+  return out;
+}
+
+// The spot check: the block's answer against the one computed here. Workers that compute
+// with the same numerics give the same bits; others (--same-numerics-only off) may differ
+// in the last bits, so they are held to a relative 1e-9.
+void BusBlockExecutor::check_spot(int block, const EStepStatistics& here) const {
+  auto& answer = received_[static_cast<size_t>(block)];
+  const std::string liar = answered_by_[static_cast<size_t>(block)];
+  const auto it = workers_.find(liar);
+  const double tolerance = it != workers_.end() && it->second.numerics == numerics_ ? 0.0 : 1e-9;
+  const auto close = [tolerance](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return false;
+    if (tolerance == 0.0) return a == b;
+    return ((a - b).array().abs() <= tolerance * (1.0 + b.array().abs())).all();
+  };
+  const bool same = close(answer->counts, here.counts) && close(answer->alpha_dot.subject, here.alpha_dot.subject) &&
+                    close(answer->alpha_dot.confounders, here.alpha_dot.confounders) &&
+                    (answer->log_likelihood == here.log_likelihood ||
+                     std::abs(answer->log_likelihood - here.log_likelihood) <= tolerance * (1.0 + std::abs(here.log_likelihood))) &&
+                    answer->impossible == here.impossible;
+  if (same) return;
+  ++stats_.liars;
+  workers_[liar].distrusted = true;
+  counters_.bad(channels::kEStepResult, "worker '" + liar + "' answered block " + std::to_string(block) +
+                                            " unlike the optimiser's own computation: it gets no more work, and its blocks "
+                                            "of this pass are computed here");
+  for (int b = 0; b < blocks_; ++b) {
+    if (answered_by_[static_cast<size_t>(b)] == liar) received_[static_cast<size_t>(b)].reset();
+  }
+  received_[static_cast<size_t>(block)] = here;
 }
 
 BusBlockExecutor::Stats BusBlockExecutor::stats() const {
@@ -266,6 +332,10 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   confounders_ = model.num_confounders();
   received_.assign(static_cast<size_t>(blocks_), std::nullopt);
   answered_.clear();
+  assigned_.assign(static_cast<size_t>(blocks_), {});
+  answered_by_.assign(static_cast<size_t>(blocks_), std::string());
+  std::optional<int> spot;  // the block checked here this pass, and its statistics
+  EStepStatistics spot_result;
 
   hbirl::estep_request_t request{};
   request.utime = 0;
@@ -312,9 +382,14 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     if (attempt > 0) stats_.retried_blocks += static_cast<std::int64_t>(todo.size());
     ++stats_.attempts;
     request.attempt = attempt;
-    request.assigned_worker.assign(static_cast<size_t>(blocks_), std::string());
-    for (size_t k = 0; k < todo.size(); ++k) request.assigned_worker[static_cast<size_t>(todo[k])] = workers[k % workers.size()];
+    request.assigned_worker = assignment(todo, workers);
+    for (int b : todo) assigned_[static_cast<size_t>(b)].insert(request.assigned_worker[static_cast<size_t>(b)]);
     publish(bus_, channels::kEStepRequest, request, counters_);
+    if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
+      spot = todo[static_cast<size_t>(spot_rng_() % todo.size())];
+      spot_result = estep.block_statistics(policy, model, seed, {*spot}, options_.local_threads).front();
+      ++stats_.spot_checks;
+    }
     const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
     while (!missing().empty() && Clock::now() < deadline) {
       if (options_.stop && options_.stop()) throw Stopped();
@@ -327,6 +402,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       if (!w.empty() && !answered_.count(w)) workers_[w].suspect = true;
     }
   }
+  if (spot && received_[static_cast<size_t>(*spot)]) check_spot(*spot, spot_result);
   const std::vector<int> rest = missing();
   if (!rest.empty()) {
     const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads);

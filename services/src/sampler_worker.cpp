@@ -12,10 +12,17 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// What one received trajectory takes once held (its arrays as decoded, plus the
+// bookkeeping of a map node): what --max-dataset-mb counts.
+std::int64_t held_bytes(const hbirl::trajectory_t& m) {
+  return 256 + 4 * static_cast<std::int64_t>(m.step_begin.size()) + 4 * static_cast<std::int64_t>(m.symbol.size()) +
+         8 * static_cast<std::int64_t>(m.n) * std::max(1, m.num_sources) + 8 * static_cast<std::int64_t>(m.weights.size());
+}
+
 }  // namespace
 
-SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters)
-    : bus_(bus), id_(std::move(id)), counters_(counters) {
+SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
+    : bus_(bus), id_(std::move(id)), counters_(counters), max_dataset_bytes_(max_dataset_bytes) {
   subs_.add(bus_, subscribe<hbirl::mdp_t>(bus_, channels::kMdp, counters_,
                                           [this](const hbirl::mdp_t& m, const Message&) { on_mdp(m); }, 10000));
   // A whole data set may arrive between two handle() calls; only the newest requests matter.
@@ -63,20 +70,32 @@ void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
 }
 
 void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
-  if (m.num_trajectories < 1 || m.num_trajectories > 10000000 || m.index < 0 || m.index >= m.num_trajectories) {
+  if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
     throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
   }
   const auto d = static_cast<std::uint64_t>(m.dataset_digest);
   if (d == digest_ && !trajectories_.empty()) return;  // have it already
-  if (d != incoming_digest_ || incoming_.size() != static_cast<size_t>(m.num_trajectories)) {
+  if (d != incoming_digest_ || incoming_size_ != m.num_trajectories) {
+    std::map<int, ObservedTrajectory>().swap(incoming_);
     incoming_digest_ = d;
-    incoming_.assign(static_cast<size_t>(m.num_trajectories), std::nullopt);
+    incoming_size_ = m.num_trajectories;
+    incoming_bytes_ = 0;
   }
-  incoming_[static_cast<size_t>(m.index)] = from_message(m);
-  if (std::any_of(incoming_.begin(), incoming_.end(), [](const auto& t) { return !t.has_value(); })) return;
+  if (incoming_.count(m.index)) return;  // a repeat
+  const std::int64_t bytes = held_bytes(m);
+  if (incoming_bytes_ + bytes > max_dataset_bytes_) {
+    std::map<int, ObservedTrajectory>().swap(incoming_);
+    incoming_digest_ = 0;
+    throw InputError("trajectory", "the data set would take more than --max-dataset-mb " +
+                                       std::to_string(max_dataset_bytes_ >> 20) + " MB: dropped");
+  }
+  incoming_.emplace(m.index, from_message(m));
+  incoming_bytes_ += bytes;
+  if (static_cast<int>(incoming_.size()) < incoming_size_) return;
   std::vector<ObservedTrajectory> all;
-  for (auto& t : incoming_) all.push_back(std::move(*t));
-  incoming_.clear();
+  all.reserve(incoming_.size());
+  for (auto& [index, t] : incoming_) all.push_back(std::move(t));
+  std::map<int, ObservedTrajectory>().swap(incoming_);
   incoming_digest_ = 0;
   if (dataset_digest(all) != d) throw InputError("trajectory.dataset_digest", "does not match the trajectories received");
   trajectories_ = std::move(all);
@@ -150,6 +169,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     r.block = block;
     r.num_pairs = P;
     r.counts = lcm_vector(s.counts);
+    if (lying_ && !r.counts.empty()) r.counts[0] += 1.0;
     r.num_symbols = W;
     r.num_confounders = E;
     r.alpha_subject = lcm_rows(s.alpha_dot.subject);

@@ -196,7 +196,11 @@ bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
                                                     [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); },
                                                     1000));
   subs.add(bus_, subscribe<hbirl::reward_t>(bus_, channels::kReward, counters_,
-                                            [&learned](const hbirl::reward_t& r, const Message&) { learned = learned || r.final; }));
+                                            [&learned, this](const hbirl::reward_t& r, const Message&) {
+                                              // Another run's optimiser (another domain) does not end this one.
+                                              if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");
+                                              learned = learned || r.final;
+                                            }));
   const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(start_delay_s));
   while (!waiting.empty() && Clock::now() < until && !(stop && stop())) {
     bus_.handle(50);

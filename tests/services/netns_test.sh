@@ -172,20 +172,29 @@ case "$case" in
     echo "worker killed mid-run: theta $(theta "$tmp/killed/result.json") as with one steady worker"
     ;;
   bad_input)
-    # Garbage and wrong-type messages on every channel: each service counts them and runs on.
-    for s in perception labeller sampler optimiser; do
+    # Garbage, wrong-type messages and every channel's own type with each 4 bytes in turn set
+    # to INT_MIN (a hostile string or array length) on every channel: each service counts
+    # them and runs on; a recording full of them is read by report and the dashboard.
+    for s in perception labeller sampler; do
       "$build/hbirl-$s" --url "$url" >"$tmp/$s.log" 2>&1 &
       eval "pid_$s=$!"
     done
+    # The optimiser learns the onion domain, the simulator publishes a Gridworld run: the
+    # optimiser refuses its markers and never learns, so the simulator stays up, serving
+    # lost frames (it reads STATUS and FRAME_REQUEST) for as long as the injection lasts.
+    "$build/hbirl-optimiser" --url "$url" --domain onion >"$tmp/optimiser.log" 2>&1 &
+    pid_optimiser=$!
+    "$build/hbirl-sim-driver" --url "$url" --domain gridworld >"$tmp/sim.log" 2>&1 &
+    pid_sim=$!
     "$build/hbirl-dashboard" --url "$url" --port 0 >"$tmp/dashboard.log" 2>&1 &
     pid_dashboard=$!
-    for i in 1 2 3 4; do  # again and again: a slow service may subscribe late
+    for i in 1 2 3; do  # again and again: a slow service may subscribe late
       sleep 1
       "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH MDP TRAJECTORY ESTEP_REQUEST ESTEP_RESULT STATUS \
-        EM_PROGRESS REWARD OBSERVATION_MODEL POSTERIOR >/dev/null
+        EM_PROGRESS REWARD OBSERVATION_MODEL POSTERIOR FRAME_REQUEST >/dev/null
     done
     sleep 1
-    for s in perception labeller sampler optimiser dashboard; do
+    for s in perception labeller sampler optimiser dashboard sim; do
       pid="pid_$s"
       kill -0 "${!pid}" 2>/dev/null || { cat "$tmp/$s.log"; fail "$s died on bad input"; }
       kill -TERM "${!pid}"
@@ -195,10 +204,19 @@ case "$case" in
       wait "${!pid}" || { cat "$tmp/$s.log"; fail "$s exited non-zero"; }
     done
     wait "$pid_optimiser" || true  # stopped before learning: exit 1 by design
-    for s in perception labeller sampler optimiser dashboard; do
-      bad="$(sed -n 's/.* \([0-9]*\) bad.*/\1/p' "$tmp/$s.log" | tail -n 1)"
+    status=0; wait "$pid_sim" || status=$?
+    [ "$status" -lt 128 ] || { cat "$tmp/sim.log"; fail "sim-driver ended by signal $((status - 128))"; }
+    for s in perception labeller sampler optimiser dashboard sim; do
+      bad="$(grep -o '#[0-9]* on' "$tmp/$s.log" | tr -d '#on ' | sort -n | tail -n 1)"
       [ -n "$bad" ] && [ "$bad" -gt 0 ] || { cat "$tmp/$s.log"; fail "$s did not count the bad messages"; }
       echo "$s: $bad bad messages counted, kept running"
+    done
+    # A poisoned recording: every hostile message of every type, read offline.
+    "$inject" --log "$tmp/poisoned.lcmlog" >/dev/null
+    for reader in "$build/hbirl report --log $tmp/poisoned.lcmlog --out $tmp/report" "timeout 5 $build/hbirl-dashboard --log $tmp/poisoned.lcmlog --port 0"; do
+      status=0; $reader >"$tmp/reader.out" 2>&1 || status=$?
+      [ "$status" -lt 128 ] || { tail -n 5 "$tmp/reader.out"; fail "'$reader' ended by signal $((status - 128))"; }
+      echo "${reader%% --log*} read the poisoned recording: exit $status; $(tail -n 1 "$tmp/reader.out")"
     done
     ;;
   *) fail "unknown case $case" ;;

@@ -47,8 +47,9 @@ class ServiceThread {
 // like a process killed with SIGKILL.
 class WorkerThread {
  public:
-  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1)
+  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1, bool lying = false)
       : bus_(std::move(hub)), counters_(quiet(id)), worker_(bus_, id, counters_) {
+    if (lying) worker_.lie_for_testing();
     thread_ = std::thread([this, die_after] {
       while (!stop_) {
         if (die_after >= 0 && worker_.blocks_computed() >= die_after) {

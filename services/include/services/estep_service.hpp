@@ -28,6 +28,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -71,6 +72,11 @@ struct BusExecutorOptions {
   // bit-identical to a one-process run whatever machines join. Off: they all work, and
   // stats().other_numerics counts the ones that may change the last bits.
   bool same_numerics_only = false;
+  // Each pass, the optimiser also computes one block a worker was given (chosen from the
+  // pass's seed) while the workers compute, and compares the answer bit for bit: a worker
+  // whose block differs gets no more work, is reported, and every block it answered in the
+  // pass is computed here instead (docs/RELIABILITY.md).
+  bool spot_check = true;
 };
 
 // The optimiser's side: a BlockExecutor that farms blocks out to the workers it hears
@@ -95,6 +101,8 @@ class BusBlockExecutor final : public BlockExecutor {
   struct Stats {
     std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
     std::int64_t stale = 0, duplicates = 0, foreign = 0;  // ignored answers
+    std::int64_t unassigned = 0;                          // answers from a worker not given that block (refused)
+    std::int64_t spot_checks = 0, liars = 0;              // blocks checked here; workers caught answering wrong
     std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
     double round_trip_s = 0.0;                            // summed over requests
   };
@@ -108,10 +116,14 @@ class BusBlockExecutor final : public BlockExecutor {
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
+    bool distrusted = false;  // answered a spot-checked block wrong: never gets work again
+    std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
   };
   void on_status(const hbirl::service_status_t& m) const;
   void on_result(const hbirl::estep_result_t& m) const;
   std::vector<std::string> live_workers() const;
+  std::vector<std::string> assignment(const std::vector<int>& todo, std::vector<std::string> workers) const;
+  void check_spot(int block, const EStepStatistics& here) const;
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
@@ -132,6 +144,11 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable int watch_ = -1, watch_steps_ = 0;  // the pass's watched trajectory and its length
   mutable std::vector<std::optional<EStepStatistics>> received_;
   mutable std::set<std::string> answered_;  // workers that answered this request
+  mutable std::vector<std::set<std::string>> assigned_;  // per block: the workers it was given to (any attempt)
+  mutable std::vector<std::string> answered_by_;         // per block: who answered it
+  // Which block is spot-checked: unpredictable to the workers (the request's seed is not),
+  // and it never changes a result (a checked block's bits are the same either way).
+  mutable std::mt19937_64 spot_rng_{std::random_device{}()};
   mutable Stats stats_;
   Subscriptions subs_;  // last: ends first
 };
