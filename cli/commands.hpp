@@ -17,6 +17,7 @@ Command add_render(CLI::App& app);
 Command add_report(CLI::App& app);
 Command add_publish(CLI::App& app);
 Command add_export(CLI::App& app);
+Command add_keygen(CLI::App& app);
 
 // Print a JSON result to stdout, or to `path` when it is not empty.
 void emit(const std::string& text, const std::string& path);
@@ -54,6 +55,9 @@ struct DomainArgs {
   DomainOptions options;
 };
 void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what);
+// --key FILE: the run's key, for a recording of a run whose messages were signed
+// (services/keyed_bus.hpp; docs/RELIABILITY.md).
+void add_key_option(CLI::App* cmd, std::string& key_file);
 // The domain, warnings to stderr; nullptr when no --domain was given.
 std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args);
 }  // namespace hbirl::cli

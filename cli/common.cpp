@@ -92,6 +92,12 @@ void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what
       ->capture_default_str();
 }
 
+void add_key_option(CLI::App* cmd, std::string& key_file) {
+  cmd->add_option("--key", key_file,
+                  "The run's key file (services/launch.sh writes OUT/run.key): check every recorded message against it\n"
+                  "and drop, counting them, those it did not sign (docs/RELIABILITY.md)");
+}
+
 std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args) {
   if (args.spec.empty()) return nullptr;
   std::vector<std::string> warnings;

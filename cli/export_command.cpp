@@ -11,7 +11,8 @@ namespace hbirl::cli {
 namespace {
 
 struct ExportArgs {
-  std::string log, out;
+  std::string log, out, key_file;
+  bool allow_incomplete = false;
   DomainArgs domain;
   AlphaUpdate update = AlphaUpdate::kPosterior;
   bool update_given = false;
@@ -24,7 +25,7 @@ int run_export(const ExportArgs& args) {
   services::Counters counters;
   counters.service = "hbirl export";
   counters.quiet = true;
-  const services::OptimiserResult r = services::collect_from_log(args.log, counters);
+  const services::OptimiserResult r = services::collect_from_log({args.log, args.key_file, args.allow_incomplete}, counters);
   const std::shared_ptr<const Domain> domain = services::domain_of(r.data, open_domain_args(args.domain));
   if (r.data.observed.empty()) throw InputError(args.log, "the log holds no demonstrations");
   services::LearningOptions options;
@@ -71,6 +72,9 @@ Command add_export(CLI::App& app) {
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out,-o", args->out, "Problem file to write (default: stdout)");
   add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");
+  add_key_option(cmd, args->key_file);
+  cmd->add_flag("--allow-incomplete", args->allow_incomplete,
+                "Export a recording whose run never reached its end (END_RUN): the episodes that finished");
   add_alpha_update_option(cmd, args->update)->each([args](const std::string&) { args->update_given = true; });
   return [args] { return run_export(*args); };
 }

@@ -20,6 +20,8 @@ namespace {
 struct LearnArgs {
   std::string problem;
   std::string log;
+  std::string key_file;       // --log: the run's key
+  bool allow_incomplete = false;
   DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
   std::string from = "observations";
   std::string optimizer = "lbfgs";
@@ -104,7 +106,9 @@ int run_learn_from_log(const LearnArgs& args) {
   services::Counters counters;
   counters.service = "hbirl learn";
   const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
-  const services::OptimiserResult r = services::learn_from_log(args.log, options, counters, domain);
+  const services::OptimiserResult r =
+      services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, options, counters, domain);
+  if (!r.incomplete.empty()) std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
   nlohmann::ordered_json out;
   out["log"] = args.log;
   out["domain"] = r.data.domain;
@@ -121,6 +125,8 @@ int run_learn_from_log(const LearnArgs& args) {
   out["dataset_digest"] = r.learned.digest;
   out["missing_frames"] = r.missing_frames;
   out["bad_messages"] = counters.bad_messages;
+  out["authenticated"] = counters.authenticated;
+  if (!r.incomplete.empty()) out["incomplete"] = r.incomplete;
   emit(out.dump(2) + "\n", args.out);
   return 0;
 }
@@ -274,6 +280,10 @@ Command add_learn(CLI::App& app) {
       ->excludes(problem);
   add_domain_options(cmd, args->domain,
                      "With --log: the domain file the run was on (built-in domains, onion and gridworld, are named in the log)");
+  add_key_option(cmd, args->key_file);
+  cmd->add_flag("--allow-incomplete", args->allow_incomplete,
+                "With --log: learn from a recording whose run never reached its end (END_RUN), from the episodes\n"
+                "that finished; the output's \"incomplete\" says what is missing (without it such a log is refused)");
   cmd->add_option("--from", args->from,
                   "What to learn from: 'observations' (HiddenDataEM on the observations) or "
                   "'truth' (MaxCausalEnt on the truth trajectories)")

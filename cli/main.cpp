@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   remember(hbirl::cli::add_report(app));
   remember(hbirl::cli::add_publish(app));
   remember(hbirl::cli::add_export(app));
+  remember(hbirl::cli::add_keygen(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "problem/domain_file.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/process.hpp"
 #include "services/sim_driver.hpp"
 #include "sim_driver/recorded_run.hpp"
@@ -15,6 +16,7 @@ namespace {
 struct PublishArgs {
   std::string problem;
   std::string url;
+  std::string key_file;
   double rate = 100.0;
   double start_delay = 10.0;
   double linger = 600.0;
@@ -41,9 +43,9 @@ int run_publish(const PublishArgs& args) {
     steps += static_cast<int>(e.steps.size());
   }
   services::install_stop_handlers();
-  std::unique_ptr<services::Bus> bus = services::open_bus(args.url);
   services::Counters counters;
   counters.service = "publish";
+  std::unique_ptr<services::Bus> bus = services::with_key(services::open_bus(args.url), args.key_file, counters);
   services::Heartbeat heartbeat(*bus, counters, "publish", services::default_id("publish"));
   services::SimDriverOptions options;
   options.max_frames_per_second = args.rate;  // one frame per step
@@ -82,6 +84,9 @@ Command add_publish(CLI::App& app) {
       "afterwards sends steps lost on the way again until the optimiser's reward.");
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
   cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");
+  cmd->add_option("--key", args->key_file,
+                  "The run's key file: sign every message with it, as the services started with the same --key\n"
+                  "expect (hbirl keygen FILE makes one; docs/RELIABILITY.md)");
   cmd->add_option("--rate", args->rate, "Steps per second, wall clock (0: as fast as the bus takes them)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();

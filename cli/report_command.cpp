@@ -9,7 +9,7 @@ namespace hbirl::cli {
 
 Command add_report(CLI::App& app) {
   struct Args {
-    std::string log, out;
+    std::string log, out, key_file;
     DomainArgs domain;
   };
   auto args = std::make_shared<Args>();
@@ -21,8 +21,9 @@ Command add_report(CLI::App& app) {
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out", args->out, "Folder to write the report to (created)")->required();
   add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");
+  add_key_option(cmd, args->key_file);
   return [args] {
-    const dashboard::Report r = dashboard::write_report(args->log, args->out, open_domain_args(args->domain));
+    const dashboard::Report r = dashboard::write_report(args->log, args->out, open_domain_args(args->domain), args->key_file);
     for (const auto& p : r.problems) std::cerr << "hbirl: warning: figure not drawn: " << p << "\n";
     std::cout << r.page << "\n";
     std::cerr << "hbirl: report of " << r.messages << " messages (" << r.bad_messages << " bad), " << r.figures.size()

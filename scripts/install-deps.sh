@@ -9,7 +9,7 @@ packages=(
   libboost-dev gnuplot-nox
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   liblcm-dev liblcm-bin iproute2 util-linux
-  libcpp-httplib-dev libjs-chart.js ca-certificates
+  libcpp-httplib-dev libjs-chart.js ca-certificates libsodium-dev
   chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev
 )

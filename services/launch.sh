@@ -36,6 +36,8 @@ timeout=900
 dashboard_port=8765
 keep_dashboard=0
 report=1
+key=""
+key_mode=auto
 orig_args=("$@")
 
 usage() {
@@ -53,6 +55,8 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          GROUND_TRUTH for controlled episodes) -- e.g. hbirl publish
   --sensor CMD           with --no-sim: run CMD as the sensor inside the set (its LCM URL is
                          appended as --url URL), e.g. "build/hbirl publish --problem F"
+  --sensor-key           the sensor signs its messages: append --key FILE to CMD as well (hbirl
+                         publish does), so the run is authenticated with a sensor too
   --workers N            sampler workers (default $workers)
   --seed S               seed of the run (default $seed)
  onion:
@@ -80,6 +84,13 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          udpm://239.255.76.67:7667?ttl=1 to include workers on other
                          machines (they run: hbirl-sampler --url URL)
   --timeout S            give up (and fail) when there is no result after S seconds (default $timeout)
+  --key FILE             the run's key (hbirl keygen FILE). By default a fresh one is written to
+                         OUT/run.key (mode 0600) for every run whose sensor is the set's own
+                         simulator (or --sensor-key): every service, the recording's readers and
+                         the dashboard then believe only messages signed with it
+                         (docs/RELIABILITY.md). A run waiting for an outside sensor is
+                         unauthenticated unless --key is given (the sensor must sign with it)
+  --no-key               no key: the bus is unauthenticated (every service says so)
   --kill-worker-after-blocks N
                          (testing) the first worker SIGKILLs itself after computing N blocks
 USAGE
@@ -111,6 +122,9 @@ while [ $# -gt 0 ]; do
     --no-dashboard) dashboard_port=""; shift ;;
     --keep-dashboard) keep_dashboard=1; shift ;;
     --no-report) report=0; shift ;;
+    --key) key="$2"; key_mode=given; shift 2 ;;
+    --no-key) key_mode=none; shift ;;
+    --sensor-key) sensor_key=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "launch.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -136,14 +150,34 @@ fi
 mkdir -p "$out/logs"
 out="$(cd "$out" && pwd)"
 
-# The outer launch.sh (not the copy run inside a namespace) owns the dashboard and the report.
+# The run's key: made once, by the outer launch.sh, and handed to the copy in the namespace.
 inner="${HBIRL_LAUNCH_INNER:-}"
+if [ "$key_mode" = auto ]; then
+  if [ "$no_sim" = 1 ] && [ "${sensor_key:-0}" = 0 ]; then
+    key_mode=none
+    echo "launch.sh: the sensor is outside the set: the bus is unauthenticated (--key FILE, with a sensor that signs, makes it authenticated)"
+  elif [ -z "$inner" ]; then
+    key="$out/run.key"
+    rm -f "$key"
+    "$build/hbirl" keygen "$key" 2>/dev/null || { echo "launch.sh: could not write the run key $key" >&2; exit 2; }
+    key_mode=given
+  fi
+fi
+key_args=()
+if [ "$key_mode" = given ]; then
+  [ -f "$key" ] || { echo "launch.sh: --key: $key not found" >&2; exit 2; }
+  key="$(cd "$(dirname "$key")" && pwd)/$(basename "$key")"
+  key_args=(--key "$key")
+fi
+
+# The outer launch.sh (not the copy run inside a namespace) owns the dashboard and the report.
 [ -z "$dashboard_port" ] || record=1  # the dashboard follows the recording
 dashboard_pid=""
 if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
   rm -f "$out/run.lcmlog"  # an earlier run's recording is not this one's
   if [ -x "$build/hbirl-dashboard" ]; then
-    "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" "${domain_args[@]}" >"$out/logs/dashboard.log" 2>&1 &
+    "$build/hbirl-dashboard" --log "$out/run.lcmlog" --port "$dashboard_port" "${domain_args[@]}" "${key_args[@]}" \
+      >"$out/logs/dashboard.log" 2>&1 &
     dashboard_pid=$!
     sleep 0.3
     if kill -0 "$dashboard_pid" 2>/dev/null; then
@@ -165,7 +199,8 @@ finish() {
   local status="$1"
   trap 'stop_dashboard; exit 130' INT TERM
   if [ -z "$inner" ] && [ "$report" = 1 ] && [ "$record" = 1 ] && [ -f "$out/run.lcmlog" ] && [ -x "$build/hbirl" ]; then
-    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" "${domain_args[@]}" >/dev/null 2>"$out/logs/report.log"; then
+    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" "${domain_args[@]}" "${key_args[@]}" \
+      >/dev/null 2>"$out/logs/report.log"; then
       echo "launch.sh: report: $out/report/index.html"
     else
       echo "launch.sh: the report could not be written (see $out/logs/report.log)" >&2
@@ -191,7 +226,8 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     # passes it on (the set's own launch.sh then stops its services).
     HBIRL_IN_NETNS=1 HBIRL_LAUNCH_INNER=1 unshare -rn -- bash -c \
       'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record) &
+      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record) \
+      $([ "$key_mode" = given ] && echo --key "$key") $([ "$key_mode" = none ] && echo --no-key) &
     set_pid=$!
     trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; stop_dashboard; exit 130' INT TERM
     set +e
@@ -240,31 +276,35 @@ if [ "$record" = 1 ]; then
 fi
 for i in $(seq 1 "$workers"); do
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" \
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}" \
       --kill-self-after-blocks "$kill_worker_after_blocks"
   else
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i"  # the MDP comes over the bus
+    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}"  # the MDP comes over the bus
   fi
 done
 if [ "$no_sim" = 0 ]; then
   for service in $listeners; do
     case "$service" in
-      perception|labeller) start "$service" "$build/hbirl-$service" --url "$url" ;;
+      perception|labeller) start "$service" "$build/hbirl-$service" --url "$url" "${key_args[@]}" ;;
     esac
   done
 fi
-"$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" --out "$out/result.json" \
+"$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" --out "$out/result.json" \
   >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
 optimiser=$!
 pids+=("$optimiser")
 names+=(optimiser)
 if [ "$no_sim" = 0 ]; then
   # Each domain's simulator reads the options that concern it.
-  start sim-driver "$build/hbirl-sim-driver" --url "$url" "${domain_args[@]}" --config "$config" --sorts "$sorts" \
+  start sim-driver "$build/hbirl-sim-driver" --url "$url" "${domain_args[@]}" "${key_args[@]}" --config "$config" --sorts "$sorts" \
     --controlled-sorts "$controlled_sorts" --fps "$fps" --confounders "$confounders" --trajectories "$trajectories" \
     --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
 elif [ -n "$sensor" ]; then
-  start sensor bash -c "$sensor --url \"\$0\"" "$url"
+  if [ "${sensor_key:-0}" = 1 ] && [ "$key_mode" = given ]; then
+    start sensor bash -c "$sensor --url \"\$0\" --key \"\$1\"" "$url" "$key"
+  else
+    start sensor bash -c "$sensor --url \"\$0\"" "$url"
+  fi
 else
   echo "launch.sh: no simulator (--no-sim): waiting for a sensor on $url (hbirl publish --problem F --url '$url')"
 fi
@@ -316,6 +356,6 @@ trap - INT TERM EXIT
 if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
   echo "launch.sh: learned (also in $out/result.json):"
   cat "$out/result.json"
-  [ "$record" = 1 ] && echo "launch.sh: recorded $out/run.lcmlog; replay: $build/hbirl learn --log $out/run.lcmlog"
+  [ "$record" = 1 ] && echo "launch.sh: recorded $out/run.lcmlog; replay: $build/hbirl learn --log $out/run.lcmlog ${key_args[*]}"
 fi
 finish "$failed"

@@ -14,6 +14,7 @@
 #include "dashboard/state.hpp"
 #include "learner/input_error.hpp"
 #include "services/lcm_bus.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
 #include "services/process.hpp"
 
@@ -35,6 +36,10 @@ int run(int argc, char** argv) {
   app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
   app.add_option("--port", port, "Port to serve on (0: any free one)")->check(CLI::Range(0, 65535))->capture_default_str();
   app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
+  std::string key_file;
+  app.add_option("--key", key_file,
+                 "The run's key file (services/launch.sh writes OUT/run.key): show only messages signed with it, count\n"
+                 "the rest as bad (docs/RELIABILITY.md); without it the dashboard believes anything on the bus");
   std::string domain_spec;
   DomainOptions domain_options;
   app.add_option("--domain", domain_spec,
@@ -78,9 +83,9 @@ int run(int argc, char** argv) {
     if (services::stop_requested()) return 0;
     auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("bus", ...) if it cannot
     follow->follow(true);
-    bus = std::move(follow);
+    bus = services::with_key(std::move(follow), key_file, counters, false);
   } else {
-    bus = std::make_unique<services::LcmBus>(url);
+    bus = services::with_key(std::make_unique<services::LcmBus>(url), key_file, counters);
   }
   state.subscribe(*bus, counters);
   std::unique_ptr<services::Heartbeat> heartbeat;

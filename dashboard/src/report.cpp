@@ -9,6 +9,7 @@
 #include "dashboard/state.hpp"
 #include "plot/gnuplot.hpp"
 #include "learner/input_error.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
 
 namespace hbirl::dashboard {
@@ -191,11 +192,15 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
 
 }  // namespace
 
-Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain) {
-  services::LogBus bus(log_path);  // throws InputError("bus", ...)
+Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain,
+                    const std::string& key_file) {
   services::Counters counters;
   counters.service = "hbirl report";
   counters.quiet = true;
+  // throws InputError("bus", ...) / ("--key", ...)
+  services::require_key_if_signed(log_path, key_file);
+  std::unique_ptr<services::Bus> signed_or_not = services::with_key(std::make_unique<services::LogBus>(log_path), key_file, counters, false);
+  services::Bus& bus = *signed_or_not;
   DashboardState state(std::move(domain));
   state.subscribe(bus, counters);
   while (bus.handle(0) >= 0) {

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     mark(bus, e, hbirl::episode_marker_t::END_EPISODE, 0, t);
   }
   for (int k = 0; k < 3; ++k) {  // the end of the run, said three times: UDP may lose one
-    mark(bus, 0, hbirl::episode_marker_t::END_RUN);
+    mark(bus, 0, hbirl::episode_marker_t::END_RUN, 0, episodes);  // num_steps: how many episodes the run had
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   std::printf("corridor_sensor: %d episodes published\n", episodes);

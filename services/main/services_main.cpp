@@ -14,6 +14,7 @@
 
 #include "learner/input_error.hpp"
 #include "services/estep_service.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/labeller_service.hpp"
 #include "services/learning.hpp"
 #include "services/optimiser.hpp"
@@ -28,12 +29,17 @@ namespace {
 struct Common {
   std::string url;
   std::string id;
+  std::string key_file;
 };
 
 void add_common(CLI::App& app, Common& c) {
   app.add_option("--url", c.url,
                  "LCM URL (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
   app.add_option("--id", c.id, "This process's id in STATUS messages (default: service-host-pid)");
+  app.add_option("--key", c.key_file,
+                 "The run's key file (services/launch.sh makes one per run; hbirl keygen FILE): sign every message\n"
+                 "and drop, counting them, those not signed with it. Without it the bus is unauthenticated\n"
+                 "(docs/RELIABILITY.md)");
 }
 
 // Handles the bus and beats the heart until asked to stop; then says what it did.
@@ -130,9 +136,9 @@ int sim_driver(int argc, char** argv) {
     std::printf("%s\n", domain->has_camera() ? "perception labeller optimiser" : "optimiser");
     return 0;
   }
-  std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sim_driver";
+  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
   SimDriver driver(*bus, *domain, o, counters);
@@ -150,9 +156,9 @@ int perception(int argc, char** argv) {
   add_common(app, c);
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // one core per process
-  std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "perception";
+  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   PerceptionService service(*bus, counters);
   Heartbeat heartbeat(*bus, counters, "perception", c.id.empty() ? default_id("perception") : c.id);
   return serve(*bus, heartbeat, counters);
@@ -165,9 +171,9 @@ int labeller(int argc, char** argv) {
   bool uniform = false;
   app.add_flag("--uniform-eta", uniform, "Uniform eta instead of the paper's plausible rules");
   CLI11_PARSE(app, argc, argv);
-  std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "labeller";
+  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   LabellerService service(*bus, counters, uniform);
   Heartbeat heartbeat(*bus, counters, "labeller", c.id.empty() ? default_id("labeller") : c.id);
   return serve(*bus, heartbeat, counters);
@@ -193,9 +199,9 @@ int sampler(int argc, char** argv) {
   app.add_option("--kill-self-after-blocks", die_after,
                  "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
   CLI11_PARSE(app, argc, argv);
-  std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "sampler";
+  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters, max_dataset_mb << 20);
   if (lie) worker.lie_for_testing();
   while (!stop_requested()) {
@@ -264,9 +270,9 @@ int optimiser(int argc, char** argv) {
   if (c_option->count() > 0) o.learning.c = step_size;
   o.executor.spot_check = !no_spot_check;
   if (!d.spec.empty()) o.domain = open_domain_args(d);
-  std::unique_ptr<Bus> bus = open_bus(c.url);
   Counters counters;
   counters.service = "optimiser";
+  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
   o.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };
   const auto result = run_optimiser(
@@ -301,6 +307,7 @@ int optimiser(int argc, char** argv) {
                 {"workers_with_other_numerics", result->estep.other_numerics},
                 {"round_trip_seconds", result->estep.round_trip_s}};
   j["bad_messages"] = counters.bad_messages;
+  j["authenticated"] = counters.authenticated;
   j["gaps"] = counters.gaps;
   std::cout << j.dump(2) << std::endl;
   if (!out.empty()) {

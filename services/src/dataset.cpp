@@ -1,5 +1,6 @@
 #include "services/dataset.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "learner/input_error.hpp"
@@ -71,9 +72,27 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       e.ends_in_terminal = m.ends_in_terminal;
       break;
     }
-    case hbirl::episode_marker_t::END_RUN:
+    case hbirl::episode_marker_t::END_RUN: {
+      // A run ends after its episodes: an END_RUN before any ended, or one whose stated
+      // number of episodes (num_steps; 0: not stated) contradicts what has begun or an
+      // earlier END_RUN, is not this run's (docs/RELIABILITY.md).
+      const bool any_ended = std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
+      if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
+      if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+      if (m.num_steps > 0) {
+        if (!episodes_.empty() && episodes_.rbegin()->first >= m.num_steps) {
+          throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes, but episode " +
+                                                           std::to_string(episodes_.rbegin()->first) + " has begun");
+        }
+        if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
+          throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " +
+                                                           std::to_string(run_episodes_));
+        }
+        run_episodes_ = m.num_steps;
+      }
       run_ended_ = true;
       break;
+    }
     default:
       throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
   }
@@ -156,6 +175,12 @@ std::int64_t DatasetBuilder::missing_frames() const {
   return missing;
 }
 
+int DatasetBuilder::unfinished_episodes() const {
+  int n = 0;
+  for (const auto& [id, e] : episodes_) n += !e.ended;
+  return n;
+}
+
 std::int64_t DatasetBuilder::missing_truth() const {
   std::int64_t missing = 0;
   for (const auto& [id, e] : episodes_) {
@@ -182,6 +207,9 @@ std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t
 
 bool DatasetBuilder::complete() const {
   if (!run_ended_) return false;
+  for (int id = 0; id < run_episodes_; ++id) {
+    if (!episodes_.count(id)) return false;
+  }
   for (const auto& [id, e] : episodes_) {
     if (!e.ended) return false;
   }

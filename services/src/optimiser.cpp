@@ -7,6 +7,7 @@
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "services/lcm_arrays.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
 
 namespace hbirl::services {
@@ -189,22 +190,32 @@ std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<con
   return builtin;
 }
 
-OptimiserResult collect_from_log(const std::string& path, Counters& counters) {
-  LogBus bus(path);
+OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
+  require_key_if_signed(run.path, run.key_file);
+  std::unique_ptr<Bus> bus = with_key(std::make_unique<LogBus>(run.path), run.key_file, counters, false);
   DatasetBuilder builder;
-  builder.subscribe(bus, counters);
+  builder.subscribe(*bus, counters);
   // As the live optimiser does: up to the moment the run is complete.
-  while (!builder.complete() && bus.handle(0) >= 0) {
+  while (!builder.complete() && bus->handle(0) >= 0) {
   }
   OptimiserResult result;
   result.data = builder.build();
   result.missing_frames = builder.missing_frames();
+  if (!builder.complete()) {
+    result.incomplete = std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
+                        ", " + std::to_string(builder.unfinished_episodes()) + " episode(s) without their end, " +
+                        std::to_string(builder.missing_frames()) + " frame(s) missing";
+    if (!run.allow_incomplete) {
+      throw InputError("--log", "'" + run.path + "' is not a complete run: " + result.incomplete +
+                                    "; --allow-incomplete learns from the finished episodes");
+    }
+  }
   return result;
 }
 
-OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
+OptimiserResult learn_from_log(const RecordedRun& run, const LearningOptions& options, Counters& counters,
                                std::shared_ptr<const Domain> domain) {
-  OptimiserResult result = collect_from_log(path, counters);
+  OptimiserResult result = collect_from_log(run, counters);
   result.learned = learn_from_dataset(*domain_of(result.data, std::move(domain)), result.data, options);
   return result;
 }

@@ -50,6 +50,7 @@ void Heartbeat::tick(const std::string& state, bool now, int trajectories, std::
   s.trajectories = trajectories;
   s.dataset_digest = static_cast<std::int64_t>(digest);
   s.detail = counters_.last_problem;
+  s.authenticated = counters_.authenticated;
   publish(bus_, channels::kStatus, s, counters_);
 }
 

@@ -56,6 +56,7 @@ void SamplerWorker::publish_status(const std::string& state) {
   s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
   s.mdp_digest = static_cast<std::int64_t>(mdp_digest_.load());
   s.detail = counters_.last_problem;
+  s.authenticated = counters_.authenticated;
   publish(bus_, channels::kStatus, s, counters_);
 }
 

@@ -161,7 +161,7 @@ bool SimDriver::publish_run(const std::function<bool()>& stop, const std::functi
     }
     publish(bus_, channels::kEpisode, end_marker(id), counters_);
   }
-  publish(bus_, channels::kEpisode, marker(0, hbirl::episode_marker_t::END_RUN, 0.0), counters_);
+  publish(bus_, channels::kEpisode, end_of_run(), counters_);
   return true;
 }
 
@@ -176,7 +176,13 @@ hbirl::episode_marker_t SimDriver::end_marker(int id) {
 
 void SimDriver::republish_end_markers() {
   for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
-  publish(bus_, channels::kEpisode, marker(0, hbirl::episode_marker_t::END_RUN, 0.0), counters_);
+  publish(bus_, channels::kEpisode, end_of_run(), counters_);
+}
+
+hbirl::episode_marker_t SimDriver::end_of_run() {
+  auto m = marker(0, hbirl::episode_marker_t::END_RUN, 0.0);
+  m.num_steps = static_cast<std::int32_t>(run_->episodes.size());  // END_RUN states the run's episodes
+  return m;
 }
 
 bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,

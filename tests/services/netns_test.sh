@@ -53,10 +53,16 @@ case "$case" in
     live_theta="$(theta "$tmp/live/result.json")"
     [ -n "$(ile "$tmp/live/result.json")" ] || fail "no ILE in the result"
     awk -v x="$(ile "$tmp/live/result.json")" 'BEGIN { exit !(x + 0 < 1e-6) }' || fail "ILE $(ile "$tmp/live/result.json") >= 1e-6"
-    "$build/hbirl" learn --log "$tmp/live/run.lcmlog" --out "$tmp/offline.json"
+    # The run was signed with a fresh key (launch.sh wrote it, mode 0600): without it the
+    # recording is refused in one line; with it, read as the optimiser read it.
+    [ "$(stat -c %a "$tmp/live/run.key")" = 600 ] || fail "run.key is not mode 600"
+    status=0; "$build/hbirl" learn --log "$tmp/live/run.lcmlog" >/dev/null 2>"$tmp/nokey.err" || status=$?
+    [ "$status" = 2 ] && grep -q -- "--key" "$tmp/nokey.err" || { cat "$tmp/nokey.err"; fail "a signed recording read without --key: exit $status"; }
+    grep -q '"authenticated": true' "$tmp/live/result.json" || fail "the optimiser did not check the messages against the key"
+    "$build/hbirl" learn --log "$tmp/live/run.lcmlog" --key "$tmp/live/run.key" --out "$tmp/offline.json"
     [ "$(theta "$tmp/offline.json")" = "$live_theta" ] ||
       fail "hbirl learn --log: theta $(theta "$tmp/offline.json") != live $live_theta; offline: $(data_summary "$tmp/offline.json"); live: $(data_summary "$tmp/live/result.json")"
-    "$build/hbirl-optimiser" --url "$url" --workers 0 --out "$tmp/replay.json" >/dev/null 2>"$tmp/replay.err" &
+    "$build/hbirl-optimiser" --url "$url" --workers 0 --key "$tmp/live/run.key" --out "$tmp/replay.json" >/dev/null 2>"$tmp/replay.err" &
     optimiser=$!
     sleep 0.5
     lcm-logplayer -s 1 -e '^(EPISODE|OBSERVATIONS|GROUND_TRUTH)$' -l "$url" "$tmp/live/run.lcmlog" >/dev/null
@@ -73,9 +79,35 @@ case "$case" in
     launch gw --domain gridworld --workers 2 --record
     grep -q '"domain": "gridworld"' "$tmp/gw/result.json" || fail "not a gridworld result"
     awk -v x="$(ile "$tmp/gw/result.json")" 'BEGIN { exit !(x != "" && x + 0 < 1) }' || fail "ILE '$(ile "$tmp/gw/result.json")' >= 1"
-    "$build/hbirl" learn --log "$tmp/gw/run.lcmlog" --out "$tmp/gw_offline.json"
+    "$build/hbirl" learn --log "$tmp/gw/run.lcmlog" --key "$tmp/gw/run.key" --out "$tmp/gw_offline.json"
     [ "$(theta "$tmp/gw_offline.json")" = "$(theta "$tmp/gw/result.json")" ] ||
       fail "hbirl learn --log: theta $(theta "$tmp/gw_offline.json") != live $(theta "$tmp/gw/result.json"); offline: $(data_summary "$tmp/gw_offline.json"); live: $(data_summary "$tmp/gw/result.json")"
+    # The recording cut short (as when the run is killed): refused in one line, or learned
+    # from its finished episodes with --allow-incomplete, which says what is missing.
+    python3 - "$tmp/gw/run.lcmlog" "$tmp/cut.lcmlog" <<'PY'
+import struct, sys
+# lcm-logger's events: sync word, event number, time, channel and data lengths, channel, data.
+# Keep those before the last quarter of EPISODE markers: the run's end (END_RUN) is not among them.
+data, out, pos, events, markers = open(sys.argv[1], "rb").read(), [], 0, [], 0
+while pos + 28 <= len(data):
+    sync, num, t, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
+    end = pos + 28 + clen + dlen
+    events.append((data[pos + 28:pos + 28 + clen], data[pos:end]))
+    pos = end
+total = sum(1 for c, _ in events if c == b"EPISODE")
+with open(sys.argv[2], "wb") as f:
+    for channel, raw in events:
+        markers += channel == b"EPISODE"
+        if markers > total * 3 // 4:
+            break
+        f.write(raw)
+PY
+    status=0; "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" >/dev/null 2>"$tmp/cut.err" || status=$?
+    [ "$status" = 2 ] && [ "$(wc -l <"$tmp/cut.err")" = 1 ] && grep -q "not a complete run" "$tmp/cut.err" ||
+      { cat "$tmp/cut.err"; fail "a recording cut short: exit $status"; }
+    "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" --allow-incomplete --out "$tmp/cut.json" 2>/dev/null
+    grep -q '"incomplete": "the recording has no END_RUN' "$tmp/cut.json" || fail "--allow-incomplete did not say what is missing"
+    echo "cut recording: $(cat "$tmp/cut.err")"
     echo "gridworld over LCM: theta $(theta "$tmp/gw/result.json"); ILE $(ile "$tmp/gw/result.json")"
     ;;
   third_domain)
@@ -89,11 +121,11 @@ case "$case" in
     grep -q '"remote_blocks": 0,' "$tmp/wh/result.json" && fail "the workers computed nothing"
     awk -v x="$(ile "$tmp/wh/result.json")" 'BEGIN { exit !(x != "" && x + 0 < 0.05 * 138.05) }' ||
       fail "ILE '$(ile "$tmp/wh/result.json")' >= 5% of |V*|_1 = 138.05"
-    "$build/hbirl" learn --log "$tmp/wh/run.lcmlog" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_offline.json"
+    "$build/hbirl" learn --log "$tmp/wh/run.lcmlog" --key "$tmp/wh/run.key" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_offline.json"
     [ "$(theta "$tmp/wh_offline.json")" = "$(theta "$tmp/wh/result.json")" ] ||
       fail "hbirl learn --log: theta $(theta "$tmp/wh_offline.json") != live $(theta "$tmp/wh/result.json")"
     # A recording becomes a problem file that learns the live theta offline.
-    "$build/hbirl" export --log "$tmp/wh/run.lcmlog" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_export.json"
+    "$build/hbirl" export --log "$tmp/wh/run.lcmlog" --key "$tmp/wh/run.key" --domain "$repo/examples/warehouse.json" --out "$tmp/wh_export.json"
     "$build/hbirl" validate --problem "$tmp/wh_export.json" >/dev/null || fail "the exported problem file is not valid"
     "$build/hbirl" learn --problem "$tmp/wh_export.json" --out "$tmp/wh_export_learned.json"
     same_theta "$tmp/wh_export_learned.json" "$tmp/wh/result.json" || fail "hbirl learn on the exported problem: another theta"

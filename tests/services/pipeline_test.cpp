@@ -15,6 +15,7 @@
 
 #include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/process.hpp"
@@ -148,7 +149,7 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
   // The recorded log replays to the same data and the same theta.
   Counters replay_counters = quiet("replay");
-  const OptimiserResult replay = learn_from_log(log_path.string(), LearningOptions{}, replay_counters);
+  const OptimiserResult replay = learn_from_log({log_path.string(), "", false}, LearningOptions{}, replay_counters);
   EXPECT_EQ(replay.learned.digest, live->learned.digest);
   for (int k = 0; k < 4; ++k) EXPECT_EQ(replay.learned.theta[k], live->learned.theta[k]) << k;
   std::filesystem::remove(log_path);
@@ -476,23 +477,33 @@ namespace {
 
 // examples/corridor.json as a live run: its demonstration published by a SimDriver
 // (hbirl publish's way) into an optimiser that knows the domain. `hostile` runs first on
-// the simulator's bus, once the optimiser listens.
-std::optional<OptimiserResult> corridor_run(const std::function<void(Bus&)>& hostile, Counters& opt_counters) {
+// an endpoint of its own (it has no key), once the optimiser listens. With `key`, the
+// simulator and the optimiser sign and check every message.
+std::optional<OptimiserResult> corridor_run(const std::function<void(Bus&)>& hostile, Counters& opt_counters,
+                                            const RunKey* key = nullptr) {
   const std::string path = std::string(HBIRL_SOURCE_DIR) + "/examples/corridor.json";
   const std::shared_ptr<const Domain> domain = open_domain(path);
   auto hub = std::make_shared<MemoryHub>();
-  MemoryBus sim_bus(hub);
+  const auto endpoint = [&](Counters& counters) -> std::unique_ptr<Bus> {
+    auto raw = std::make_unique<MemoryBus>(hub);
+    if (!key) return raw;
+    return std::make_unique<KeyedBus>(std::move(raw), *key, counters);
+  };
   Counters sim_counters = quiet("publish");
+  std::unique_ptr<Bus> sim_endpoint = endpoint(sim_counters);
+  Bus& sim_bus = *sim_endpoint;
+  MemoryBus hostile_bus(hub);
   SimDriverOptions o;
   o.max_frames_per_second = 0;
   SimDriver driver(sim_bus, domain->name(), recorded_run(read_problem_file(path)), o, sim_counters);
   std::promise<void> listening;
   std::thread sim([&] {
     listening.get_future().wait();
-    if (hostile) hostile(sim_bus);
+    if (hostile) hostile(hostile_bus);
     driver.publish_run(nullptr);
   });
-  MemoryBus opt_bus(hub);
+  std::unique_ptr<Bus> opt_endpoint = endpoint(opt_counters);
+  Bus& opt_bus = *opt_endpoint;
   OptimiserOptions options;
   options.domain = domain;
   auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
@@ -546,6 +557,77 @@ TEST(Pipeline, MessagesThatDoNotFitTheDomainAreRefusedOneByOne) {
   EXPECT_NE(opt_counters.last_problem.find("episode_marker.domain"), std::string::npos) << opt_counters.last_problem;
   EXPECT_EQ(attacked->learned.digest, clean->learned.digest);
   for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(attacked->learned.theta[k], clean->learned.theta[k]);
+}
+
+// Forgeries from a process without the run's key -- an END_RUN before the run, another
+// alphabet, a step's observations sent ahead of the sensor's, a final REWARD, E-step
+// answers, hundreds of sampler heartbeats -- change nothing when the run is signed: the
+// same data set and theta as the clean signed run, every forgery counted. Without a key
+// the checks that need none still hold: the early END_RUN and the other alphabet are
+// refused, and the run learns the clean theta.
+TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
+  const RunKey key = RunKey::generate();
+  Counters clean_counters = quiet("optimiser");
+  const auto clean = corridor_run(nullptr, clean_counters, &key);
+  ASSERT_TRUE(clean.has_value());
+  EXPECT_EQ(clean_counters.bad_messages, 0);
+  int forged = 0;
+  const auto forge = [&forged](bool with_data) {
+    return [&forged, with_data](Bus& bus) {
+      Counters c = quiet("forger");
+      hbirl::episode_marker_t end{};
+      end.domain = "corridor";
+      end.kind = hbirl::episode_marker_t::END_RUN;
+      end.frames_per_step = 1;
+      publish(bus, channels::kEpisode, end, c);
+      hbirl::observations_t wide{};
+      wide.num_symbols = 5;  // the corridor has 2
+      wide.num_sources = 2;
+      wide.n = 1;
+      wide.symbol = {4};
+      wide.eta = {{0.5, 0.5}};
+      publish(bus, channels::kObservations, wide, c);
+      forged = 2;
+      if (!with_data) return;
+      for (int step = 0; step < 3; ++step) {  // the sensor's own steps of episode 0, made up and sent first
+        hbirl::observations_t ahead{};
+        ahead.episode = 0;
+        ahead.step = step;
+        ahead.num_symbols = 2;
+        ahead.num_sources = 2;
+        ahead.n = 1;
+        ahead.symbol = {1};
+        ahead.eta = {{1.0, 0.0}};
+        publish(bus, channels::kObservations, ahead, c);
+        ++forged;
+      }
+      hbirl::reward_t reward{};
+      reward.domain = "corridor";
+      reward.final = true;
+      publish(bus, channels::kReward, reward, c);
+      for (int k = 0; k < 300; ++k) {
+        hbirl::service_status_t beat{};
+        beat.service = "sampler";
+        beat.id = "sampler-forged-" + std::to_string(k);
+        beat.state = "running";
+        publish(bus, channels::kStatus, beat, c);
+      }
+    };
+  };
+  Counters keyed_counters = quiet("optimiser");
+  const auto keyed = corridor_run(forge(true), keyed_counters, &key);
+  ASSERT_TRUE(keyed.has_value());
+  EXPECT_EQ(keyed->learned.digest, clean->learned.digest);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(keyed->learned.theta[k], clean->learned.theta[k]);
+  EXPECT_GE(keyed_counters.bad_messages, forged) << "every forgery on the optimiser's channels is counted";
+  EXPECT_NE(keyed_counters.last_problem.find("not signed"), std::string::npos) << keyed_counters.last_problem;
+
+  Counters unkeyed_counters = quiet("optimiser");
+  const auto unkeyed = corridor_run(forge(false), unkeyed_counters);
+  ASSERT_TRUE(unkeyed.has_value());
+  EXPECT_EQ(unkeyed_counters.bad_messages, 2);
+  EXPECT_EQ(unkeyed->learned.digest, clean->learned.digest);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(unkeyed->learned.theta[k], clean->learned.theta[k]);
 }
 
 // The simulator as a whole service (SimDriver::serve): it starts once the optimiser's

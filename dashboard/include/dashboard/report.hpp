@@ -19,6 +19,8 @@ struct Report {
 
 // Throws InputError for a log that cannot be read or a folder that cannot be written.
 // `domain`: the run's domain file, when it is one (else the built-in domain it names).
-Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain = nullptr);
+// `key_file`: the run's key when its messages were signed (services/keyed_bus.hpp).
+Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain = nullptr,
+                    const std::string& key_file = "");
 
 }  // namespace hbirl::dashboard

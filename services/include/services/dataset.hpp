@@ -54,6 +54,7 @@ class DatasetBuilder {
   // ... and every controlled episode has every step's ground truth (its prior needs them).
   bool complete() const;
   std::int64_t missing_frames() const;   // of episodes that ended
+  int unfinished_episodes() const;       // begun, never ended
   std::int64_t missing_truth() const;    // steps of controlled episodes that ended
   // Up to `limit` missing (episode, step, frame), in order; a controlled step without its
   // ground truth is asked for as its frame 0 (the simulator sends the truth of every step
@@ -88,6 +89,7 @@ class DatasetBuilder {
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;
+  int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
   std::int64_t frames_ = 0;
   std::int64_t last_utime_ = 0;
   std::optional<Eigen::VectorXd> true_weights_;

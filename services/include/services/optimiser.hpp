@@ -42,6 +42,7 @@ struct OptimiserResult {
   int frame_requests = 0;            // FRAME_REQUEST messages sent
   int workers = 0;
   BusBlockExecutor::Stats estep;
+  std::string incomplete;            // a recorded run read with allow_incomplete: what it lacks ("" when complete)
 };
 // Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
 // to stop first.
@@ -51,14 +52,25 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                              const std::function<void(const std::string&)>& log = nullptr,
                                              const std::function<void()>& ready = nullptr);
 
+// A recorded run to read: the lcm-logger file, the run's key when it was signed (every
+// message is then checked against it, keyed_bus.hpp), and whether a recording that never
+// reached END_RUN (a run cut short) may still be learned from.
+struct RecordedRun {
+  std::string path;
+  std::string key_file;
+  bool allow_incomplete = false;
+};
+
 // The data set of a recorded log, as the live optimiser collected it (up to the moment
-// the run was complete); `learned` is left empty. Throws InputError for unusable logs.
-OptimiserResult collect_from_log(const std::string& path, Counters& counters);
+// the run was complete); `learned` is left empty. Throws InputError for unusable logs --
+// and for a log whose run never completed, unless allow_incomplete (then `incomplete`
+// says what is missing).
+OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters);
 
 // Learns offline from a recorded log (hbirl learn --log): the same data set and the same
 // learning as the live optimiser, computed here. `domain` as OptimiserOptions::domain.
 // Throws InputError for unusable logs.
-OptimiserResult learn_from_log(const std::string& path, const LearningOptions& options, Counters& counters,
+OptimiserResult learn_from_log(const RecordedRun& run, const LearningOptions& options, Counters& counters,
                                std::shared_ptr<const Domain> domain = nullptr);
 
 // The domain a data set was collected in: `given` when not null (the markers must name

@@ -60,6 +60,7 @@ class SimDriver {
  private:
   hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;
   hbirl::episode_marker_t end_marker(int episode);
+  hbirl::episode_marker_t end_of_run();
   void on_request(const hbirl::frame_request_t& m);
   void publish_truth(int episode, int step);
   void publish_frame(int episode, int step, int frame);

@@ -25,6 +25,7 @@ struct Counters {
   std::int64_t gaps = 0;         // sequence numbers skipped by publishers
   std::string last_problem;
   bool quiet = false;            // no reports on stderr (tests)
+  bool authenticated = false;    // the bus checks every message against a run key (keyed_bus.hpp)
 
   // Counts a bad message and reports it: the first 20, then every 1000th.
   void bad(const std::string& channel, const std::string& why);
@@ -45,6 +46,9 @@ void same_frame(const From& from, To& to) {
   to.frame = from.frame;
 }
 
+// What a message signed with a run key carries after its encoding (keyed_bus.hpp).
+constexpr int kSignatureTrailerBytes = 36;
+
 // Decodes `m` as a T; the reason when it cannot.
 template <class T>
 std::optional<std::string> decode(const Message& m, T& out) {
@@ -53,7 +57,12 @@ std::optional<std::string> decode(const Message& m, T& out) {
     if (used < 0) {
       return "not a " + std::string(T::getTypeName()) + " (wrong fingerprint, or truncated)";
     }
-    if (used != m.size) return std::to_string(m.size - used) + " bytes after the " + T::getTypeName();
+    if (used != m.size) {
+      if (m.size - used == kSignatureTrailerBytes && m.size >= 4 && std::equal(m.data + m.size - 4, m.data + m.size, "hbk1")) {
+        return std::string("signed with a run key: give --key to check and read it");
+      }
+      return std::to_string(m.size - used) + " bytes after the " + T::getTypeName();
+    }
   } catch (const std::exception& e) {  // e.g. a length field that cannot be allocated
     return "not a " + std::string(T::getTypeName()) + " (" + e.what() + ")";
   }
