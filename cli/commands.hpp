@@ -19,7 +19,13 @@ Command add_publish(CLI::App& app);
 Command add_export(CLI::App& app);
 Command add_keygen(CLI::App& app);
 
-// Print a JSON result to stdout, or to `path` when it is not empty.
+// Output that could not be written (a full disk, a closed pipe): exit status 1, one line.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Print a JSON result to stdout, or to `path` when it is not empty. Throws OutputError
+// (stdout) or InputError("--out", ...) when it cannot be written.
 void emit(const std::string& text, const std::string& path);
 // Print warnings (one line each) to stderr.
 void warn_all(const std::string& source, const std::vector<std::string>& warnings);

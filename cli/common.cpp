@@ -1,3 +1,5 @@
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 
@@ -8,7 +10,9 @@ namespace hbirl::cli {
 
 void emit(const std::string& text, const std::string& path) {
   if (path.empty()) {
+    errno = 0;
     std::cout << text << std::flush;
+    if (!std::cout) throw OutputError(std::string("stdout: ") + std::strerror(errno ? errno : EIO));
     return;
   }
   std::ofstream out(path, std::ios::binary);
@@ -18,7 +22,7 @@ void emit(const std::string& text, const std::string& path) {
 }
 
 void warn_all(const std::string& source, const std::vector<std::string>& warnings) {
-  for (const auto& w : warnings) std::cerr << "hbirl: warning: " << source << ": " << w << "\n";
+  for (const auto& w : warnings) std::cerr << "hbirl: warning: " << printable(source + ": " + w) << "\n";
 }
 
 }  // namespace hbirl::cli

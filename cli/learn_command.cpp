@@ -1,4 +1,5 @@
 // hbirl learn: HiddenDataEM / MaxCausalEnt IRL on a problem file.
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -10,6 +11,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "learner/observation_support.hpp"
 #include "problem/json_format.hpp"
 #include "services/optimiser.hpp"
 
@@ -53,6 +55,7 @@ std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, cons
   }
   std::vector<ObservedTrajectory> trajectories, controlled_observed;
   std::vector<Trajectory> controlled_truth;
+  std::vector<size_t> demonstration_index;  // of each trajectory learned from, for messages
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     if (problem.demonstration[i].controlled) {  // the subject prior's, below
       controlled_observed.push_back(*problem.demonstration[i].steps);
@@ -64,6 +67,7 @@ std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, cons
                                              "missing; learning from observations needs it for every trajectory"));
     }
     trajectories.push_back(*problem.demonstration[i].steps);
+    demonstration_index.push_back(i);
   }
   if (trajectories.empty()) throw in_file(args.problem, InputError("demonstration", "has only controlled-run trajectories"));
   ObservationPrior prior = *problem.observation_model;
@@ -74,6 +78,12 @@ std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, cons
     } catch (const InputError& e) {
       throw in_file(args.problem, e);
     }
+  }
+  if (const auto impossible = first_impossible_observation(problem.mdp, trajectories, prior)) {
+    std::string where = "demonstration[" + std::to_string(demonstration_index[static_cast<size_t>(impossible->trajectory)]) +
+                        "].steps[" + std::to_string(impossible->step) + "]";
+    if (impossible->observation >= 0) where += ".observations[" + std::to_string(impossible->observation) + "]";
+    throw in_file(args.problem, InputError(where, "impossible under the observation model: " + impossible->why));
   }
   if (args.update_given) use_alpha_update(prior, args.update);
   if (args.eta == "stated") prior.learn_eta = false;
@@ -202,6 +212,9 @@ int run_learn(const LearnArgs& args) {
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) {
     const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.theta);
+    if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
+      throw in_file(args.problem, InputError("true_weights", "give an ILE that is not a finite number: the true rewards are too large"));
+    }
     out["ile"] = ile.ile;
     out["ile_relative"] = ile.relative();
     out["policy_agreement"] = policy_agreement(mdp, *problem.true_weights, learned.theta);

@@ -1,6 +1,8 @@
 // hbirl: learn an expert's reward from noisy, confounded observations.
 // Exit status: 0 success, 2 bad input or usage (one line on stderr, nothing on stdout),
 // 1 internal error.
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 
 #include "commands.hpp"
@@ -42,16 +44,27 @@ int main(int argc, char** argv) {
     std::cerr << "hbirl: error: " << e.what() << " (run 'hbirl --help')\n";
     return 2;
   }
+  int status = 2;
   try {
     for (auto& [sub, command] : commands) {
-      if (sub->parsed()) return command();
+      if (sub->parsed()) status = command();
     }
   } catch (const hbirl::InputError& e) {
-    std::cerr << "hbirl: error: " << e.what() << "\n";
+    std::cerr << "hbirl: error: " << hbirl::printable(e.what()) << "\n";
     return 2;
+  } catch (const hbirl::cli::OutputError& e) {
+    std::cerr << "hbirl: error: could not write the output: " << hbirl::printable(e.what()) << "\n";
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "hbirl: internal error: " << e.what() << "\n";
+    std::cerr << "hbirl: internal error: " << hbirl::printable(e.what()) << "\n";
     return 1;
   }
-  return 2;
+  // Output that did not get out (a full disk, a closed pipe) is a failure, not a result.
+  errno = 0;
+  std::cout.flush();
+  if (!std::cout) {
+    std::cerr << "hbirl: error: could not write the output: " << std::strerror(errno ? errno : EIO) << "\n";
+    return 1;
+  }
+  return status;
 }

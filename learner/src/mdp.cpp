@@ -52,6 +52,10 @@ void Mdp::validate() const {
   if (!(discount >= 0.0 && discount < 1.0)) {
     throw InputError("mdp.discount", "must be in [0, 1), got " + std::to_string(discount));
   }
+  if (discount > kMaxDiscount) {
+    throw InputError("mdp.discount", "must be at most 0.999999 (a horizon 1/(1 - discount) of a million steps); value "
+                                     "iteration cannot converge closer to 1");
+  }
   const int* outer = transitions.outerIndexPtr();
   const int* inner = transitions.innerIndexPtr();
   const double* value = transitions.valuePtr();
@@ -87,6 +91,9 @@ void Mdp::validate() const {
     }
   }
   if (!features.allFinite()) throw InputError("mdp.features", "contains NaN or inf");
+  if (features.size() > 0 && features.cwiseAbs().maxCoeff() > kMaxFeatureMagnitude) {
+    throw InputError("mdp.features", "has a value beyond +-1e6: rescale the features (they are meant to be of order 1)");
+  }
   double start_sum = 0.0;
   for (int s = 0; s < num_states; ++s) {
     if (!std::isfinite(start[s]) || start[s] < 0.0) {

@@ -3,17 +3,28 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iterator>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "problem/json_node.hpp"
 #include "readers.hpp"
 
 namespace hbirl {
+
+namespace {
+// All the digits of x: 0.9999999999999999 must not read as 1 in an error line.
+std::string exact(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
+}
+}  // namespace
 
 namespace {
 
@@ -82,11 +93,31 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   if (pairs * std::max(n.features, 1) > kMaxFeatureCells) {
     node.at("num_features").fail("num_states * num_actions * num_features is too large");
   }
+  // The sizes against what the file holds, before anything is allocated for them: every
+  // state is terminal or has transitions, and every action of a non-terminal state has
+  // transitions or is impossible -- so a few bytes cannot declare a billion states.
+  const auto listed = [&node](const char* key) -> long long {
+    const auto list = node.find(key);
+    return list ? static_cast<long long>(list->size()) : 0;
+  };
+  const long long transitions_listed = listed("transitions"), terminal_listed = listed("terminal");
+  const bool has_transitions = node.has("transitions");  // when missing, that is the error to report
+  if (has_transitions && n.states > transitions_listed + terminal_listed) {
+    node.at("num_states").fail("is " + std::to_string(n.states) + ", but the file lists only " + std::to_string(transitions_listed) +
+                               " transitions and " + std::to_string(terminal_listed) +
+                               " terminal states (each state is terminal or has transitions)");
+  }
+  if (has_transitions && pairs > transitions_listed + listed("impossible_actions") + terminal_listed * n.actions) {
+    node.at("num_actions").fail("num_states * num_actions is " + std::to_string(pairs) +
+                                " pairs, more than the file's transitions, impossible actions and terminal states cover");
+  }
 
   double discount = 0.95;
   if (auto d = node.find("discount")) {
     discount = d->as_number();
-    if (!(discount >= 0.0 && discount < 1.0)) d->fail("expected a number in [0, 1), got " + fmt(discount));
+    if (!(discount >= 0.0 && discount <= kMaxDiscount)) {
+      d->fail("expected a number in [0, " + fmt(kMaxDiscount) + "] (a horizon of at most a million steps), got " + exact(discount));
+    }
   }
 
   std::vector<int> terminal;
@@ -192,7 +223,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
       if (n.features == 0) e[2].fail("mdp.num_features is 0, so there is no feature to set");
       const int k = static_cast<int>(e[2].as_int(0, n.features - 1));
-      const double v = e[3].as_number();
+      const double v = e[3].as_number(-kMaxFeatureMagnitude, kMaxFeatureMagnitude);
       features.push_back({s, a, k, v});
       seen.push_back({{static_cast<long long>(s) * n.actions + a, k}, i});
     }
@@ -217,8 +248,12 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   ObservationPrior prior;
   prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
   prior.num_confounders = static_cast<int>(node.at("num_confounders").as_int(0, 1 << 16));
-  if (static_cast<long long>(mdp.num_pairs()) * prior.num_symbols > kMaxFeatureCells) {
-    node.at("num_symbols").fail("num_states * num_actions * num_symbols is too large");
+  // O is (|S||A| + |E|) x |W| doubles, and the E-step holds a few of its size: bounded
+  // before it is allocated.
+  if ((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols > kMaxFeatureCells) {
+    node.at("num_symbols").fail("(num_states * num_actions + num_confounders) * num_symbols is " +
+                                std::to_string((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols) +
+                                " cells, more than the " + std::to_string(kMaxFeatureCells) + " (2 GiB) an observation model may take");
   }
   double subject_default = 1.0;
   if (auto d = node.find("subject_alpha_default")) subject_default = d->as_number(0.0, 1e300);
@@ -293,13 +328,28 @@ Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp) {
     node.fail("has " + std::to_string(k) + " entries, expected " + std::to_string(mdp.num_features()) + " (mdp.num_features)");
   }
   Eigen::VectorXd w(static_cast<Eigen::Index>(k));
-  for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = node[i].as_number();
+  for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = node[i].as_number(-kMaxFeatureMagnitude, kMaxFeatureMagnitude);
   return w;
 }
 
 nlohmann::json parse_json_text(const std::string& text) {
+  // JSON leaves duplicate keys to the reader (nlohmann keeps the last): a file that says
+  // one thing twice is refused, naming the key, rather than silently half-ignored.
+  std::vector<std::set<std::string>> keys;  // of each object being read, innermost last
+  const auto check = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (event == E::object_start) {
+      keys.emplace_back();
+    } else if (event == E::object_end) {
+      keys.pop_back();
+    } else if (event == E::key) {
+      const std::string key = parsed.get<std::string>();
+      if (!keys.empty() && !keys.back().insert(key).second) throw InputError(key, "appears twice in the same object");
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(text);
+    return nlohmann::json::parse(text, check);
   } catch (const nlohmann::json::exception& e) {
     // "[json.exception.parse_error.101] parse error at line 2, column 5: ..." -> drop the tag.
     std::string what = e.what();
@@ -316,7 +366,16 @@ std::string read_text_file(const std::string& path) {
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Read in blocks up to a bound: a device (/dev/zero) or a pipe has no size to check first.
+  std::string text;
+  std::vector<char> block(1 << 16);
+  while (in) {
+    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+    text.append(block.data(), static_cast<size_t>(in.gcount()));
+    if (text.size() > kMaxFileBytes) {
+      throw InputError("", "more than " + std::to_string(kMaxFileBytes >> 20) + " MB: not a problem file (or too large for one)");
+    }
+  }
   if (in.bad()) throw InputError("", "cannot read: " + std::string(std::strerror(errno ? errno : EIO)));
   return text;
 }

@@ -20,6 +20,10 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, st
 Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp);
 // The JSON document of `text`; malformed JSON is InputError("", "malformed JSON: ...").
 nlohmann::json parse_json_text(const std::string& text);
+// The largest problem or domain file read (256 MiB; a 200 x 200 Gridworld's is 15 MB): a
+// bigger one, or an endless device such as /dev/zero, is refused before it fills memory
+// (its JSON tree takes several times the bytes).
+constexpr size_t kMaxFileBytes = size_t{256} << 20;
 // The whole file; unreadable files are InputError("", ...).
 std::string read_text_file(const std::string& path);
 

@@ -53,12 +53,12 @@ void Counters::bad(const std::string& channel, const std::string& why) {
   last_problem = channel + ": " + why;
   if (!quiet && (bad_messages <= 20 || bad_messages % 1000 == 0)) {
     std::fprintf(stderr, "%s: bad message #%lld on %s: %s\n", service.empty() ? "hbirl" : service.c_str(),
-                 static_cast<long long>(bad_messages), channel.c_str(), why.c_str());
+                 static_cast<long long>(bad_messages), printable(channel).c_str(), printable(why).c_str());
   }
 }
 
 void Counters::note(const std::string& what) const {
-  if (!quiet) std::fprintf(stderr, "%s: %s\n", service.empty() ? "hbirl" : service.c_str(), what.c_str());
+  if (!quiet) std::fprintf(stderr, "%s: %s\n", service.empty() ? "hbirl" : service.c_str(), printable(what).c_str());
 }
 
 }  // namespace hbirl::services

@@ -371,6 +371,75 @@ TEST_F(Cli, GridworldExperimentAtSmallScale) {
   EXPECT_EQ(without_seconds(csv), without_seconds(slurp(out1 / "gridworld_runs.csv")));
 }
 
+// The hostile inputs of docs/RELIABILITY.md: each exits 2 with one line naming the field
+// (and position), quickly and without taking memory it does not need.
+TEST_F(Cli, HostileProblemFilesAreRefusedInOneLine) {
+  json d = corridor();
+  d["mdp"]["num_states"] = 1 << 20;  // a few transitions cannot make 2^20 states
+  expect_rejected(d.dump(), "mdp.num_states: is 1048576, but the file lists only");
+  d["mdp"]["num_states"] = 1 << 28;  // nor 2^28 (and their features would take 4 GiB)
+  expect_rejected(d.dump(), "mdp.num_features: num_states * num_actions * num_features is too large");
+  d = corridor();
+  d["observation_model"]["num_confounders"] = 65536;
+  d["observation_model"]["num_symbols"] = 4096;
+  expect_rejected(d.dump(), "observation_model.num_symbols: (num_states * num_actions + num_confounders) * num_symbols is");
+  d = corridor();
+  d["mdp"]["features"][0][3] = 1.7e308;
+  expect_rejected(d.dump(), "mdp.features[0][3]: expected a number in [-1000000, 1000000]");
+  d = corridor();
+  d["true_weights"] = {1e308, -1e308};
+  expect_rejected(d.dump(), "true_weights[0]: expected a number in [-1000000, 1000000]");
+  d = corridor();
+  d["mdp"]["discount"] = 0.9999999999999999;
+  expect_rejected(d.dump(), "mdp.discount: expected a number in [0, 0.999999]");
+  std::string text = corridor().dump();
+  text.replace(text.find("\"mdp\":{"), 7, "\"mdp\":{\"discount\":0.5,");
+  expect_rejected(text, "discount: appears twice in the same object");
+  d = corridor();
+  d["mdp"]["num_states"] = "x\x1b[2J\x07";  // control characters are escaped, not sent to the terminal
+  expect_rejected(d.dump(), "got the string \"x\\x1b[2J\\x07\"");
+  const Outcome zero = run("learn --problem /dev/zero");
+  EXPECT_EQ(zero.status, 2) << zero.err;
+  EXPECT_NE(zero.err.find("more than 256 MB"), std::string::npos) << zero.err;
+}
+
+// An observation no source can produce where its trajectory can be: refused before
+// learning, naming it (it used to give weights of 0 and exit 0).
+TEST_F(Cli, ImpossibleObservationIsNamed) {
+  json d = corridor();
+  auto& om = d["observation_model"];
+  om["subject_alpha_default"] = 0.0;
+  json kept = json::array();
+  for (const auto& e : om["subject_alpha"]) {
+    if (e[2] == 0) kept.push_back(e);
+  }
+  kept.push_back({2, 0, 0, 1.0});
+  kept.push_back({2, 1, 0, 1.0});
+  om["subject_alpha"] = kept;  // the subject never shows symbol 1
+  d["demonstration"][0]["steps"][0]["observations"] = json::array({json::array({1, {1.0, 0.0}})});
+  const fs::path p = write("impossible.json", d.dump());
+  const Outcome r = run("learn --problem '" + p.string() + "'");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.err_lines(), 1) << r.err;
+  EXPECT_NE(r.err.find("demonstration[0].steps[0].observations[0]: impossible under the observation model: symbol 1"),
+            std::string::npos)
+      << r.err;
+  // With a little weight on the confounder (which can show symbol 1) it is possible again.
+  d["demonstration"][0]["steps"][0]["observations"] = json::array({json::array({1, {0.9, 0.1}})});
+  const Outcome ok = run("learn --problem '" + write("possible.json", d.dump()).string() + "'");
+  EXPECT_EQ(ok.status, 0) << ok.err;
+}
+
+// Output that cannot be written is a failure: exit 1 and a line saying so.
+TEST_F(Cli, UnwritableOutputFails) {
+  const fs::path err = dir_ / "stderr";
+  const std::string cmd = std::string("'") + HBIRL_BIN + "' learn --from truth --problem '" + example("corridor.json") +
+                          "' >/dev/full 2>'" + err.string() + "'";
+  const int raw = std::system(cmd.c_str());
+  EXPECT_EQ(WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, 1);
+  EXPECT_NE(slurp(err).find("could not write the output: stdout: No space left on device"), std::string::npos) << slurp(err);
+}
+
 TEST_F(Cli, LearnsFromObservations) {
   const Outcome r = run("learn --problem '" + example("corridor.json") + "'");
   ASSERT_EQ(r.status, 0) << r.err;

@@ -212,7 +212,11 @@ TEST(ProblemFile, NegativeValues) {
                "observation_model.subject_alpha[0][3]", "expected a number in [0,");
   expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][1][1] = {-0.1, 1.0, 0.1}; },
                "demonstration[0].steps[0].observations[1][1][0]", "expected a number in [0, 1]");
-  expect_error([](json& d) { d["mdp"]["discount"] = -0.5; }, "mdp.discount", "expected a number in [0, 1)");
+  expect_error([](json& d) { d["mdp"]["discount"] = 0.9999999999999999; }, "mdp.discount", "got 0.99999999999999989");
+  expect_error([](json& d) { d["mdp"]["num_states"] = 1 << 20; }, "mdp.num_states", "is 1048576, but the file lists only");
+  expect_error([](json& d) { d["mdp"]["features"][0][3] = 1.7e308; }, "mdp.features[0][3]", "expected a number in [-1000000, 1000000]");
+  expect_error([](json& d) { d["true_weights"][0] = -1e308; }, "true_weights[0]", "expected a number in [-1000000, 1000000]");
+  expect_error([](json& d) { d["mdp"]["discount"] = -0.5; }, "mdp.discount", "expected a number in [0, 0.999999]");
 }
 
 TEST(ProblemFile, OutOfRangeIndices) {

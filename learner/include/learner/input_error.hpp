@@ -6,6 +6,24 @@
 
 namespace hbirl {
 
+// `text` with control characters (from a file or a message) written as \xNN, so that an
+// error line cannot rewrite the terminal it is printed on.
+inline std::string printable(const std::string& text) {
+  static const char hex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const unsigned char c : text) {
+    if (c < 0x20 || c == 0x7f) {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
 class InputError : public std::runtime_error {
  public:
   InputError(std::string field, std::string message)

@@ -20,6 +20,13 @@ using SparseRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
 // log 0: an impossible action's Q and log-probability, a never-occupied state's.
 inline constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+// The largest discount (an effective horizon 1/(1 - gamma) of 10^6 steps): closer to 1,
+// the soft Bellman backups contract too slowly to converge in double precision and a
+// solve spins (docs/RELIABILITY.md).
+inline constexpr double kMaxDiscount = 0.999999;
+// The largest feature value (and true weight) in magnitude: rewards and values stay far
+// from overflow whatever weights the optimiser tries. Features are meant to be of order 1.
+inline constexpr double kMaxFeatureMagnitude = 1e6;
 
 struct TransitionEntry {
   int state;
