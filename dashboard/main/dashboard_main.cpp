@@ -36,6 +36,15 @@ int run(int argc, char** argv) {
   app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
   app.add_option("--port", port, "Port to serve on (0: any free one)")->check(CLI::Range(0, 65535))->capture_default_str();
   app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
+  dashboard::ServerLimits limits;
+  app.add_option("--max-connections", limits.max_connections,
+                 "HTTP connections served at once (as many more wait; beyond that new ones wait in the kernel)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app.add_option("--http-timeout", limits.timeout_s,
+                 "Seconds a client may send or take nothing before it is dropped (slow and idle connections)")
+      ->check(CLI::Range(0.05, 600.0))
+      ->capture_default_str();
   std::string key_file;
   app.add_option("--key", key_file,
                  "The run's key file (services/launch.sh writes OUT/run.key): show only messages signed with it, count\n"
@@ -61,7 +70,7 @@ int run(int argc, char** argv) {
   services::Counters counters;
   counters.service = "hbirl-dashboard";
   dashboard::DashboardState state(domain);
-  dashboard::Server server(state, web);
+  dashboard::Server server(state, web, limits);
   const int bound = server.bind(host, port);
   std::thread serving([&server] { server.run(); });
   struct StopServer {  // whatever happens below, the server thread ends before `server` does

@@ -10,10 +10,21 @@
 
 namespace hbirl::dashboard {
 
+// How the server treats its clients (hbirl-dashboard --help; docs/RELIABILITY.md).
+struct ServerLimits {
+  // Connections served at once; as many more wait in line, and beyond that the server stops
+  // accepting until one ends (the kernel holds the rest): a crowd of clients cannot make
+  // it start a thread each.
+  int max_connections = 16;
+  // A client that sends (or takes) nothing for this long is dropped: slow and idle
+  // connections free their place instead of holding it.
+  double timeout_s = 2.0;
+};
+
 class Server {
  public:
   // Throws InputError("--web", ...) when the page is not in web_dir.
-  Server(const DashboardState& state, const std::string& web_dir);
+  Server(const DashboardState& state, const std::string& web_dir, ServerLimits limits = {});
   ~Server();
   // Binds host:port (port 0: any free port); throws InputError("--port", ...) when it cannot.
   // Returns the port bound.
