@@ -248,14 +248,39 @@ fi
 # it again) makes the recording differ from what the optimiser learned from.
 [ -n "$url" ] || url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152"
 
+# The supervisor: every service started with start() is watched, and one that dies (an
+# exit status other than 0, or a signal) is started again with the same command, after a
+# back-off of 0.5, 1, 2 s, at most $max_restarts times; the protocol asks again for what it
+# lost (frames, end markers, E-step blocks), so the run still completes with the same
+# result. lcm-logger is not restarted (what it missed cannot be recorded again: the
+# recording is then incomplete, and `hbirl learn --log` says so). logs/pids lists every
+# process started, restarts included.
 pids=()
 names=()
+cmds=()
+restarts=()
+max_restarts=3
+supervised() { case "$1" in perception|labeller|sampler-*|optimiser|sim-driver) return 0 ;; *) return 1 ;; esac; }
+run_service() {  # run_service INDEX: (re)start it in the background
+  local i="$1" name="${names[$1]}" extra=""
+  supervised "$name" && [ "${restarts[$i]}" -gt 0 ] && extra="--restarts ${restarts[$i]}"
+  if [ "$name" = optimiser ]; then  # stdout is its result, stderr its log
+    eval "exec ${cmds[$i]} $extra" >>"$out/logs/optimiser.log" 2>>"$out/logs/optimiser.err" &
+  else
+    eval "exec ${cmds[$i]} $extra" >>"$out/logs/$name.log" 2>&1 &
+  fi
+  pids[$i]=$!
+  echo "$name ${pids[$i]}" >>"$out/logs/pids"
+}
 start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log
   local name="$1"; shift
-  "$@" >"$out/logs/$name.log" 2>&1 &
-  pids+=($!)
-  names+=("$name")
+  local i="${#names[@]}"
+  names[$i]="$name"
+  cmds[$i]="$(printf '%q ' "$@")"
+  restarts[$i]=0
+  run_service "$i"
 }
+: >"$out/logs/pids"
 logger=""
 stop_all() {  # the services, then the logger (it records their last heartbeats)
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -TERM "$pid" 2>/dev/null || true; done
@@ -275,11 +300,12 @@ if [ "$record" = 1 ]; then
   logger="${pids[-1]}"
 fi
 for i in $(seq 1 "$workers"); do
+  sampler=("$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}")  # the MDP comes over the bus
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}" \
-      --kill-self-after-blocks "$kill_worker_after_blocks"
+    start "sampler-$i" "${sampler[@]}" --kill-self-after-blocks "$kill_worker_after_blocks"
+    cmds[$((${#names[@]} - 1))]="$(printf '%q ' "${sampler[@]}")"  # (testing) restarted, it does not kill itself again
   else
-    start "sampler-$i" "$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}"  # the MDP comes over the bus
+    start "sampler-$i" "${sampler[@]}"
   fi
 done
 if [ "$no_sim" = 0 ]; then
@@ -289,11 +315,10 @@ if [ "$no_sim" = 0 ]; then
     esac
   done
 fi
-"$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" --out "$out/result.json" \
-  >"$out/logs/optimiser.log" 2>"$out/logs/optimiser.err" &
-optimiser=$!
-pids+=("$optimiser")
-names+=(optimiser)
+: >"$out/logs/optimiser.log"
+: >"$out/logs/optimiser.err"
+start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" --out "$out/result.json"
+optimiser_index=$((${#names[@]} - 1))
 if [ "$no_sim" = 0 ]; then
   # Each domain's simulator reads the options that concern it.
   start sim-driver "$build/hbirl-sim-driver" --url "$url" "${domain_args[@]}" "${key_args[@]}" --config "$config" --sorts "$sorts" \
@@ -311,25 +336,46 @@ fi
 
 
 failed=0
-checked=()
-# Watch everything until the optimiser is done: a service that dies with an error (except
-# a worker we asked to die) fails the run at once; so does running past --timeout.
+finished=()
+optimiser_done=0
+describe() { if [ "$1" -gt 128 ]; then echo "killed by signal $(($1 - 128))"; else echo "exit $1"; fi; }
+# Watch everything until the optimiser is done: a service that dies is restarted (above);
+# one that dies more than $max_restarts times, or anything else that fails, fails the run
+# at once; so does running past --timeout.
 check_services() {
   for i in "${!pids[@]}"; do
-    [ "${pids[$i]}" = "$optimiser" ] && continue
-    [ -n "${checked[$i]:-}" ] && continue
-    if ! kill -0 "${pids[$i]}" 2>/dev/null; then
-      checked[$i]=1
-      set +e; wait "${pids[$i]}"; s=$?; set -e
-      if [ "$s" -ne 0 ] && ! { [ -n "$kill_worker_after_blocks" ] && [ "${names[$i]}" = sampler-1 ]; }; then
-        echo "launch.sh: ${names[$i]} failed (exit $s); see $out/logs/${names[$i]}.log" >&2
-        failed=1
-      fi
+    [ -n "${finished[$i]:-}" ] && continue
+    kill -0 "${pids[$i]}" 2>/dev/null && continue
+    set +e; wait "${pids[$i]}"; s=$?; set -e
+    name="${names[$i]}"
+    if [ "$s" = 0 ]; then
+      finished[$i]=1
+      [ "$i" = "$optimiser_index" ] && optimiser_done=1
+      continue
     fi
+    if supervised "$name" && [ "${restarts[$i]}" -lt "$max_restarts" ]; then
+      restarts[$i]=$((restarts[$i] + 1))
+      delay="$(awk -v k="${restarts[$i]}" 'BEGIN { print 0.5 * 2 ^ (k - 1) }')"
+      echo "launch.sh: $name died ($(describe "$s")); restarting it in $delay s (restart ${restarts[$i]} of $max_restarts)" >&2
+      sleep "$delay"
+      run_service "$i"
+      continue
+    fi
+    finished[$i]=1
+    if [ "$name" = lcm-logger ]; then
+      echo "launch.sh: lcm-logger died ($(describe "$s")): the recording $out/run.lcmlog is incomplete" >&2
+      continue
+    fi
+    if supervised "$name"; then
+      echo "launch.sh: $name died $((max_restarts + 1)) times (last: $(describe "$s")); giving up: see $out/logs/$name.log" >&2
+    else
+      echo "launch.sh: $name failed ($(describe "$s")); see $out/logs/$name.log" >&2
+    fi
+    failed=1
   done
 }
 deadline=$((SECONDS + timeout))
-while kill -0 "$optimiser" 2>/dev/null; do
+while [ "$optimiser_done" = 0 ]; do
   check_services
   if [ "$failed" = 1 ]; then break; fi
   if [ "$SECONDS" -ge "$deadline" ]; then
@@ -339,17 +385,10 @@ while kill -0 "$optimiser" 2>/dev/null; do
   fi
   sleep 0.2
 done
-if [ "$failed" = 0 ]; then
-  set +e
-  wait "$optimiser"
-  status=$?
-  set -e
-  if [ "$status" -ne 0 ]; then
-    echo "launch.sh: the optimiser failed (exit $status); see $out/logs/optimiser.err" >&2
-    failed=1
-  fi
-  check_services
-fi
+[ "$failed" = 1 ] || check_services
+restarted=""
+for i in "${!names[@]}"; do [ "${restarts[$i]}" = 0 ] || restarted+=" ${names[$i]} (${restarts[$i]})"; done
+[ -z "$restarted" ] || echo "launch.sh: restarted during the run:$restarted"
 stop_all
 trap - INT TERM EXIT
 

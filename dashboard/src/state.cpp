@@ -435,6 +435,8 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
                         {"bad_messages", m.bad_messages},
                         {"gaps", m.gaps},
                         {"trajectories", m.trajectories},
+                        {"restarts", m.restarts},
+                        {"authenticated", m.authenticated != 0},
                         {"detail", m.detail}});
   }
   j["services"] = services;

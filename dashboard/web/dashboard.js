@@ -201,7 +201,9 @@ function showServices(s) {
     const done = x.state === 'done' || x.state === 'stopped';
     return `<tr><td>${escapeHtml(x.service)}</td><td>${escapeHtml(x.id)}</td><td>${escapeHtml(x.state)}</td>` +
       `<td class="${age > 3 && !done ? 'stale' : ''}">${age.toFixed(1)} s ago</td><td>${x.messages_in}</td><td>${x.messages_out}</td>` +
-      `<td class="${x.bad_messages > 0 ? 'bad' : ''}">${x.bad_messages}</td><td>${x.gaps}</td><td>${escapeHtml(x.detail)}</td></tr>`;
+      `<td class="${x.bad_messages > 0 ? 'bad' : ''}">${x.bad_messages}</td><td>${x.gaps}</td>` +
+      `<td class="${x.restarts > 0 ? 'stale' : ''}">${x.restarts}</td>` +
+      `<td class="${x.authenticated ? '' : 'bad'}">${x.authenticated ? 'yes' : 'no'}</td><td>${escapeHtml(x.detail)}</td></tr>`;
   }).join('');
   $('estep-caption').textContent = s.estep ? `E-step over the bus: ${s.estep.retried_blocks} blocks re-asked, ` +
     `${s.estep.local_blocks} computed by the optimiser itself.` : '';

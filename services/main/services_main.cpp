@@ -30,12 +30,15 @@ struct Common {
   std::string url;
   std::string id;
   std::string key_file;
+  int restarts = 0;
 };
 
 void add_common(CLI::App& app, Common& c) {
   app.add_option("--url", c.url,
                  "LCM URL (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
   app.add_option("--id", c.id, "This process's id in STATUS messages (default: service-host-pid)");
+  app.add_option("--restarts", c.restarts, "How many times the supervisor restarted this service before (shown in STATUS)")
+      ->check(CLI::Range(0, 1000000));
   app.add_option("--key", c.key_file,
                  "The run's key file (services/launch.sh makes one per run; hbirl keygen FILE): sign every message\n"
                  "and drop, counting them, those not signed with it. Without it the bus is unauthenticated\n"
@@ -138,6 +141,7 @@ int sim_driver(int argc, char** argv) {
   }
   Counters counters;
   counters.service = "sim_driver";
+  counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
@@ -158,6 +162,7 @@ int perception(int argc, char** argv) {
   cv::setNumThreads(1);  // one core per process
   Counters counters;
   counters.service = "perception";
+  counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   PerceptionService service(*bus, counters);
   Heartbeat heartbeat(*bus, counters, "perception", c.id.empty() ? default_id("perception") : c.id);
@@ -173,6 +178,7 @@ int labeller(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   Counters counters;
   counters.service = "labeller";
+  counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   LabellerService service(*bus, counters, uniform);
   Heartbeat heartbeat(*bus, counters, "labeller", c.id.empty() ? default_id("labeller") : c.id);
@@ -201,6 +207,7 @@ int sampler(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   Counters counters;
   counters.service = "sampler";
+  counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters, max_dataset_mb << 20);
   if (lie) worker.lie_for_testing();
@@ -272,6 +279,7 @@ int optimiser(int argc, char** argv) {
   if (!d.spec.empty()) o.domain = open_domain_args(d);
   Counters counters;
   counters.service = "optimiser";
+  counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
   Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
   o.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };

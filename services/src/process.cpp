@@ -51,6 +51,7 @@ void Heartbeat::tick(const std::string& state, bool now, int trajectories, std::
   s.dataset_digest = static_cast<std::int64_t>(digest);
   s.detail = counters_.last_problem;
   s.authenticated = counters_.authenticated;
+  s.restarts = counters_.restarts;
   publish(bus_, channels::kStatus, s, counters_);
 }
 

@@ -57,6 +57,7 @@ void SamplerWorker::publish_status(const std::string& state) {
   s.mdp_digest = static_cast<std::int64_t>(mdp_digest_.load());
   s.detail = counters_.last_problem;
   s.authenticated = counters_.authenticated;
+  s.restarts = counters_.restarts;
   publish(bus_, channels::kStatus, s, counters_);
 }
 

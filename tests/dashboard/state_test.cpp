@@ -189,11 +189,15 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
   s.id = "sampler-1";
   s.state = "running";
   s.bad_messages = 5;
+  s.restarts = 2;
+  s.authenticated = true;
   state.on_status(s, 1'000'000);
   j = state.json(3'500'000);
   ASSERT_EQ(j["services"].size(), 1u);
   EXPECT_DOUBLE_EQ(j["services"][0]["seconds_since_heartbeat"].get<double>(), 2.5);
   EXPECT_EQ(j["services"][0]["bad_messages"], 5);
+  EXPECT_EQ(j["services"][0]["restarts"], 2);  // the supervisor's restarts (services/launch.sh)
+  EXPECT_EQ(j["services"][0]["authenticated"], true);
   s.id = "";
   EXPECT_THROW(state.on_status(s, 0), InputError);
 }

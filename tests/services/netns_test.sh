@@ -203,6 +203,29 @@ PY
       fail "no block was re-asked or computed locally"
     echo "worker killed mid-run: theta $(theta "$tmp/killed/result.json") as with one steady worker"
     ;;
+  supervisor)
+    # Every service SIGKILLed in turn while the run is going (perception, the labeller, a
+    # worker, the simulator, the optimiser): launch.sh restarts each, the protocol asks
+    # again for what was lost, and the run learns the clean run's theta bit for bit.
+    launch clean --workers 2 --max-fps 100
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/killed" "${small[@]}" --workers 2 --max-fps 100 \
+      >"$tmp/killed.out" 2>&1 &
+    set_pid=$!
+    pid_of() { awk -v n="$1" '$1 == n { p = $2 } END { print p }' "$tmp/killed/logs/pids" 2>/dev/null; }
+    for i in $(seq 1 100); do [ -n "$(pid_of sim-driver)" ] && break; sleep 0.1; done
+    for victim in perception labeller sampler-1 sim-driver optimiser; do
+      sleep 0.7
+      pid="$(pid_of "$victim")"
+      [ -n "$pid" ] && kill -9 "$pid" 2>/dev/null && echo "killed $victim ($pid)"
+    done
+    wait "$set_pid" || { cat "$tmp/killed.out"; fail "launch.sh with services killed exited non-zero"; }
+    grep "restarted during the run" "$tmp/killed.out" || fail "nothing was restarted"
+    for victim in perception labeller sampler-1 sim-driver optimiser; do
+      grep -q "$victim died (killed by signal 9); restarting" "$tmp/killed.out" || echo "note: $victim had finished before its kill"
+    done
+    grep -q "perception died (killed by signal 9); restarting" "$tmp/killed.out" || fail "perception was not restarted"
+    same_theta "$tmp/killed/result.json" "$tmp/clean/result.json" || fail "theta after the restarts differs from the clean run's"
+    ;;
   bad_input)
     # Garbage, wrong-type messages and every channel's own type with each 4 bytes in turn set
     # to INT_MIN (a hostile string or array length) on every channel: each service counts

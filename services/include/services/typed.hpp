@@ -26,6 +26,7 @@ struct Counters {
   std::string last_problem;
   bool quiet = false;            // no reports on stderr (tests)
   bool authenticated = false;    // the bus checks every message against a run key (keyed_bus.hpp)
+  int restarts = 0;              // times the supervisor restarted this process's service before
 
   // Counts a bad message and reports it: the first 20, then every 1000th.
   void bad(const std::string& channel, const std::string& why);
