@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "services/estep_service.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/sampler_worker.hpp"
 #include "sim_driver/gridworld.hpp"
@@ -34,6 +35,7 @@ const Data& data() {
     out.prior.num_confounders = 3;
     out.prior.subject_alpha = Eigen::MatrixXd::Ones(out.task.mdp.num_pairs(), 4);
     out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
+    out.prior.learn_eta = false;  // as the service set learns: the bus carries the stated eta
     return out;
   }();
   return d;
@@ -48,19 +50,28 @@ void BM_EStepPassHere(benchmark::State& state) {
 }
 BENCHMARK(BM_EStepPassHere)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// Arguments: workers; then 0: as before issue 14 (no spot check, no key), 1: the default
+// (the optimiser spot-checks one block per pass), 2: the default with every message signed
+// and checked with a run key (docs/RELIABILITY.md).
 void BM_EStepPassOverBus(benchmark::State& state) {
   const Data& d = data();
   auto hub = std::make_shared<MemoryHub>();
   const int n = static_cast<int>(state.range(0));
+  const int mode = static_cast<int>(state.range(1));
+  const RunKey key = RunKey::generate();
   std::atomic<bool> stop{false};
   std::vector<std::thread> threads;
-  std::vector<std::unique_ptr<MemoryBus>> buses;
   std::vector<std::unique_ptr<Counters>> counters;
+  std::vector<std::unique_ptr<Bus>> buses;
   std::vector<std::unique_ptr<SamplerWorker>> workers;
+  const auto endpoint = [&](Counters& c) -> std::unique_ptr<Bus> {
+    if (mode < 2) return std::make_unique<MemoryBus>(hub);
+    return std::make_unique<KeyedBus>(std::make_unique<MemoryBus>(hub), key, c);
+  };
   for (int w = 0; w < n; ++w) {
-    buses.push_back(std::make_unique<MemoryBus>(hub));
     counters.push_back(std::make_unique<Counters>());
     counters.back()->quiet = true;
+    buses.push_back(endpoint(*counters.back()));
     workers.push_back(std::make_unique<SamplerWorker>(*buses.back(), "sampler-" + std::to_string(w), *counters.back()));
   }
   for (int w = 0; w < n; ++w) {
@@ -68,10 +79,12 @@ void BM_EStepPassOverBus(benchmark::State& state) {
       while (!stop) workers[static_cast<size_t>(w)]->handle(5);
     });
   }
-  MemoryBus bus(hub);
   Counters c;
   c.quiet = true;
-  auto executor = std::make_shared<BusBlockExecutor>(bus, d.task.mdp, "gridworld", d.observed, c);
+  std::unique_ptr<Bus> bus = endpoint(c);
+  BusExecutorOptions executor_options;
+  executor_options.spot_check = mode >= 1;
+  auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", d.observed, c, executor_options);
   if (executor->wait_for_workers(n, 10000) != n) state.SkipWithError("workers did not come up");
   ObservationEStepOptions options;
   options.executor = executor;
@@ -85,7 +98,11 @@ void BM_EStepPassOverBus(benchmark::State& state) {
   state.counters["local_blocks"] = static_cast<double>(s.local_blocks);
   state.counters["retried"] = static_cast<double>(s.retried_blocks);
 }
-BENCHMARK(BM_EStepPassOverBus)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EStepPassOverBus)
+    ->ArgsProduct({{1, 2, 4}, {0, 1, 2}})
+    ->ArgNames({"workers", "mode"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace hbirl::services

@@ -1,6 +1,7 @@
 #include "services/estep_service.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include "learner/input_error.hpp"
 
@@ -10,6 +11,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "services/memory_bus.hpp"
+#include "services/sampler_worker.hpp"
 #include "service_threads.hpp"
 #include "sim_driver/gridworld.hpp"
 #include "sim_driver/gridworld_observations.hpp"
@@ -274,6 +276,33 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   EXPECT_GT(stats.stale, 0);
   EXPECT_GT(opt.counters.bad_messages, 0);
   EXPECT_GT(worker.counters().bad_messages, 0);
+}
+
+// A data set's declared size takes no memory until its trajectories arrive (a 61-byte
+// TRAJECTORY claiming 10 million used to make a worker allocate 1.1 GB), and a data set
+// beyond the worker's --max-dataset-mb is refused and dropped.
+TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
+  const auto max_rss_kb = [] {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss;
+  };
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub), sender(hub);
+  Counters counters = quiet("sampler"), out = quiet("sender");
+  SamplerWorker worker(bus, "sampler-a", counters, std::int64_t{1} << 20);
+  hbirl::trajectory_t claim = to_message(task().observed[0], 5, 10'000'000, 42);
+  const long before = max_rss_kb();
+  publish(sender, channels::kTrajectory, claim, out);
+  bus.handle(0);
+  EXPECT_LT(max_rss_kb() - before, 50 * 1024) << "kB more at the peak";
+  EXPECT_EQ(counters.bad_messages, 0);  // a fine message: its data set is just not complete
+  // A data set of 1000 claimed trajectories, each ~2.5 KB held: past 1 MB after ~430.
+  for (int i = 0; i < 1000; ++i) publish(sender, channels::kTrajectory, to_message(task().observed[0], i, 1000, 43), out);
+  bus.handle(0);
+  EXPECT_GT(counters.bad_messages, 0);
+  EXPECT_NE(counters.last_problem.find("--max-dataset-mb"), std::string::npos) << counters.last_problem;
+  EXPECT_EQ(worker.digest(), 0u);  // nothing complete was taken in
 }
 
 // A worker that lies about its blocks is caught by the optimiser's spot check in the first
