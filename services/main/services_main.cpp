@@ -254,6 +254,12 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
+  std::int64_t max_dataset_mb = o.max_dataset_bytes >> 20;
+  app.add_option("--max-dataset-mb", max_dataset_mb,
+                 "The most memory the run's observations may take, in MB; frames beyond it are refused (counted as\n"
+                 "bad), whatever a sender publishes")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 20));
   bool no_spot_check = false;
   app.add_flag("--no-spot-check", no_spot_check,
                "Do not recompute one worker-computed block per E-step pass here (by default a worker whose block\n"
@@ -276,6 +282,7 @@ int optimiser(int argc, char** argv) {
   }
   if (c_option->count() > 0) o.learning.c = step_size;
   o.executor.spot_check = !no_spot_check;
+  o.max_dataset_bytes = max_dataset_mb << 20;
   if (!d.spec.empty()) o.domain = open_domain_args(d);
   Counters counters;
   counters.service = "optimiser";

@@ -129,7 +129,15 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   num_symbols_ = m.num_symbols;
   num_sources_ = m.num_sources;
   Episode& e = episode(m.episode);
-  if (e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f)).second) ++frames_;  // a repeat is ignored
+  if (e.frames.count({m.step, m.frame})) return;  // a repeat is ignored
+  const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size()) + 8 * static_cast<std::int64_t>(f.eta.size());
+  if (bytes_ + bytes > max_bytes_) {
+    throw InputError("observations", "the run's data would take more than --max-dataset-mb " + std::to_string(max_bytes_ >> 20) +
+                                         " MB: frame not kept");
+  }
+  bytes_ += bytes;
+  e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f));
+  ++frames_;
   last_utime_ = std::max(last_utime_, m.utime);
 }
 

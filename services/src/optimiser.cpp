@@ -63,6 +63,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
     builder.expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0, mdp.num_states,
                    mdp.num_actions);
   }
+  builder.limit(options.max_dataset_bytes);
   builder.subscribe(bus, counters);
   if (ready) ready();
   const auto say = [&log](const std::string& s) {

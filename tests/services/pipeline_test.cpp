@@ -374,6 +374,38 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
 
 // Ground truth is checked field by field; true weights that disagree mid-run leave the
 // ILE unknown but keep the true steps (the controlled run's prior needs them).
+// Made-up frames under ever new (episode, step, frame) keys cannot grow the optimiser's
+// data set past its limit (--max-dataset-mb): the frames beyond it are refused, naming
+// the option, and not kept; repeats of kept frames still pass as repeats.
+TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {
+  DatasetBuilder b;
+  b.limit(64 * 1024);
+  hbirl::observations_t o{};
+  o.num_symbols = 4;
+  o.num_sources = 2;
+  o.n = 8;
+  o.symbol.assign(8, 1);
+  o.eta.assign(8, {0.5, 0.5});
+  int kept = 0, refused = 0;
+  for (int k = 0; k < 2000; ++k) {
+    o.episode = k / 100;
+    o.step = k % 100;
+    try {
+      b.on_observations(o);
+      ++kept;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--max-dataset-mb"), std::string::npos) << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(kept, 100);
+  EXPECT_GT(refused, 1000);
+  EXPECT_LE(kept * (96 + 4 * 8 + 8 * 16), 64 * 1024);
+  o.episode = 0;
+  o.step = 0;
+  EXPECT_NO_THROW(b.on_observations(o));  // a repeat of a kept frame
+}
+
 TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
   DatasetBuilder b;
   hbirl::episode_marker_t m{};

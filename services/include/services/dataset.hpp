@@ -44,6 +44,10 @@ class DatasetBuilder {
   // truth are checked on every message (0: any), so a sensor that does not fit is refused
   // message by message, not after the run.
   void expect(const std::string& domain, int num_symbols, int num_sources, int num_states, int num_actions);
+  // At most this many bytes of observations are kept: a frame that would take the data
+  // set past it is refused (InputError naming --max-dataset-mb) and not kept, whoever
+  // floods the bus with made-up frames.
+  void limit(std::int64_t max_bytes) { max_bytes_ = max_bytes; }
   // Each throws InputError naming the field of a message that does not fit.
   void on_marker(const hbirl::episode_marker_t& m);
   void on_observations(const hbirl::observations_t& m);
@@ -90,6 +94,7 @@ class DatasetBuilder {
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;
   int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
+  std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept
   std::int64_t frames_ = 0;
   std::int64_t last_utime_ = 0;
   std::optional<Eigen::VectorXd> true_weights_;

@@ -30,6 +30,9 @@ struct OptimiserOptions {
   int wait_workers_ms = 10000;
   int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
   int quiet_ms = 5000;          // ... and learn without them when still none came for this long
+  // The most memory the run's observations may take (hbirl-optimiser --max-dataset-mb):
+  // frames beyond it are refused, counted, and not kept (DatasetBuilder::limit).
+  std::int64_t max_dataset_bytes = std::int64_t{2048} << 20;
   // Called often (every ~100 ms while collecting, every EM iteration) with what the
   // optimiser is doing ("collecting", "learning"): the process beats its heartbeat there,
   // so services that wait for it (the simulator) and the dashboard hear it throughout.
