@@ -38,6 +38,20 @@ DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
   return episodes_[id];
 }
 
+// Whether an episode belongs to the controlled run is said by its first marker; a later
+// one that says otherwise (a stray or forged marker) is refused, not obeyed: relabelling
+// a controlled episode as a demonstration would change what is learned without a word.
+void DatasetBuilder::mark_controlled(Episode& e, const hbirl::episode_marker_t& m) {
+  const bool controlled = m.controlled != 0;
+  if (e.marked && e.controlled != controlled) {
+    throw InputError("episode_marker.controlled", "episode " + std::to_string(m.episode) + " was marked " +
+                                                      (e.controlled ? "controlled" : "a demonstration") +
+                                                      " before: this marker contradicts it");
+  }
+  e.controlled = controlled;
+  e.marked = true;
+}
+
 void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
   if (counters_) counters_->gaps += marker_seq_.see(m.seq);
   if (!expected_domain_.empty() && m.domain != expected_domain_) {
@@ -50,7 +64,7 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
     case hbirl::episode_marker_t::BEGIN_EPISODE:
     case hbirl::episode_marker_t::BEGIN_STEP: {
       Episode& e = episode(m.episode);
-      e.controlled = m.controlled;
+      mark_controlled(e, m);
       if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
@@ -65,7 +79,7 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
-      e.controlled = m.controlled;
+      mark_controlled(e, m);
       e.ended = true;
       e.num_steps = m.num_steps;
       e.frames_per_step = m.frames_per_step;

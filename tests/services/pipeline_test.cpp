@@ -406,6 +406,32 @@ TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {
   EXPECT_NO_THROW(b.on_observations(o));  // a repeat of a kept frame
 }
 
+// A marker that relabels an episode (controlled run vs demonstration) after its first
+// marker said otherwise is refused, naming the field; the first word stands.
+TEST(DatasetBuilder, AMarkerCannotRelabelAnEpisode) {
+  DatasetBuilder b;
+  hbirl::episode_marker_t m{};
+  m.domain = "gridworld";
+  m.episode = 3;
+  m.controlled = true;
+  m.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+  m.frames_per_step = 1;
+  b.on_marker(m);
+  hbirl::episode_marker_t forged = m;
+  forged.controlled = false;
+  forged.kind = hbirl::episode_marker_t::END_EPISODE;
+  forged.num_steps = 1;
+  try {
+    b.on_marker(forged);
+    ADD_FAILURE() << "the relabelling marker was obeyed";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "episode_marker.controlled");
+  }
+  m.kind = hbirl::episode_marker_t::END_EPISODE;
+  m.num_steps = 1;
+  EXPECT_NO_THROW(b.on_marker(m));  // the sensor's own end marker agrees
+}
+
 TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
   DatasetBuilder b;
   hbirl::episode_marker_t m{};

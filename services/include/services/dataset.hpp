@@ -78,6 +78,7 @@ class DatasetBuilder {
   };
   struct Episode {
     bool controlled = false;
+    bool marked = false;  // a marker has said whether it is controlled (then later ones must agree)
     bool ended = false;
     bool ends_in_terminal = false;
     int num_steps = 0;
@@ -86,6 +87,7 @@ class DatasetBuilder {
     std::map<int, StateAction> truth;             // step -> (s, a)
   };
   Episode& episode(int id);
+  static void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
 
   std::string domain_;
   std::string expected_domain_;
