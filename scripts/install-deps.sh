@@ -12,6 +12,7 @@ packages=(
   libcpp-httplib-dev libjs-chart.js ca-certificates libsodium-dev
   chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev ninja-build
 )
 
 missing=()

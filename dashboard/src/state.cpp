@@ -7,6 +7,7 @@
 
 #include "learner/input_error.hpp"
 #include "services/channels.hpp"
+#include "services/frame_header.hpp"
 
 namespace hbirl::dashboard {
 
@@ -97,6 +98,14 @@ void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
   if (m.episode < 0 || m.step < 0 || m.frame < 0) throw InputError("camera_frame.episode", "episode, step and frame must be >= 0");
   if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
   if (m.size <= 0 || m.size > static_cast<int>(m.data.size())) throw InputError("camera_frame.size", "does not match its data");
+  // frame_png() decodes it: the image's header must state the message's size, within
+  // perception's limits, or the decoder allocates what a hostile header says
+  // (services/frame_header.hpp).
+  const auto stated = services::encoded_frame_size(m.data.data(), static_cast<size_t>(m.size), m.encoding);
+  if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096 || !stated || stated->first != m.width ||
+      stated->second != m.height) {
+    throw InputError("camera_frame.data", "is not a " + m.encoding + " image of the message's width x height (1x1 to 4096x4096)");
+  }
   const std::lock_guard<std::mutex> lock(mutex_);
   Pending& p = pending_[{m.episode, m.step, m.frame}];
   p.image.assign(m.data.begin(), m.data.begin() + m.size);

@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "learner/input_error.hpp"
+#include "services/frame_header.hpp"
 
 namespace hbirl::services {
 
@@ -19,6 +20,14 @@ void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
   if (m.size <= 0) throw InputError("camera_frame.data", "is empty");
   if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096) {
     throw InputError("camera_frame.width", "the frame must be between 1x1 and 4096x4096");  // before decoding it
+  }
+  // The image's own header too: it is what the decoder allocates for (frame_header.hpp).
+  const auto stated = encoded_frame_size(m.data.data(), m.data.size(), m.encoding);
+  if (!stated) throw InputError("camera_frame.data", "does not begin as " + m.encoding + " does");
+  if (stated->first != m.width || stated->second != m.height) {
+    throw InputError("camera_frame.width", "the image's header says " + std::to_string(stated->first) + "x" +
+                                               std::to_string(stated->second) + ", the message says " + std::to_string(m.width) +
+                                               "x" + std::to_string(m.height));
   }
   const cv::Mat frame = cv::imdecode(cv::Mat(1, m.size, CV_8UC1, const_cast<std::uint8_t*>(m.data.data())), cv::IMREAD_COLOR);
   if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);

@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <future>
 #include <limits>
 #include <cmath>
@@ -508,6 +509,18 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   bad.width = 320;
   bad.height = 100;  // not the camera's shape
   publish(test_bus, channels::kDetections, bad, tc);
+  // A 167-byte PNG whose header states 30000 x 30000 in a 320 x 240 message (the fuzzer's
+  // finding, tests/fuzz/RESULTS.md): refused before decoding, nothing allocated for it.
+  {
+    std::ifstream in(std::string(HBIRL_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_png_frame/finding-png-header-30000x30000.png",
+                     std::ios::binary);
+    const std::vector<std::uint8_t> bomb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bomb.size(), 24u);
+    f.encoding = "png";
+    f.data = bomb;
+    f.size = static_cast<std::int32_t>(bomb.size());
+    publish(test_bus, channels::kCamera, f, tc);
+  }
   // Then a good frame still goes through both.
   cv::Mat frame(240, 320, CV_8UC3, cv::Scalar(200, 200, 196));
   std::vector<unsigned char> png;
@@ -522,7 +535,8 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
     labeller_bus.handle(0);
     test_bus.handle(0);
   }
-  EXPECT_EQ(pc.bad_messages, 3);
+  EXPECT_EQ(pc.bad_messages, 4);
+  EXPECT_NE(pc.last_problem.find("30000x30000"), std::string::npos) << pc.last_problem;
   EXPECT_EQ(lc.bad_messages, 2);
   EXPECT_EQ(detections, 1);
 }
