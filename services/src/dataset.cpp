@@ -88,16 +88,13 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
     }
     case hbirl::episode_marker_t::END_RUN: {
       // A run ends after its episodes: an END_RUN before any ended, or one whose stated
-      // number of episodes (num_steps; 0: not stated) contradicts what has begun or an
-      // earlier END_RUN, is not this run's (docs/RELIABILITY.md).
+      // number of episodes (num_steps; 0: not stated) contradicts an earlier END_RUN, is
+      // not this run's. Once stated, episodes 0 .. n-1 are the run: others (a stray
+      // sender's) are neither waited for nor learned from (docs/RELIABILITY.md).
       const bool any_ended = std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
       if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
       if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
       if (m.num_steps > 0) {
-        if (!episodes_.empty() && episodes_.rbegin()->first >= m.num_steps) {
-          throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes, but episode " +
-                                                           std::to_string(episodes_.rbegin()->first) + " has begun");
-        }
         if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
           throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " +
                                                            std::to_string(run_episodes_));
@@ -189,7 +186,7 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
 std::int64_t DatasetBuilder::missing_frames() const {
   std::int64_t missing = 0;
   for (const auto& [id, e] : episodes_) {
-    if (!e.ended) continue;
+    if (!e.ended || !in_run(id)) continue;
     std::int64_t have = 0;
     for (const auto& [key, f] : e.frames) have += key.first < e.num_steps && key.second < e.frames_per_step;
     missing += static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - have;
@@ -199,14 +196,14 @@ std::int64_t DatasetBuilder::missing_frames() const {
 
 int DatasetBuilder::unfinished_episodes() const {
   int n = 0;
-  for (const auto& [id, e] : episodes_) n += !e.ended;
+  for (const auto& [id, e] : episodes_) n += !e.ended && in_run(id);
   return n;
 }
 
 std::int64_t DatasetBuilder::missing_truth() const {
   std::int64_t missing = 0;
   for (const auto& [id, e] : episodes_) {
-    if (!e.ended || !e.controlled) continue;
+    if (!e.ended || !e.controlled || !in_run(id)) continue;
     for (int t = 0; t < e.num_steps; ++t) missing += !e.truth.count(t);
   }
   return missing;
@@ -215,7 +212,7 @@ std::int64_t DatasetBuilder::missing_truth() const {
 std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t limit) const {
   std::vector<std::tuple<int, int, int>> out;
   for (const auto& [id, e] : episodes_) {
-    if (!e.ended) continue;
+    if (!e.ended || !in_run(id)) continue;
     for (int t = 0; t < e.num_steps; ++t) {
       const bool no_truth = e.controlled && !e.truth.count(t);
       for (int k = 0; k < e.frames_per_step; ++k) {
@@ -233,7 +230,7 @@ bool DatasetBuilder::complete() const {
     if (!episodes_.count(id)) return false;
   }
   for (const auto& [id, e] : episodes_) {
-    if (!e.ended) return false;
+    if (!e.ended && in_run(id)) return false;
   }
   return missing_frames() == 0 && missing_truth() == 0;
 }
@@ -246,7 +243,7 @@ Dataset DatasetBuilder::build() const {
   d.last_utime = last_utime_;
   d.true_weights = true_weights_;
   for (const auto& [id, e] : episodes_) {
-    if (!e.ended) continue;
+    if (!e.ended || !in_run(id)) continue;
     ObservedTrajectory t;
     t.ends_in_terminal = e.ends_in_terminal;
     std::vector<double> eta;

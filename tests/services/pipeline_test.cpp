@@ -433,6 +433,41 @@ TEST(DatasetBuilder, AMarkerCannotRelabelAnEpisode) {
   EXPECT_NO_THROW(b.on_marker(m));  // the sensor's own end marker agrees
 }
 
+// Once END_RUN states how many episodes the run had, an episode beyond them (a stray
+// sender's observations under a made-up episode id) neither holds the run up nor enters
+// the data set; an END_RUN before any episode ended is not believed.
+TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
+  DatasetBuilder b;
+  hbirl::episode_marker_t end_run{};
+  end_run.domain = "gridworld";
+  end_run.kind = hbirl::episode_marker_t::END_RUN;
+  end_run.num_steps = 1;
+  end_run.frames_per_step = 1;
+  EXPECT_THROW(b.on_marker(end_run), InputError);  // before any episode ended
+  hbirl::observations_t o{};
+  o.num_symbols = 4;
+  o.num_sources = 1;
+  o.n = 1;
+  o.symbol = {2};
+  o.eta = {{1.0}};
+  o.episode = 999;  // a stray sender's
+  b.on_observations(o);
+  o.episode = 0;
+  b.on_observations(o);
+  hbirl::episode_marker_t end{};
+  end.domain = "gridworld";
+  end.kind = hbirl::episode_marker_t::END_EPISODE;
+  end.num_steps = 1;
+  end.frames_per_step = 1;
+  b.on_marker(end);
+  EXPECT_FALSE(b.complete());
+  b.on_marker(end_run);
+  EXPECT_TRUE(b.complete());
+  EXPECT_EQ(b.build().observed.size(), 1u);
+  end_run.num_steps = 2;
+  EXPECT_THROW(b.on_marker(end_run), InputError);  // contradicts the first
+}
+
 TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
   DatasetBuilder b;
   hbirl::episode_marker_t m{};

@@ -88,6 +88,8 @@ class DatasetBuilder {
   };
   Episode& episode(int id);
   static void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
+  // Episode `id` belongs to the run: any, until END_RUN states how many it had.
+  bool in_run(int id) const { return run_episodes_ == 0 || id < run_episodes_; }
 
   std::string domain_;
   std::string expected_domain_;
