@@ -10,6 +10,7 @@
 
 #include "learner/hidden_data_em.hpp"
 #include "learner/soft_value_iteration.hpp"
+#include "services/keyed_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/sampler_worker.hpp"
 #include "service_threads.hpp"
@@ -370,6 +371,58 @@ TEST(EStepService, ForgedAnswersDoNotChangeTheta) {
     } else {
       EXPECT_GT(stats.unassigned, 0);
       EXPECT_EQ(stats.liars, 0);
+    }
+  }
+}
+
+// 300 made-up sampler heartbeats claiming the optimiser's data set and MDP (they used to
+// slow a 5 s run to 184 s: every pass gave blocks to workers that never answer). With a
+// run key they are dropped unread: no block is re-asked or computed here, theta is the
+// one-process run's. Without one, a worker that never answered gets one block per pass:
+// the pass still completes with the same theta.
+TEST(EStepService, FakeWorkerHeartbeatsCostNothingWithAKey) {
+  for (const bool keyed : {true, false}) {
+    auto hub = std::make_shared<MemoryHub>();
+    const RunKey key = RunKey::generate();
+    const auto endpoint = [&](Counters& c) -> std::unique_ptr<Bus> {
+      if (!keyed) return std::make_unique<MemoryBus>(hub);
+      return std::make_unique<KeyedBus>(std::make_unique<MemoryBus>(hub), key, c);
+    };
+    Counters wc = quiet("sampler-a"), oc = quiet("optimiser"), fc = quiet("forger");
+    std::unique_ptr<Bus> worker_bus = endpoint(wc);
+    SamplerWorker worker(*worker_bus, "sampler-a", wc);
+    std::atomic<bool> stop{false};
+    std::thread working([&] {
+      while (!stop) worker.handle(5);
+    });
+    std::unique_ptr<Bus> opt_bus = endpoint(oc);
+    BusExecutorOptions options;
+    options.timeout_ms = 300;
+    auto executor = std::make_shared<BusBlockExecutor>(*opt_bus, task().task.mdp, "gridworld", task().observed, oc, options);
+    ASSERT_EQ(executor->wait_for_workers(1, 10000), 1);
+    MemoryBus forger(hub);
+    for (int k = 0; k < 300; ++k) {
+      hbirl::service_status_t s{};
+      s.service = "sampler";
+      s.id = "sampler-fake-" + std::to_string(k);
+      s.seq = 1;
+      s.state = "running";
+      s.trajectories = static_cast<std::int32_t>(task().observed.size());
+      s.dataset_digest = static_cast<std::int64_t>(executor->digest());
+      s.mdp_digest = static_cast<std::int64_t>(worker.mdp_digest());
+      s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
+      publish(forger, channels::kStatus, s, fc);
+    }
+    expect_identical(learn(executor), local());
+    stop = true;
+    working.join();
+    const auto stats = executor->stats();
+    if (keyed) {
+      EXPECT_EQ(stats.retried_blocks, 0);
+      EXPECT_EQ(stats.local_blocks, 0);
+      EXPECT_GE(oc.bad_messages, 300);
+    } else {
+      EXPECT_GT(stats.remote_blocks, 0);  // the real worker still did the work
     }
   }
 }
