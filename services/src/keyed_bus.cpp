@@ -128,9 +128,15 @@ void require_key_if_signed(const std::string& log_path, const std::string& key_f
   if (!key_file.empty()) return;
   lcm::LogFile log(log_path, "r");
   if (!log.good()) return;  // the reader says why
-  const lcm::LogEvent* first = log.readNextEvent();
-  if (first && has_trailer(static_cast<const std::uint8_t*>(first->data), first->datalen)) {
-    throw InputError("--key", "the messages in '" + log_path + "' are signed with a run key: give it (launch.sh wrote OUT/run.key)");
+  // The first of hbirl's messages decides (LCM's own, e.g. LCM_SELF_TEST, are never signed).
+  for (int k = 0; k < 1000; ++k) {
+    const lcm::LogEvent* event = log.readNextEvent();
+    if (!event) return;
+    if (event->channel.rfind("LCM_", 0) == 0) continue;
+    if (has_trailer(static_cast<const std::uint8_t*>(event->data), event->datalen)) {
+      throw InputError("--key", "the messages in '" + log_path + "' are signed with a run key: give it (launch.sh wrote OUT/run.key)");
+    }
+    return;
   }
 }
 

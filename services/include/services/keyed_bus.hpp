@@ -60,7 +60,7 @@ class KeyedBus final : public Bus {
   std::int64_t rejected_ = 0;
 };
 
-// A recording to be read without a key whose first message is signed: throws
+// A recording to be read without a key whose first hbirl message is signed: throws
 // InputError("--key", ...) saying so (instead of every message failing to decode).
 void require_key_if_signed(const std::string& log_path, const std::string& key_file);
 
