@@ -31,6 +31,6 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 scripts/learner-only-check.sh build-learner-only "$jobs"
 
 # libFuzzer (clang, ASan + UBSan): every reader of files and of the bus, and the
-# dashboard's HTTP handling, 15 s each on its seed corpus (tests/fuzz; the long runs are
+# dashboard's HTTP handling, 10 s each on its seed corpus (tests/fuzz; the long runs are
 # in tests/fuzz/RESULTS.md). Fails on any crash, leak, timeout or huge allocation.
-scripts/fuzz.sh build-fuzz 15
+scripts/fuzz.sh build-fuzz 10
