@@ -17,8 +17,6 @@ namespace hbirl::services {
 
 namespace {
 
-constexpr std::uint8_t kMarker[4] = {'h', 'b', 'k', '1'};
-
 void init_sodium() {
   if (sodium_init() < 0) throw std::runtime_error("libsodium could not be initialised");
 }
@@ -88,10 +86,6 @@ void RunKey::write(const std::string& path) const {
   if (::close(fd) != 0 || !ok) throw InputError("--key", "could not write '" + path + "'");
 }
 
-bool has_trailer(const std::uint8_t* data, int size) {
-  return size >= kTrailerBytes && std::memcmp(data + size - 4, kMarker, 4) == 0;
-}
-
 KeyedBus::KeyedBus(std::unique_ptr<Bus> inner, const RunKey& key, Counters& counters)
     : inner_(std::move(inner)), key_(key), counters_(counters) {
   init_sodium();
@@ -103,7 +97,7 @@ bool KeyedBus::publish(const std::string& channel, const void* data, int size) {
   if (size > 0) std::memcpy(signed_bytes.data(), data, static_cast<size_t>(size));
   const auto tag = tag_of(key_, channel, data, size);
   std::memcpy(signed_bytes.data() + size, tag.data(), kTagBytes);
-  std::memcpy(signed_bytes.data() + size + kTagBytes, kMarker, 4);
+  std::memcpy(signed_bytes.data() + size + kTagBytes, kTrailerMarker, 4);
   return inner_->publish(channel, signed_bytes.data(), static_cast<int>(signed_bytes.size()));
 }
 

@@ -33,12 +33,8 @@ class RunKey {
   std::array<std::uint8_t, kBytes> bytes_{};
 };
 
-// What a signed message carries after its LCM encoding: the tag and a 4-byte marker.
-constexpr int kTagBytes = 32;
-constexpr int kTrailerBytes = kTagBytes + 4;
-// True when `data` ends in a trailer (whether or not its tag is valid): a reader without
-// the key can say "give --key" instead of "garbage".
-bool has_trailer(const std::uint8_t* data, int size);
+// What a signed message carries after its LCM encoding (the tag and a marker) and
+// has_trailer(): typed.hpp.
 
 // A bus whose messages are signed on the way out and checked on the way in. Messages
 // without a valid tag reach no handler; each is counted in `counters` as bad.

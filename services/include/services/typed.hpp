@@ -4,6 +4,7 @@
 // truncated packet) or that its handler rejects (InputError naming the field) is
 // counted and reported in one line, and the service carries on.
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <optional>
@@ -47,8 +48,16 @@ void same_frame(const From& from, To& to) {
   to.frame = from.frame;
 }
 
-// What a message signed with a run key carries after its encoding (keyed_bus.hpp).
-constexpr int kSignatureTrailerBytes = 36;
+// What a message signed with a run key carries after its encoding (keyed_bus.hpp): a
+// 32-byte tag and the marker "hbk1". Defined here because a reader without the key
+// recognises it (to say "give --key" rather than "garbage").
+constexpr int kTagBytes = 32;
+constexpr int kTrailerBytes = kTagBytes + 4;
+inline constexpr std::uint8_t kTrailerMarker[4] = {'h', 'b', 'k', '1'};
+// True when `data` ends in a trailer (whether or not its tag is valid).
+inline bool has_trailer(const std::uint8_t* data, int size) {
+  return size >= kTrailerBytes && std::equal(kTrailerMarker, kTrailerMarker + 4, data + size - 4);
+}
 
 // Decodes `m` as a T; the reason when it cannot.
 template <class T>
@@ -59,7 +68,7 @@ std::optional<std::string> decode(const Message& m, T& out) {
       return "not a " + std::string(T::getTypeName()) + " (wrong fingerprint, or truncated)";
     }
     if (used != m.size) {
-      if (m.size - used == kSignatureTrailerBytes && m.size >= 4 && std::equal(m.data + m.size - 4, m.data + m.size, "hbk1")) {
+      if (m.size - used == kTrailerBytes && has_trailer(m.data, m.size)) {
         return std::string("signed with a run key: give --key to check and read it");
       }
       return std::to_string(m.size - used) + " bytes after the " + T::getTypeName();
