@@ -209,6 +209,7 @@ int run_learn(const LearnArgs& args) {
   out["objective"] = "causal_log_likelihood";
   out["optimizer"] = to_string(options.optimizer.kind);
   out["em_iterations"] = best.em_iterations;
+  out["em_evaluations"] = best.em_evaluations;
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) {
     const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.theta);
@@ -253,6 +254,7 @@ int run_learn(const LearnArgs& args) {
     if (r.alpha && r.alpha->learn && r.alpha->update == AlphaUpdate::kPosterior) item["prior_strength"] = r.alpha->strength;
     item["score"] = r.score;
     item["em_iterations"] = r.em_iterations;
+    item["em_evaluations"] = r.em_evaluations;
     item["optimizer_iterations"] = r.optimizer_iterations;
     item["converged"] = r.converged;
     item["status"] = r.optimizer_status;
@@ -262,7 +264,7 @@ int run_learn(const LearnArgs& args) {
   for (const RestartResult& r : learned.restarts) {
     if (!r.converged) {
       std::cerr << "hbirl: warning: a restart stopped before converging ("
-                << (r.em_iterations >= options.max_em_iterations && estep->depends_on_policy()
+                << (r.em_evaluations >= options.max_em_iterations && estep->depends_on_policy()
                         ? "EM iteration limit " + std::to_string(options.max_em_iterations)
                         : "M-step: " + r.optimizer_status)
                 << "); see \"restarts\" in the output\n";
@@ -334,7 +336,7 @@ Command add_learn(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   add_engine_options(cmd, args->engine);
-  cmd->add_option("--max-em-iterations", args->max_em_iterations, "HiddenDataEM iteration limit")
+  cmd->add_option("--max-em-iterations", args->max_em_iterations, "HiddenDataEM's budget of E-step + M-step evaluations (SQUAREM's rejected extrapolations count; \"em_evaluations\" in the output)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--alpha-tolerance", args->alpha_tolerance,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <sstream>
 
@@ -68,15 +69,20 @@ void em_figure(const json& s, const std::string& stem, Report& r) {
   std::ostringstream data;
   bool ile = false;
   data << "$em << EOD\n";
+  std::optional<double> strength;
   for (const auto& e : em) {
+    // A new prior strength is a new objective: a blank line breaks gnuplot's line there.
+    const double s_e = e.value("prior_strength", 0.0);
+    if (strength && *strength != s_e) data << "\n";
+    strength = s_e;
     data << e["iteration"].get<int>() << " " << (e["log_likelihood"].is_null() ? "NaN" : number(e["log_likelihood"], 12)) << " "
          << (e["ile"].is_null() ? "NaN" : number(e["ile"], 8)) << "\n";
     ile = ile || !e["ile"].is_null();
   }
-  data << "EOD\nset title 'Learning: log-likelihood" << (ile ? " and ILE" : "") << " per EM iteration'\n"
-       << "set xlabel 'EM iteration'\nset ylabel 'log Pr(observations | θ, O)'\nset grid\nset key bottom right box opaque\n";
+  data << "EOD\nset title 'Learning: EM objective" << (ile ? " and ILE" : "") << " per EM iteration'\n"
+       << "set xlabel 'EM iteration'\nset ylabel 'log Pr(observations | θ, O) + log prior'\nset grid\nset key bottom right box opaque\n";
   if (ile) data << "set y2label 'ILE (true reward)'\nset y2tics\nset ytics nomirror\nset y2range [0:*]\n";
-  std::string plot = "plot $em using 1:2 with linespoints lw 2 pt 7 ps 0.6 lc rgb '#1565c0' title 'log-likelihood'";
+  std::string plot = "plot $em using 1:2 with linespoints lw 2 pt 7 ps 0.6 lc rgb '#1565c0' title 'EM objective'";
   if (ile) plot += ", $em using 1:3 axes x1y2 with linespoints lw 2 pt 5 ps 0.6 lc rgb '#d84315' title 'ILE'";
   plot += "\n";
   const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);

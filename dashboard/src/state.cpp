@@ -201,6 +201,9 @@ void DashboardState::on_truth(const hbirl::ground_truth_t& m) {
 void DashboardState::on_progress(const hbirl::em_progress_t& m) {
   if (m.iteration < 0) throw InputError("em_progress.iteration", "is negative");
   if (std::isnan(m.log_likelihood)) throw InputError("em_progress.log_likelihood", "is NaN");
+  if (!(m.prior_strength >= 0.0) || !std::isfinite(m.prior_strength)) {
+    throw InputError("em_progress.prior_strength", "must be finite and at least 0");
+  }
   for (double t : m.theta) {
     if (!std::isfinite(t)) throw InputError("em_progress.theta", "must be finite");
   }
@@ -361,6 +364,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   for (const auto& p : progress_) {
     em.push_back({{"iteration", p.iteration},
                   {"log_likelihood", finite_or_null(p.log_likelihood)},
+                  {"prior_strength", p.prior_strength},
                   {"ile", p.ile >= 0.0 ? finite_or_null(p.ile) : nlohmann::json(nullptr)},
                   {"seconds", p.seconds},
                   {"retries", p.retries},

@@ -142,18 +142,23 @@ function showPosterior(s) {
 function showEm(s) {
   if (!s.em.length) return;
   const it = s.em.map((e) => e.iteration);
-  const datasets = [{ label: 'log-likelihood', data: s.em.map((e) => e.log_likelihood), borderColor: '#1565c0', yAxisID: 'll', pointRadius: 2 }];
+  // EM's record never goes down within one prior strength; a newly chosen strength is a
+  // new objective, so the line breaks there (docs/MODEL.md "EM's record").
+  const newObjective = (ctx) => s.em[ctx.p1DataIndex].prior_strength !== s.em[ctx.p0DataIndex].prior_strength;
+  const datasets = [{ label: 'EM objective', data: s.em.map((e) => e.log_likelihood), borderColor: '#1565c0', yAxisID: 'll', pointRadius: 2,
+    segment: { borderColor: (ctx) => (newObjective(ctx) ? 'rgba(0,0,0,0)' : undefined) } }];
   const hasIle = s.em.some((e) => e.ile !== null);
   if (hasIle) datasets.push({ label: 'ILE (true reward)', data: s.em.map((e) => e.ile), borderColor: '#d84315', yAxisID: 'ile', pointRadius: 2 });
   lineOrBar('em-chart', 'line', it, datasets, {
     scales: {
       x: { title: { display: true, text: 'EM iteration' } },
-      ll: { position: 'left', title: { display: true, text: 'log Pr(observations | θ, O)' } },
+      ll: { position: 'left', title: { display: true, text: 'log Pr(observations | θ, O) + log prior' } },
       ile: { position: 'right', display: hasIle, min: 0, title: { display: true, text: 'ILE' }, grid: { drawOnChartArea: false } },
     },
   });
   const last = s.em[s.em.length - 1];
-  $('em-caption').textContent = `${s.em.length} iterations, ${fmt(last.seconds, 3)} s; log-likelihood ${fmt(last.log_likelihood, 8)}` +
+  const strength = last.prior_strength > 0 ? ` (prior strength ${fmt(last.prior_strength)}; a new strength breaks the line)` : '';
+  $('em-caption').textContent = `${s.em.length} iterations, ${fmt(last.seconds, 3)} s; EM objective ${fmt(last.log_likelihood, 8)}${strength}` +
     (last.ile !== null ? `, ILE ${fmt(last.ile)}` : '') + (s.reward && s.reward.final ? ' · finished' : ' · learning…');
   filled('panel-em');
 }

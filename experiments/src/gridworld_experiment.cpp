@@ -128,7 +128,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   Eigen::Index best_feature = 0;
   learned.theta.maxCoeff(&best_feature);
   result.goal_recovered = best_feature == s.task.goal;
-  result.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_iterations;
+  result.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
   result.log_likelihood = learned.log_likelihood;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

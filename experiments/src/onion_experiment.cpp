@@ -197,7 +197,7 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
           r.ile = ile.ile;
           r.ile_relative = ile.relative();
           r.policy_agreement = policy_agreement(mdp, expert_weights(), learned.theta);
-          r.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_iterations;
+          r.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
           r.log_likelihood = learned.log_likelihood;
         } catch (const std::exception& e) {
           r.error = e.what();  // one failed run must not lose the others

@@ -87,7 +87,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   r.ile_relative = ile.relative();
   r.optimal = r.ile_relative <= kOptimalTolerance;
   r.policy_agreement = policy_agreement(task.mdp, task.true_weights, learned.theta);
-  r.em_iterations = best.em_iterations;
+  r.em_iterations = best.em_evaluations;  // the cost
   r.converged = best.converged;
   r.log_likelihood = learned.log_likelihood;
   if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) r.strength = best.alpha->strength;

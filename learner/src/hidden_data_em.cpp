@@ -120,6 +120,9 @@ bool converged(const LearnOptions& o, const EmMap::Step& step, const EmMap::Poin
          std::abs(step.objective - previous) <= o.likelihood_tolerance * std::max(1.0, std::abs(step.objective));
 }
 
+// Called with each accepted EM iterate (its objective is at that point); SQUAREM's rejected
+// extrapolations are evaluations, not iterates, and are not reported: EM's record is then
+// non-decreasing (docs/MODEL.md "EM's record").
 using Report = std::function<void(const EmMap::Step&)>;
 
 // Plain EM from x until it converges (true) or the evaluation budget runs out (false).
@@ -167,8 +170,8 @@ bool squarem(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Rep
     const double a = std::clamp(-r.norm() / v.norm(), -step_max, -1.0);
     const EmMap::Point jump = unpack(p0 - 2.0 * a * r + a * a * v, x);
     const EmMap::Step s3 = map(jump);
-    report(s3);
     if (std::isfinite(s3.objective) && s3.objective >= s2.objective - 1e-9 * std::max(1.0, std::abs(s2.objective))) {
+      report(s3);
       x = s3.next;
       previous = s3.objective;
       if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
@@ -190,8 +193,9 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
   EmMap map(mdp, estep, options, seed);
   EmMap::Point x = map.start(theta);
   const Report report = [&](const EmMap::Step& step) {
+    ++result.em_iterations;
     if (options.on_iteration) {
-      options.on_iteration(index, map.evaluations(), step.objective, step.next.theta, step.e,
+      options.on_iteration(index, result.em_iterations, step.objective, step.next.theta, step.e,
                            step.next.alpha ? &*step.next.alpha : nullptr);
     }
     result.optimizer_status = step.m.status;
@@ -228,7 +232,7 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
   // (objectives at different strengths are not comparable), else by the objective.
   if (choice) result.held_out_log_likelihood = choice->current_score;
   result.score = (choice ? choice->current_score : final_e.objective) - penalty;
-  result.em_iterations = map.evaluations();
+  result.em_evaluations = map.evaluations();
   result.optimizer_iterations = map.optimizer_iterations();
   return result;
 }

@@ -144,6 +144,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                           p.restart = 0;
                                           p.iteration = iteration;
                                           p.log_likelihood = ll;
+                                          p.prior_strength = alpha.learn && alpha.update == AlphaUpdate::kPosterior ? alpha.strength : 0.0;
                                           p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
                                           p.num_features = static_cast<std::int32_t>(theta.size());
                                           p.theta = lcm_vector(theta);

@@ -158,10 +158,16 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
     e.num_features = 2;
     e.theta = {0.1 * it, -0.1 * it};
     e.retries = it - 1;
+    e.prior_strength = it == 3 ? 4.0 : 1.0;  // a new strength: a new objective, the line breaks
     state.on_progress(e);
   }
+  hbirl::em_progress_t bad{};
+  bad.iteration = 4;
+  bad.prior_strength = -1.0;
+  EXPECT_THROW(state.on_progress(bad), InputError);
   nlohmann::json j = state.json(0);
   ASSERT_EQ(j["em"].size(), 3u);
+  EXPECT_EQ(j["em"][2]["prior_strength"], 4.0);
   EXPECT_TRUE(j["em"][0]["ile"].is_null());
   EXPECT_EQ(j["em"][2]["ile"], 0.0);
   EXPECT_EQ(j["theta"]["learned"][0], 0.1 * 3);

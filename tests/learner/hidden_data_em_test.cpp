@@ -4,7 +4,9 @@
 
 #include <cstring>
 
+#include "learner/estep_observations.hpp"
 #include "sim_driver/gridworld.hpp"
+#include "sim_driver/random_task.hpp"
 
 namespace hbirl {
 namespace {
@@ -34,6 +36,52 @@ TEST(LearnReward, SameBitsWhateverTheThreadCount) {
       }
     }
   }
+}
+
+// EM's record (on_iteration) is non-decreasing to rounding on random tasks (traps, graphs,
+// noisy sensors, 0-7 confounders), with and without SQUAREM, without a learned
+// observation model, with it, with learned eta, and with an automatically chosen prior
+// strength -- within each strength: a newly chosen strength is a new objective, and
+// the record says so (ObservationPrior::strength of the reported alpha).
+TEST(LearnReward, RecordedObjectiveNeverDecreasesOnRandomTasks) {
+  enum class Alpha { kFixed, kLearned, kLearnedEta, kAutomatic };
+  int checked = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    RandomTaskOverrides overrides;
+    overrides.demonstrations = 6;
+    const RandomTask task = make_random_task(seed, 0, overrides);
+    for (Alpha mode : {Alpha::kFixed, Alpha::kLearned, Alpha::kLearnedEta, Alpha::kAutomatic}) {
+      ObservationPrior prior = task.prior;
+      prior.learn = mode != Alpha::kFixed;
+      prior.learn_eta = mode == Alpha::kLearnedEta || mode == Alpha::kAutomatic;
+      prior.automatic_strength = mode == Alpha::kAutomatic;
+      const ObservationEStep estep(task.mdp, task.observed.trajectories, prior);
+      for (bool accelerate : {false, true}) {
+        LearnOptions options;
+        options.accelerate = accelerate;
+        options.threads = 1;
+        options.max_em_iterations = 30;
+        std::vector<std::pair<double, double>> record;  // (strength, objective)
+        options.on_iteration = [&](int, int iteration, double objective, const Eigen::VectorXd&, const EStepResult&,
+                                   const ObservationPrior* alpha) {
+          EXPECT_EQ(iteration, static_cast<int>(record.size()) + 1);
+          record.emplace_back(alpha ? alpha->strength : 0.0, objective);
+        };
+        const LearnResult result = learn_reward(task.mdp, estep, options);
+        const std::string where = "task " + std::to_string(seed) + ", mode " + std::to_string(static_cast<int>(mode)) +
+                                  (accelerate ? ", SQUAREM" : ", plain EM");
+        ASSERT_EQ(static_cast<int>(record.size()), result.restarts[0].em_iterations) << where;
+        EXPECT_LE(result.restarts[0].em_iterations, result.restarts[0].em_evaluations) << where;
+        for (size_t i = 1; i < record.size(); ++i) {
+          if (record[i].first != record[i - 1].first) continue;  // a new strength: a new objective
+          const double tolerance = 1e-8 * std::max(1.0, std::abs(record[i - 1].second));
+          EXPECT_GE(record[i].second, record[i - 1].second - tolerance) << where << ", iterate " << i + 1;
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
 }
 
 TEST(LearnReward, RestartsAndSelectionRule) {

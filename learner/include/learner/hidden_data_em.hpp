@@ -43,8 +43,8 @@ struct LearnOptions {
   // deterministic E-step: turn it off for sampling engines.
   bool accelerate = true;
   SoftViOptions soft_vi;
-  // Called after every EM iteration (from the restart's thread): restart index,
-  // iteration, objective (EStepResult::objective), theta, the E-step's report, and the observation model's
+  // Called after every accepted EM iterate (from the restart's thread; SQUAREM's rejected
+  // extrapolations are not iterates): restart index, iterate number (1, 2, ...), objective (EStepResult::objective), theta, the E-step's report, and the observation model's
   // refined Dirichlet parameters (nullptr when O is not learned).
   std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&, const ObservationPrior*)> on_iteration;
 };
@@ -60,7 +60,8 @@ struct RestartResult {
   // The selection score: the held-out log-likelihood when there is one, else the
   // objective; minus (l2 / 2) M ||theta||^2.
   double score = 0.0;
-  int em_iterations = 0;          // EM map evaluations (E-step + M-step)
+  int em_iterations = 0;   // iterates EM kept (those reported to on_iteration)
+  int em_evaluations = 0;  // EM map evaluations (E-step + M-step), the cost: SQUAREM's rejected extrapolations too
   int optimizer_iterations = 0;  // summed over M-steps
   bool converged = false;
   std::string optimizer_status;
