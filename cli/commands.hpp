@@ -35,6 +35,8 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 #include "learner/estep_mcmc.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
+#include "learner/mcmc_diagnostics.hpp"
+#include "problem/json_format.hpp"
 #include "problem/problem_file.hpp"
 #include "sim_driver/domain.hpp"
 
@@ -48,9 +50,20 @@ InputError in_file(const std::string& path, const InputError& e);
 // The posterior engines, chosen with --engine exact|mcmc and the MCMC options.
 struct EngineArgs {
   std::string name = "exact";
-  McmcOptions mcmc;
+  // 4 chains unless told: R-hat compares chains (Vehtari et al. 2021 run 4 by default).
+  McmcOptions mcmc = [] {
+    McmcOptions o;
+    o.chains = 4;
+    return o;
+  }();
 };
 void add_engine_options(CLI::App* cmd, EngineArgs& args);
+// The MCMC engine's convergence diagnostics as printed ("mcmc_diagnostics": worst_rhat,
+// worst_bulk_ess, quantities, chains; the worst are null when nothing was checked, and
+// worst_rhat also when it is infinite, JSON having no infinity), and one warning line on
+// stderr when they miss the thresholds (mcmc_diagnostics.hpp).
+nlohmann::ordered_json mcmc_diagnostics_json(const McmcDiagnostics& diagnostics);
+void warn_if_not_converged(const McmcDiagnostics& diagnostics);
 // --alpha-update posterior|paper: how the observation model is refined (observation_model.hpp).
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update);
 EngineFactory engine_factory(const EngineArgs& args);

@@ -1,7 +1,9 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "learner/input_error.hpp"
@@ -68,6 +70,34 @@ void add_engine_options(CLI::App* cmd, EngineArgs& args) {
 EngineFactory engine_factory(const EngineArgs& args) {
   if (args.name == "mcmc") return mcmc_engine_factory(args.mcmc);
   return exact_engine_factory();
+}
+
+nlohmann::ordered_json mcmc_diagnostics_json(const McmcDiagnostics& diagnostics) {
+  nlohmann::ordered_json out;
+  const bool checked = diagnostics.quantities > 0;
+  out["worst_rhat"] = checked ? nlohmann::ordered_json(diagnostics.worst_rhat) : nlohmann::ordered_json(nullptr);
+  out["worst_bulk_ess"] = checked ? nlohmann::ordered_json(diagnostics.worst_bulk_ess) : nlohmann::ordered_json(nullptr);
+  out["quantities"] = diagnostics.quantities;
+  out["chains"] = diagnostics.chains;
+  return out;
+}
+
+void warn_if_not_converged(const McmcDiagnostics& diagnostics) {
+  if (diagnostics.converged()) return;
+  std::ostringstream line;
+  line << std::fixed << "hbirl: warning: MCMC not converged:";
+  const char* separator = " ";
+  if (!(diagnostics.worst_rhat <= kRhatThreshold)) {
+    line << separator << "R\u0302 " << std::setprecision(3) << diagnostics.worst_rhat << " > " << std::setprecision(2)
+         << kRhatThreshold;
+    separator = ", ";
+  }
+  if (!(diagnostics.worst_bulk_ess >= kBulkEssThreshold)) {
+    line << separator << "bulk ESS " << std::setprecision(0) << diagnostics.worst_bulk_ess << " < " << kBulkEssThreshold;
+  }
+  line << " (worst of " << diagnostics.quantities << " pair marginals, " << diagnostics.chains
+       << " chains each); raise --mcmc-samples or --mcmc-chains\n";
+  std::cerr << line.str();
 }
 
 }  // namespace hbirl::cli

@@ -9,7 +9,9 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "experiments/eta_experiments.hpp"
 #include "experiments/gridworld_experiment.hpp"
+#include "experiments/onion_regimes.hpp"
 #include "experiments/onion_experiment.hpp"
 #include "experiments/random_tasks_experiment.hpp"
 #include "experiments/summary.hpp"
@@ -230,6 +232,22 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   return 0;
 }
 
+// --methods of the onion experiments: "all" or a comma-separated list of keys.
+std::vector<onion::OnionMethod> parse_onion_methods(const std::string& text) {
+  if (text == "all") return onion::all_onion_methods();
+  std::vector<onion::OnionMethod> methods;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    onion::OnionMethod m;
+    if (!onion::parse_method(item, m)) {
+      throw InputError("--methods", "unknown method \"" + item +
+                                        "\" (true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta)");
+    }
+    methods.push_back(m);
+  }
+  return methods;
+}
+
 struct OnionExperimentArgs {
   std::string out = "results";
   std::string trajectories = "1,2,3,4,5,6,7,8,9,10";
@@ -249,20 +267,7 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   for (int n : o.trajectories) {
     if (n < 1) throw InputError("--trajectories", "needs at least 1 trajectory per point");
   }
-  o.methods.clear();
-  if (args.methods == "all") {
-    o.methods = onion::all_onion_methods();
-  } else {
-    std::stringstream in(args.methods);
-    for (std::string item; std::getline(in, item, ',');) {
-      onion::OnionMethod m;
-      if (!onion::parse_method(item, m)) {
-        throw InputError("--methods", "unknown method \"" + item +
-                                          "\" (true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta)");
-      }
-      o.methods.push_back(m);
-    }
-  }
+  o.methods = parse_onion_methods(args.methods);
   make_folder(args.out);
   const auto [runs, seconds] = run_with_progress("learning runs", o, onion::run_onion_experiment);
   const Collected c = collect(
@@ -332,6 +337,139 @@ int run_random_tasks_command(RandomTasksArgs& args) {
   std::cout << summary;
   std::cerr << "hbirl: wrote " << (args.runs_csv.empty() ? "random_tasks_runs.csv, " : "") << "random_tasks_summary.md"
             << (problem.empty() ? ", random_tasks.png, random_tasks.svg" : "") << " in " << args.out << "\n";
+  return 0;
+}
+
+// The Gridworld as the eta experiments watch it: --trajectories, --length, --per-step, --seed.
+void add_scenario_options(CLI::App* cmd, GridworldScenarioOptions& s) {
+  cmd->add_option("--trajectories", s.trajectories, "Demonstrations per run")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--length", s.length, "Steps per demonstration")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--per-step", s.per_step, "Observations per step")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cmd->add_option("--seed", s.seed, "Seed of every random choice")->capture_default_str();
+}
+
+std::string run_footer(const std::string& what, size_t runs, int per_cell, const GridworldScenarioOptions& s, double seconds,
+                       int threads) {
+  std::ostringstream footer;
+  footer << per_cell << " runs per cell, " << s.trajectories << " demonstrations of " << s.length << " steps, " << s.per_step
+         << " observations per step, posterior update, seed " << s.seed << "; " << runs << " " << what << " in "
+         << static_cast<long>(seconds + 0.5) << " s on " << (threads > 0 ? threads : default_thread_count()) << " threads.";
+  return footer.str();
+}
+
+struct EtaSensitivityArgs {
+  std::string out = "results";
+  std::string confounders = "3,7";
+  std::string masses = "0.4,0.6,0.8,0.95";
+  std::string accuracies = "0.2,0.4,0.6,0.8,1.0";
+  EtaSensitivityOptions options;
+};
+
+// Comma-separated numbers in [lo, hi].
+std::vector<double> parse_numbers(const std::string& text, const char* option, double lo, double hi) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      const double x = std::stod(item, &used);
+      if (used != item.size() || !(x >= lo && x <= hi)) throw std::invalid_argument(item);
+      out.push_back(x);
+    } catch (const std::exception&) {
+      std::ostringstream range;
+      range << "[" << lo << ", " << hi << "]";
+      throw InputError(option, "expected comma-separated numbers in " + range.str() + ", got \"" + item + "\"");
+    }
+  }
+  if (out.empty()) throw InputError(option, "is empty");
+  return out;
+}
+
+int run_eta_sensitivity_command(EtaSensitivityArgs& args) {
+  EtaSensitivityOptions& o = args.options;
+  o.confounders = parse_int_list(args.confounders, "--confounders");
+  for (int e : o.confounders) {
+    if (e < 1) throw InputError("--confounders", "needs at least one element per entry (a labeller picks between sources)");
+  }
+  o.masses = parse_numbers(args.masses, "--masses", 0.01, 1.0);
+  o.accuracies = parse_numbers(args.accuracies, "--accuracies", 0.0, 1.0);
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  const auto [runs, seconds] = run_with_progress("learning runs", o, run_eta_sensitivity);
+  write_file(dir / "eta_sensitivity_runs.csv", eta_runs_csv(runs));
+  const std::string summary = eta_sensitivity_summary(
+      runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) +
+                " eta_prior_strength " + std::to_string(o.eta_prior_strength).substr(0, 4) + ".");
+  write_file(dir / "eta_sensitivity_summary.md", summary);
+  const std::string problem = draw_eta_sensitivity_figure(runs, (dir / "eta_sensitivity").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote eta_sensitivity_runs.csv, eta_sensitivity_summary.md"
+            << (problem.empty() ? ", eta_sensitivity.png, eta_sensitivity.svg" : "") << " in " << args.out << "\n";
+  return 0;
+}
+
+struct UnlistedArgs {
+  std::string out = "results";
+  std::string confounders = "0,1,3,5,7";
+  std::string told = "0,1";
+  UnlistedOptions options;
+};
+
+int run_unlisted_command(UnlistedArgs& args) {
+  UnlistedOptions& o = args.options;
+  o.confounders = parse_int_list(args.confounders, "--confounders");
+  o.told = parse_int_list(args.told, "--told");
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  const auto [runs, seconds] = run_with_progress("learning runs", o, run_unlisted);
+  write_file(dir / "unlisted_runs.csv", unlisted_runs_csv(runs));
+  std::ostringstream eps;
+  eps << " The catch-all's share of eta: " << o.unlisted_eta << ".";
+  const std::string summary =
+      unlisted_summary(runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) + eps.str());
+  write_file(dir / "unlisted_summary.md", summary);
+  const std::string problem = draw_unlisted_figure(runs, (dir / "unlisted").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote unlisted_runs.csv, unlisted_summary.md" << (problem.empty() ? ", unlisted.png, unlisted.svg" : "")
+            << " in " << args.out << "\n";
+  return 0;
+}
+
+struct OnionRegimesArgs {
+  std::string out = "results";
+  std::string shares = "0,0.25,0.5,0.75,0.9";
+  std::string eta_powers = "1,3";
+  std::string methods = "all";
+  int trajectories = 6;
+  onion::OnionRegimesOptions options;
+};
+
+int run_onion_regimes_command(OnionRegimesArgs& args) {
+  onion::OnionRegimesOptions& o = args.options;
+  o.shares = parse_numbers(args.shares, "--shares", 0.0, 0.95);
+  o.eta_powers = parse_numbers(args.eta_powers, "--eta-powers", 0.05, 20.0);
+  o.base.trajectories = {args.trajectories};
+  o.base.methods = parse_onion_methods(args.methods);
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  const auto [runs, seconds] = run_with_progress("learning runs", o, onion::run_onion_regimes);
+  write_file(dir / "onion_regimes_runs.csv", onion::onion_regimes_csv(runs));
+  std::ostringstream footer;
+  footer << o.base.runs << " runs per point, " << args.trajectories << " sorts each, frames rendered at " << o.base.scene.width
+         << " px, " << o.base.scene.fps << " fps, with the blue-shirt person and the other onions; subject prior from a controlled run of "
+         << o.base.controlled_sorts << " sorts; posterior update (eta learned per context by Plausible eta), seed " << o.base.seed << "; "
+         << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+         << (o.base.threads > 0 ? o.base.threads : default_thread_count()) << " threads.";
+  const std::string summary = onion::onion_regimes_summary(runs, footer.str());
+  write_file(dir / "onion_regimes_summary.md", summary);
+  const std::string problem = onion::draw_onion_regimes_figure(runs, (dir / "onion_regimes").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote onion_regimes_runs.csv, onion_regimes_summary.md"
+            << (problem.empty() ? ", onion_regimes.png, onion_regimes.svg" : "") << " in " << args.out << "\n";
   return 0;
 }
 
@@ -412,7 +550,63 @@ Command add_experiment(CLI::App& app) {
   tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
   tasks_cmd->add_option("--summarise", t->runs_csv,
                         "Do not run: summarise and draw the runs of this random_tasks_runs.csv into --out");
-  return [g, grid, n, onion_cmd, t, tasks_cmd] {
+  auto es = std::make_shared<EtaSensitivityArgs>();
+  CLI::App* eta_cmd = cmd->add_subcommand(
+      "eta-sensitivity",
+      "Beyond the paper: the Gridworld watched by a labeller that gives its pick --masses of eta and picks the true\n"
+      "source with probability --accuracies; ILE with eta as stated and with eta learned per context (the labeller's\n"
+      "pick), against a perfect labeller. Writes eta_sensitivity_runs.csv, eta_sensitivity_summary.md (heat-map\n"
+      "tables, paired comparisons, how much of the gap to the perfect labeller learned eta closes, learned vs true\n"
+      "calibration) and eta_sensitivity.png/.svg to --out. The numbers do not depend on --threads.");
+  eta_cmd->add_option("--out,-o", es->out, "Output folder")->capture_default_str();
+  eta_cmd->add_option("--runs", es->options.runs, "Runs per cell")->check(CLI::Range(1, 1000000))->capture_default_str();
+  eta_cmd->add_option("--confounders", es->confounders, "Numbers of confounding elements, comma-separated")->capture_default_str();
+  eta_cmd->add_option("--masses", es->masses, "The labeller's share of eta for its pick, comma-separated")->capture_default_str();
+  eta_cmd->add_option("--accuracies", es->accuracies, "How often its pick is the true source, comma-separated")->capture_default_str();
+  eta_cmd->add_option("--eta-prior-strength", es->options.eta_prior_strength, "kappa of learned eta (observation_model.eta_prior_strength)")
+      ->check(CLI::Range(1e-6, 1e12))
+      ->capture_default_str();
+  add_scenario_options(eta_cmd, es->options.scenario);
+  eta_cmd->add_option("--threads", es->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  auto un = std::make_shared<UnlistedArgs>();
+  CLI::App* unlisted_cmd = cmd->add_subcommand(
+      "unlisted",
+      "Beyond the paper: the Gridworld with --confounders true elements of which the learner is told --told (0: eta over\n"
+      "the subject alone). Methods: as told, with the catch-all unlisted source (eta fixed, eta learned), and the\n"
+      "oracle told every element. Writes unlisted_runs.csv, unlisted_summary.md (ILE and subject-or-not label\n"
+      "accuracy per |E|) and unlisted.png/.svg to --out. The numbers do not depend on --threads.");
+  unlisted_cmd->add_option("--out,-o", un->out, "Output folder")->capture_default_str();
+  unlisted_cmd->add_option("--runs", un->options.runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
+  unlisted_cmd->add_option("--confounders", un->confounders, "True numbers of elements, comma-separated")->capture_default_str();
+  unlisted_cmd->add_option("--told", un->told, "How many of them the learner is told, comma-separated")->capture_default_str();
+  unlisted_cmd->add_option("--unlisted-eta", un->options.unlisted_eta, "The catch-all's share of every eta (observation_model.unlisted_source.eta)")
+      ->check(CLI::Range(1e-6, 1.0 - 1e-6))
+      ->capture_default_str();
+  add_scenario_options(unlisted_cmd, un->options.scenario);
+  unlisted_cmd->add_option("--threads", un->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  auto rg = std::make_shared<OnionRegimesArgs>();
+  rg->options.base.runs = 20;
+  CLI::App* regimes_cmd = cmd->add_subcommand(
+      "onion-regimes",
+      "Beyond the paper: where each onion baseline breaks. ILE of the five methods at --trajectories sorts as the\n"
+      "foreground person's share of the time in front of the expert goes through --shares (0: absent), with and\n"
+      "without the mirror, and with the labeller's eta as stated or overconfident (--eta-powers: eta raised to the\n"
+      "power and renormalised). Writes onion_regimes_runs.csv, onion_regimes_summary.md and onion_regimes.png/.svg\n"
+      "to --out. The numbers do not depend on --threads.");
+  add_shared_options(regimes_cmd, rg->out, rg->options.base.runs, rg->options.base.update, rg->options.base.c,
+                     rg->options.base.restarts, rg->options.base.seed, rg->options.base.threads);
+  regimes_cmd->add_option("--shares", rg->shares, "Foreground person's shares of the time in front, comma-separated, in [0, 0.95]")
+      ->capture_default_str();
+  regimes_cmd->add_option("--eta-powers", rg->eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
+      ->capture_default_str();
+  regimes_cmd->add_option("--trajectories", rg->trajectories, "Sorts learned from")->check(CLI::Range(1, 1000))->capture_default_str();
+  regimes_cmd->add_option("--methods", rg->methods,
+                          "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
+      ->capture_default_str();
+  return [g, grid, n, onion_cmd, t, tasks_cmd, es, eta_cmd, un, unlisted_cmd, rg, regimes_cmd] {
+    if (regimes_cmd->parsed()) return run_onion_regimes_command(*rg);
+    if (eta_cmd->parsed()) return run_eta_sensitivity_command(*es);
+    if (unlisted_cmd->parsed()) return run_unlisted_command(*un);
     if (grid->parsed()) return run_gridworld_experiment_command(*g);
     if (onion_cmd->parsed()) return run_onion_experiment_command(*n);
     if (tasks_cmd->parsed()) return run_random_tasks_command(*t);

@@ -79,6 +79,11 @@ std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, cons
       throw in_file(args.problem, e);
     }
   }
+  try {
+    add_unlisted_source(prior, trajectories);  // before the check: the catch-all can produce anything
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
   if (const auto impossible = first_impossible_observation(problem.mdp, trajectories, prior)) {
     std::string where = "demonstration[" + std::to_string(demonstration_index[static_cast<size_t>(impossible->trajectory)]) +
                         "].steps[" + std::to_string(impossible->step) + "]";
@@ -193,9 +198,12 @@ int run_learn(const LearnArgs& args) {
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
   Eigen::VectorXd counts;
   std::optional<ObservationModel> model;
+  std::optional<McmcDiagnostics> mcmc;  // of this last E-step pass, at the returned point
   if (observed != nullptr) {
     model = dirichlet_mean(best.alpha ? *best.alpha : *problem.observation_model);
-    counts = observed->statistics(policy, *model, args.seed).counts;
+    const EStepStatistics stats = observed->statistics(policy, *model, args.seed);
+    counts = stats.counts;
+    if (args.engine.name == "mcmc") mcmc = stats.mcmc;
   } else {
     EStepState state = estep->initial_state(0);
     counts = estep->expect(policy, state).counts;
@@ -206,6 +214,7 @@ int run_learn(const LearnArgs& args) {
   out["log_likelihood"] = learned.log_likelihood;
   out["from"] = args.from;
   if (!from_truth) out["engine"] = args.engine.name;
+  if (mcmc) out["mcmc_diagnostics"] = mcmc_diagnostics_json(*mcmc);
   out["objective"] = "causal_log_likelihood";
   out["optimizer"] = to_string(options.optimizer.kind);
   out["em_iterations"] = best.em_iterations;
@@ -225,18 +234,24 @@ int run_learn(const LearnArgs& args) {
     nlohmann::ordered_json om = model_json(mdp, *model);
     const ObservationPrior& used = best.alpha ? *best.alpha : observed->prior();
     om["update"] = used.learn ? alpha_update_name(used.update) : "fixed";
+    // The catch-all for unlisted confounders is the last of "confounders" and of every eta.
+    if (used.unlisted_added) om["unlisted_source"] = {{"eta", used.unlisted_eta}, {"index", used.num_confounders - 1}};
     if (used.learn && used.update == AlphaUpdate::kPosterior) {
       om["prior_strength"] = used.strength;
       om["prior_strength_chosen"] = used.automatic_strength;
       if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
     }
     if (const std::optional<RowMatrix> eta = observed->learned_eta(used)) {
-      // Per context (each distinct stated eta): stated and learned source distributions.
+      // Per context (the file's, or each distinct stated eta): stated and learned source
+      // distributions and how many observations the context covers.
       nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
       for (Eigen::Index c = 0; c < eta->rows(); ++c) {
         const Eigen::VectorXd stated = observed->context_eta().row(c).transpose();
         const Eigen::VectorXd learned_row = eta->row(c).transpose();
-        contexts.push_back({{"stated", to_vector(stated)}, {"learned", to_vector(learned_row)}});
+        contexts.push_back({{"context", c},
+                            {"stated", to_vector(stated)},
+                            {"learned", to_vector(learned_row)},
+                            {"observations", observed->context_observations()[c]}});
       }
       om["learned_eta"] = contexts;
     }
@@ -271,6 +286,7 @@ int run_learn(const LearnArgs& args) {
       break;
     }
   }
+  if (mcmc) warn_if_not_converged(*mcmc);
   emit(format_json(out), args.out);
   return 0;
 }

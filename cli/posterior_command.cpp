@@ -54,6 +54,7 @@ int run_posterior(const PosteriorArgs& args) {
   double total = 0.0;
   long long map_correct = 0;
   long long truth_steps = 0;
+  McmcDiagnostics mcmc;  // worst over the trajectories (neutral for the exact engine)
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     const DemonstratedTrajectory& item = problem.demonstration[i];
     if (!item.steps) {
@@ -61,6 +62,7 @@ int run_posterior(const PosteriorArgs& args) {
     }
     Rng rng = root.split(i);
     const TrajectoryPosterior post = engine->posterior(policy, model, *item.steps, rng);
+    mcmc += post.mcmc;
     nlohmann::ordered_json traj;
     if (std::isfinite(post.log_likelihood)) {
       traj["log_likelihood"] = post.log_likelihood;
@@ -105,7 +107,10 @@ int run_posterior(const PosteriorArgs& args) {
     out["log_likelihood"] = nullptr;
   }
   if (truth_steps > 0) out["map_accuracy"] = static_cast<double>(map_correct) / static_cast<double>(truth_steps);
+  const bool sampled = args.engine.name == "mcmc";
+  if (sampled) out["mcmc_diagnostics"] = mcmc_diagnostics_json(mcmc);
   out["trajectories"] = trajectories;
+  if (sampled) warn_if_not_converged(mcmc);
   emit(format_json(out), args.out);
   return 0;
 }

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <sstream>
 
+#include "experiments/gridworld_scenario.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
@@ -15,50 +16,10 @@ namespace hbirl {
 
 namespace {
 
-// Everything a run at one |E| shares across methods.
-struct Scenario {
-  GridworldTask task;
-  Eigen::MatrixXd subject_o;
-  Eigen::MatrixXd confounder_o;
-  Eigen::MatrixXd controlled_alpha;
-  GridworldObservations observations;  // true sources known; eta assigned per method
-};
+using Scenario = GridworldScenario;
 
 Scenario make_scenario(const GridworldExperimentOptions& o, int run, int confounders) {
-  const Rng root(o.seed);
-  Rng task_rng = root.split(static_cast<std::uint64_t>(run));
-  GridworldOptions grid;
-  grid.size = o.size;
-  Scenario s{make_gridworld_task(grid, o.trajectories, o.length, task_rng), {}, {}, {}, {}};
-  s.subject_o = gridworld_subject_observation_model(o.size, 1.0);
-  const std::vector<Trajectory> controlled =
-      soft_expert_demonstration(s.task.mdp, s.task.true_weights, o.trajectories, o.length, task_rng);
-  s.controlled_alpha = controlled_run_alpha(s.task.mdp, controlled, s.subject_o, o.per_step, 1.0, task_rng);
-  Rng obs_rng = task_rng.split(1000 + static_cast<std::uint64_t>(confounders));
-  s.confounder_o = random_confounder_observation_model(confounders, obs_rng);
-  GridworldObservationOptions observe;
-  observe.confounders = confounders;
-  observe.per_step = o.per_step;
-  observe.eta = EtaKind::kUniform;
-  s.observations = observe_gridworld(s.task.mdp, s.task.trajectories, s.subject_o, s.confounder_o, observe, obs_rng);
-  return s;
-}
-
-double source_accuracy(const Mdp& mdp, const SoftSolution& policy, const ObservationModel& model,
-                       const GridworldObservations& observations) {
-  ExactEngine engine(mdp);
-  long long right = 0;
-  long long total = 0;
-  for (size_t i = 0; i < observations.trajectories.size(); ++i) {
-    const TrajectoryPosterior post = engine.posterior(policy, model, observations.trajectories[i]);
-    for (int n = 0; n < post.sources.rows(); ++n) {
-      Eigen::Index best = 0;
-      post.sources.row(n).maxCoeff(&best);
-      right += best == observations.true_sources[i][static_cast<size_t>(n)];
-      ++total;
-    }
-  }
-  return total == 0 ? -1.0 : static_cast<double>(right) / static_cast<double>(total);
+  return make_gridworld_scenario({o.seed, o.size, o.trajectories, o.length, o.per_step}, run, confounders);
 }
 
 GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, int run, int confounders,

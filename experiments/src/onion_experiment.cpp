@@ -121,6 +121,12 @@ bool parse_method(const std::string& key, OnionMethod& method) {
   return false;
 }
 
+RowMatrix miscalibrated(const RowMatrix& eta, double power) {
+  RowMatrix out = eta.array().pow(power).matrix();
+  for (Eigen::Index n = 0; n < out.rows(); ++n) out.row(n) /= out.row(n).sum();
+  return out;
+}
+
 std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   const Mdp mdp = make_onion_mdp();
   const SceneConfig& scene = o.scene;
@@ -143,7 +149,10 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
     DemonstrationOptions options;
     options.sorts = most;
     options.start_time = 1000.0 * run;  // the confounders' clock: each run sees other moments
-    const OnionDemonstration demo = demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
+    OnionDemonstration demo = demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
+    if (o.eta_power != 1.0) {
+      for (ObservedTrajectory& t : demo.observed) t.eta = miscalibrated(t.eta, o.eta_power);
+    }
     for (size_t i = 0; i < o.trajectories.size(); ++i) {
       const int n = o.trajectories[i];
       for (size_t m = 0; m < o.methods.size(); ++m) {

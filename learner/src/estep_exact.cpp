@@ -87,6 +87,7 @@ EStepStatistics& EStepStatistics::operator+=(const EStepStatistics& other) {
   }
   log_likelihood += other.log_likelihood;
   impossible += other.impossible;
+  mcmc += other.mcmc;
   if (other.watched.size() > 0) {
     watched = other.watched;
     watched_log_likelihood = other.watched_log_likelihood;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace hbirl {
@@ -225,6 +226,34 @@ bool deterministic(const Mdp& mdp) {
   return true;
 }
 
+// The convergence diagnostics of the pair marginals (docs/MODEL.md, "Is the MCMC E-step
+// converged?"). paths[c] holds chain c's kept draws, each the pair of every step (T per
+// draw); visits(t, r) counts the draws at pair r at step t over all chains. The draws of
+// the marginal (t, r) are the indicators [pair at step t == r]. Only those visited in
+// some draw but not in all are checked: a pair never (or always) at step t has identical
+// draws, which carry no information about mixing (R-hat is 0/0), and checking only
+// visited pairs keeps the cost to the pairs the posterior actually reaches.
+McmcDiagnostics path_diagnostics(const std::vector<std::vector<int>>& paths, const RowMatrix& visits) {
+  McmcDiagnostics out;
+  out.chains = static_cast<int>(paths.size());
+  const auto steps = static_cast<size_t>(visits.rows());
+  if (steps == 0) return out;
+  const size_t draws = paths.front().size() / steps;
+  const double total = static_cast<double>(draws * paths.size());
+  Chains indicators(paths.size(), std::vector<double>(draws));
+  for (size_t t = 0; t < steps; ++t) {
+    for (Eigen::Index r = 0; r < visits.cols(); ++r) {
+      const double seen = visits(static_cast<Eigen::Index>(t), r);
+      if (seen == 0.0 || seen == total) continue;
+      for (size_t c = 0; c < paths.size(); ++c) {
+        for (size_t d = 0; d < draws; ++d) indicators[c][d] = paths[c][d * steps + t] == r ? 1.0 : 0.0;
+      }
+      if (const std::optional<QuantityDiagnostics> q = diagnose(indicators)) out.add(*q);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 McmcEngine::McmcEngine(const Mdp& mdp, McmcOptions options)
@@ -240,22 +269,28 @@ McmcEngine::McmcEngine(const Mdp& mdp, McmcOptions options)
 }
 
 bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory,
-                        Rng& rng, RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot) {
+                        Rng& rng, RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot,
+                        McmcDiagnostics& diagnostics) {
   const int T = trajectory.length();
   const int Z = 1 + model.num_confounders();
   marginals = RowMatrix::Zero(T, mdp_.num_pairs());
   sources = RowMatrix::Zero(trajectory.num_observations(), Z);
   alpha_dot = AlphaCounts::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
+  // Per chain, the pair of every step of every kept draw (for the diagnostics).
+  std::vector<std::vector<int>> paths(static_cast<size_t>(options_.chains));
   for (int c = 0; c < options_.chains; ++c) {
     Rng chain_rng = rng.split(static_cast<std::uint64_t>(c));
     Chain chain(mdp_, policy, model, trajectory);
     if (!chain.initialise(chain_rng)) return false;
+    std::vector<int>& path = paths[static_cast<size_t>(c)];
+    path.reserve(static_cast<size_t>(options_.samples) * static_cast<size_t>(T));
     for (int sweep = 0; sweep < options_.burn_in + options_.samples; ++sweep) {
       chain.sweep(single_site_, block_, chain_rng);
       if (sweep < options_.burn_in) continue;
       for (int t = 0; t < T; ++t) {
         const int r = chain.pair(t);
         marginals(t, r) += 1.0;
+        path.push_back(r);
         for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
           const int w = trajectory.symbols[static_cast<size_t>(n)];
           for (int z = 0; z < Z; ++z) {
@@ -272,6 +307,7 @@ bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& mode
       }
     }
   }
+  diagnostics = path_diagnostics(paths, marginals);
   const double total = static_cast<double>(options_.samples) * options_.chains;
   marginals /= total;
   sources /= total;
@@ -285,7 +321,8 @@ TrajectoryPosterior McmcEngine::posterior(const SoftSolution& policy, const Obse
   TrajectoryPosterior out;
   out.log_likelihood = exact_.log_likelihood(policy, model, trajectory);
   AlphaCounts alpha_dot;
-  if (out.log_likelihood == kNegInf || !sample(policy, model, trajectory, rng, out.marginals, out.sources, alpha_dot)) {
+  if (out.log_likelihood == kNegInf ||
+      !sample(policy, model, trajectory, rng, out.marginals, out.sources, alpha_dot, out.mcmc)) {
     out.log_likelihood = kNegInf;
     out.marginals = RowMatrix::Constant(trajectory.length(), mdp_.num_pairs(), std::numeric_limits<double>::quiet_NaN());
     out.sources = RowMatrix::Constant(trajectory.num_observations(), 1 + model.num_confounders(),
@@ -300,11 +337,13 @@ void McmcEngine::accumulate(const SoftSolution& policy, const ObservationModel& 
   RowMatrix marginals;
   RowMatrix sources;
   AlphaCounts alpha_dot;
-  if (ll == kNegInf || !sample(policy, model, trajectory, rng, marginals, sources, alpha_dot)) {
+  McmcDiagnostics diagnostics;
+  if (ll == kNegInf || !sample(policy, model, trajectory, rng, marginals, sources, alpha_dot, diagnostics)) {
     ++out.impossible;
     return;
   }
   out.log_likelihood += ll;
+  out.mcmc += diagnostics;
   out.counts += marginals.colwise().sum().transpose();
   out.alpha_dot += alpha_dot;
   if (out.source_counts.rows() > 0) {

@@ -60,7 +60,12 @@ void ObservationEStep::assign_contexts() {
       if (t.num_observations() > 0 && t.contexts.size() != static_cast<size_t>(t.num_observations())) {
         throw InputError("demonstration", "some observations have a context and others not");
       }
-      for (int c : t.contexts) contexts = std::max(contexts, c + 1);
+      for (int c : t.contexts) {
+        if (c < 0 || c >= kMaxContexts) {
+          throw InputError("demonstration", "context " + std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+        }
+        contexts = std::max(contexts, c + 1);
+      }
       continue;
     }
     t.contexts.resize(static_cast<size_t>(t.num_observations()));
@@ -72,19 +77,19 @@ void ObservationEStep::assign_contexts() {
     contexts = static_cast<int>(index.size());
   }
   context_eta_ = RowMatrix::Zero(contexts, 1 + prior_.num_confounders);
+  context_observations_ = Eigen::VectorXd::Zero(contexts);
+  for (const auto& t : trajectories_) {
+    for (int n = 0; n < t.num_observations(); ++n) {
+      context_eta_.row(t.context(n)) += t.weight(n) * t.eta.row(n);
+      context_observations_[t.context(n)] += t.weight(n);
+    }
+  }
   if (!given) {
     for (const auto& [key, c] : index) context_eta_.row(c) = Eigen::Map<const Eigen::RowVectorXd>(key.data(), context_eta_.cols());
     return;
   }
-  Eigen::VectorXd weight = Eigen::VectorXd::Zero(contexts);
-  for (const auto& t : trajectories_) {
-    for (int n = 0; n < t.num_observations(); ++n) {
-      context_eta_.row(t.context(n)) += t.weight(n) * t.eta.row(n);
-      weight[t.context(n)] += t.weight(n);
-    }
-  }
   for (int c = 0; c < contexts; ++c) {
-    if (weight[c] > 0.0) context_eta_.row(c) /= weight[c];
+    if (context_observations_[c] > 0.0) context_eta_.row(c) /= context_observations_[c];
     else context_eta_.row(c).setConstant(1.0 / static_cast<double>(context_eta_.cols()));
   }
 }
@@ -240,6 +245,7 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
   result.impossible_trajectories = stats.impossible;
   result.watched = std::move(stats.watched);
   result.watched_log_likelihood = stats.watched_log_likelihood;
+  result.mcmc = stats.mcmc;
   return result;
 }
 

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "learner/digest.hpp"
+#include "learner/input_error.hpp"
 
 namespace hbirl {
 
@@ -117,6 +118,29 @@ std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTraj
     for (Eigen::Index z = 0; z < sources; ++z) kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 2];
   }
   return kinds;
+}
+
+void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory>& trajectories) {
+  const double epsilon = prior.unlisted_eta;
+  if (epsilon == 0.0 || prior.unlisted_added) return;
+  if (!(epsilon > 0.0 && epsilon < 1.0)) throw InputError("observation_model.unlisted_source.eta", "must be in (0, 1)");
+  const Eigen::Index sources = 1 + prior.num_confounders;
+  for (auto& t : trajectories) {
+    if (t.num_observations() > 0 && t.eta.cols() != sources) {
+      throw InputError("demonstration", "eta has " + std::to_string(t.eta.cols()) + " sources, the observation model " +
+                                            std::to_string(sources));
+    }
+    RowMatrix eta(t.eta.rows(), sources + 1);
+    eta.leftCols(sources) = (1.0 - epsilon) * t.eta;
+    eta.col(sources).setConstant(epsilon);
+    t.eta = std::move(eta);
+  }
+  Eigen::MatrixXd confounders(prior.num_confounders + 1, prior.num_symbols);
+  confounders.topRows(prior.num_confounders) = prior.confounder_alpha;
+  confounders.row(prior.num_confounders).setOnes();  // flat: nothing is known of it
+  prior.confounder_alpha = std::move(confounders);
+  ++prior.num_confounders;
+  prior.unlisted_added = true;
 }
 
 void use_alpha_update(ObservationPrior& prior, AlphaUpdate update) {

@@ -243,7 +243,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
                                         std::vector<std::string>* warnings) {
   node.check_keys({"num_symbols", "num_confounders", "subject_alpha", "subject_alpha_default",
                    "confounder_alpha", "confounder_alpha_default", "learn", "c", "update", "prior_strength",
-                   "learn_eta", "eta_prior_strength"},
+                   "learn_eta", "eta_prior_strength", "unlisted_source"},
                   warnings);
   ObservationPrior prior;
   prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
@@ -309,7 +309,16 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
     if (!(prior.c > 0.0 && prior.c <= 1.0)) c->fail("expected a number in (0, 1], got " + fmt(prior.c));
   }
   if (auto l = node.find("learn_eta")) prior.learn_eta = l->as_bool();
-  if (auto k = node.find("eta_prior_strength")) prior.eta_strength = k->as_number(1e-6, 1e12);
+  if (auto k = node.find("eta_prior_strength")) {
+    prior.eta_strength = k->as_number();
+    if (!(prior.eta_strength > 0.0 && prior.eta_strength <= 1e12)) k->fail("expected a number in (0, 1e12], got " + fmt(prior.eta_strength));
+  }
+  if (auto u = node.find("unlisted_source")) {
+    u->check_keys({"eta"}, warnings);
+    const JsonNode eta = u->at("eta");
+    prior.unlisted_eta = eta.as_number();
+    if (!(prior.unlisted_eta > 0.0 && prior.unlisted_eta < 1.0)) eta.fail("expected a number in (0, 1), got " + fmt(prior.unlisted_eta));
+  }
   if (auto strength = node.find("prior_strength")) {
     if (strength->is_string()) {
       if (strength->as_string() != "auto") strength->fail("expected \"auto\" or a positive number, got \"" + strength->as_string() + "\"");
@@ -387,6 +396,22 @@ namespace {
 using detail::read_mdp;
 using detail::read_observation_model;
 
+// `learn_eta: true`, said explicitly, needs an eta to learn: observations, and a source
+// besides the subject (a listed confounder or the unlisted catch-all).
+void check_eta_can_be_learned(const JsonNode& root, const Problem& problem) {
+  const std::optional<JsonNode> om = root.find("observation_model");
+  const std::optional<JsonNode> flag = om ? om->find("learn_eta") : std::nullopt;
+  if (!flag || !problem.observation_model->learn_eta) return;
+  const ObservationPrior& prior = *problem.observation_model;
+  if (prior.num_confounders == 0 && prior.unlisted_eta == 0.0) {
+    flag->fail("is true, but there is one source (num_confounders 0, no unlisted_source): no eta to learn");
+  }
+  const bool observed = std::any_of(problem.demonstration.begin(), problem.demonstration.end(), [](const DemonstratedTrajectory& t) {
+    return !t.controlled && t.steps && t.steps->num_observations() > 0;
+  });
+  if (!observed) flag->fail("is true, but no demonstrated step has observations: no eta to learn");
+}
+
 ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<ObservationPrior>& prior,
                               std::vector<std::string>* warnings) {
   ObservedTrajectory out;
@@ -411,7 +436,14 @@ ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<Observa
     const JsonNode list = steps[t].at("observations");
     for (size_t n = 0; n < list.size(); ++n) {
       const JsonNode obs = list[n];
-      obs.expect_tuple(2, "[symbol, [eta...]]");
+      // [symbol, eta] or [symbol, eta, context]; a trajectory gives contexts to all its observations or none.
+      const bool with_context = obs.raw().is_array() && obs.raw().size() == 3;
+      obs.expect_tuple(with_context ? 3 : 2, "[symbol, [eta...]] or [symbol, [eta...], context]");
+      if (with_context != (row == 0 ? with_context : !out.contexts.empty())) {
+        obs.fail(with_context ? "has a context, the trajectory's earlier observations none"
+                              : "has no context, the trajectory's earlier observations one each");
+      }
+      if (with_context) out.contexts.push_back(static_cast<int>(obs[2].as_int(0, kMaxContexts - 1)));
       const int symbol = static_cast<int>(obs[0].as_int(0, prior->num_symbols - 1));
       const JsonNode eta = obs[1];
       const size_t m = eta.size();
@@ -509,6 +541,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
     }
     problem.demonstration.push_back(std::move(trajectory));
   }
+  check_eta_can_be_learned(root, problem);
   if (auto tw = root.find("true_weights")) problem.true_weights = detail::read_true_weights(*tw, problem.mdp);
   return problem;
 }
@@ -601,8 +634,10 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
     om["subject_alpha_default"] = p.subject_alpha_base;
     om["learn"] = p.learn;
     om["update"] = alpha_update_name(p.update);
-    om["learn_eta"] = p.learn_eta;
+    // Only when it differs from the update's default: said explicitly, it must have an eta to learn.
+    if (p.learn_eta != (p.update == AlphaUpdate::kPosterior)) om["learn_eta"] = p.learn_eta;
     om["eta_prior_strength"] = p.eta_strength;
+    if (p.unlisted_eta > 0.0) om["unlisted_source"] = J{{"eta", p.unlisted_eta}};
     om["c"] = p.c;
     if (p.automatic_strength) {
       om["prior_strength"] = "auto";
@@ -624,7 +659,9 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
         J observations = J::array();
         for (int i = o.step_begin[static_cast<size_t>(t)]; i < o.step_begin[static_cast<size_t>(t) + 1]; ++i) {
           std::vector<double> eta(o.eta.row(i).data(), o.eta.row(i).data() + o.eta.cols());
-          observations.push_back(J::array({o.symbols[static_cast<size_t>(i)], eta}));
+          J observation = J::array({o.symbols[static_cast<size_t>(i)], eta});
+          if (!o.contexts.empty()) observation.push_back(o.contexts[static_cast<size_t>(i)]);
+          observations.push_back(std::move(observation));
         }
         steps.push_back(J{{"observations", observations}});
       }

@@ -94,6 +94,42 @@ void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, 
   }
 }
 
+namespace {
+
+// `mass` on `pick`, the rest evenly over the other sources.
+Eigen::VectorXd eta_with_pick(double mass, int sources, int pick) {
+  if (sources == 1) return Eigen::VectorXd::Ones(1);
+  Eigen::VectorXd eta = Eigen::VectorXd::Constant(sources, (1.0 - mass) / (sources - 1));
+  eta[pick] = mass;
+  return eta;
+}
+
+}  // namespace
+
+Eigen::VectorXd labeller_calibration(const Labeller& labeller, int sources, int pick) {
+  return eta_with_pick(labeller.accuracy, sources, pick);
+}
+
+void assign_labeller_eta(GridworldObservations& observations, int sources, const Labeller& labeller, Rng& rng) {
+  for (size_t i = 0; i < observations.trajectories.size(); ++i) {
+    ObservedTrajectory& observed = observations.trajectories[i];
+    const std::vector<int>& truth = observations.true_sources[i];
+    const int n = observed.num_observations();
+    observed.eta.resize(n, sources);
+    observed.contexts.assign(static_cast<size_t>(n), 0);
+    for (int row = 0; row < n; ++row) {
+      const int source = truth[static_cast<size_t>(row)];
+      int pick = source;
+      if (sources > 1 && !(rng.uniform() < labeller.accuracy)) {
+        pick = rng.uniform_int(sources - 1);  // one of the others, evenly
+        if (pick >= source) ++pick;
+      }
+      observed.eta.row(row) = eta_with_pick(labeller.mass, sources, pick).transpose();
+      observed.contexts[static_cast<size_t>(row)] = pick;
+    }
+  }
+}
+
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,
                                      const Eigen::MatrixXd& subject_o, int per_step, double pseudo_count, Rng& rng) {
   // The subject alone: every observation drawn from its O at the true (s, a).

@@ -105,6 +105,7 @@ void SceneConfig::validate() const {
   if (width < 160 || width > 4096) throw InputError("width", "must be between 160 and 4096 pixels");
   if (fps < 1 || fps > 240) throw InputError("fps", "must be between 1 and 240");
   if (!(step_seconds > 0.0 && step_seconds <= 60.0)) throw InputError("step_seconds", "must be in (0, 60]");
+  if (!(foreground_share >= 0.0 && foreground_share <= 0.95)) throw InputError("foreground_share", "must be in [0, 0.95]");
 }
 
 GripperSize gripper_size(const SceneConfig& config) {
@@ -134,6 +135,8 @@ OnionScene::OnionScene(const SceneConfig& config, std::uint64_t seed) : config_(
   walk_phase_ = rng.uniform(0.0, walk_period_);
   occlusion_period_ = rng.uniform(16.0, 24.0);
   occlusion_phase_ = rng.uniform(0.0, occlusion_period_);
+  // In front for stay + one walk (half of each) of every period.
+  if (config_.foreground_share > 0.0) occlusion_stay_ = std::max(0.0, config_.foreground_share * occlusion_period_ - kOcclusionWalk);
   background_ = cv::Mat(config_.height(), config_.width, CV_8UC3);
   draw_background(background_);
 }
@@ -301,7 +304,7 @@ void OnionScene::draw_foreground_person(cv::Mat& img, double time) const {
   const int W = img.cols, H = img.rows;
   // Walks in from the left, stands in front of the expert, walks out to the right.
   const double phase = std::fmod(time + occlusion_phase_, occlusion_period_);
-  constexpr double kWalk = 1.5, kStay = 6.0;
+  const double kWalk = kOcclusionWalk, kStay = occlusion_stay_;
   double x;
   if (phase < kWalk) {
     x = -0.25 + (0.45 + 0.25) * phase / kWalk;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -450,6 +451,46 @@ TEST_F(Cli, LearnsFromObservations) {
   EXPECT_TRUE(out["log_likelihood"].is_number());
   ASSERT_EQ(out["observation_model"]["confounders"].size(), 1u);
   ASSERT_EQ(out["observation_model"]["subject"].size(), 8u);
+}
+
+// --engine mcmc reports its convergence diagnostics (docs/MODEL.md) and warns when they
+// miss the thresholds: with 20 draws per chain the bulk ESS cannot reach 400 (and the
+// corridor's single-site moves mix slowly anyway). Returns "mcmc_diagnostics".
+json expect_unconverged(const Outcome& r, int chains) {
+  EXPECT_EQ(r.status, 0) << r.err;
+  const json out = json::parse(r.out);
+  const json d = out.value("mcmc_diagnostics", json::object());
+  EXPECT_TRUE(d.contains("worst_bulk_ess") && d["worst_bulk_ess"].is_number()) << r.out;
+  EXPECT_LT(d.value("worst_bulk_ess", 1e9), 400.0);
+  // null: infinite (halves of chains that never moved and disagree; JSON has no inf).
+  EXPECT_TRUE(d.contains("worst_rhat") && (d["worst_rhat"].is_null() || d["worst_rhat"].get<double>() > 1.01)) << r.out;
+  EXPECT_GT(d.value("quantities", 0), 0);
+  EXPECT_EQ(d.value("chains", 0), chains);
+  EXPECT_NE(r.err.find("hbirl: warning: MCMC not converged: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("raise --mcmc-samples or --mcmc-chains"), std::string::npos) << r.err;
+  return d;
+}
+
+// (A few EM iterations keep it fast.)
+TEST_F(Cli, LearnWithMcmcReportsConvergence) {
+  const std::string problem = " --max-em-iterations 2 --problem '" + example("corridor.json") + "'";
+  const json d = expect_unconverged(run("learn --engine mcmc --mcmc-burn-in 20 --mcmc-samples 20" + problem), 4);
+  ASSERT_TRUE(d["worst_rhat"].is_number());
+  EXPECT_TRUE(std::isfinite(d["worst_rhat"].get<double>()));
+  EXPECT_TRUE(std::isfinite(d["worst_bulk_ess"].get<double>()));
+  const Outcome exact = run("learn" + problem);
+  ASSERT_EQ(exact.status, 0) << exact.err;
+  EXPECT_FALSE(json::parse(exact.out).contains("mcmc_diagnostics"));
+  EXPECT_EQ(exact.err.find("MCMC"), std::string::npos) << exact.err;
+}
+
+TEST_F(Cli, PosteriorWithMcmcReportsConvergence) {
+  const std::string base = "posterior --engine mcmc --mcmc-chains 2 --weights 1,0 --problem '" + example("corridor.json") + "'";
+  const json few = expect_unconverged(run(base + " --mcmc-samples 20"), 2);
+  // Many more sweeps: a better worst ESS.
+  const Outcome many = run(base + " --mcmc-samples 4000");
+  ASSERT_EQ(many.status, 0) << many.err;
+  EXPECT_GT(json::parse(many.out)["mcmc_diagnostics"]["worst_bulk_ess"].get<double>(), few["worst_bulk_ess"].get<double>());
 }
 
 TEST_F(Cli, PosteriorInTheSpecShape) {

@@ -2,10 +2,27 @@
 
 #include <gtest/gtest.h>
 
+#include "learner/estep_observations.hpp"
 #include "tiny_observed_problem.hpp"
 
 namespace hbirl {
 namespace {
+
+McmcOptions sweeps(int samples, int burn_in, int chains) {
+  McmcOptions options;
+  options.samples = samples;
+  options.burn_in = burn_in;
+  options.chains = chains;
+  return options;
+}
+
+bool possible(const testing::TinyProblem& p) {
+  return std::isfinite(ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).log_likelihood);
+}
+
+// The tiny MDPs have 2 successors per (s, a) out of 3 states: single-site moves alone
+// can be reducible there, so stochastic ones (trial % 3 != 0) also get the block move.
+McmcOptions::Block tiny_block(int trial) { return trial % 3 == 0 ? McmcOptions::Block::kAuto : McmcOptions::Block::kAlways; }
 
 struct Agreement {
   double marginals = 0.0;  // max |MCMC - exact| over steps and pairs
@@ -32,18 +49,13 @@ constexpr double kTolerance = 0.05;
 
 TEST(McmcEngine, AgreesWithExactOnRandomTinyProblems) {
   Rng rng(77);
-  McmcOptions options;
-  options.samples = 20000;
-  options.burn_in = 1000;
-  options.chains = 2;
+  McmcOptions options = sweeps(20000, 1000, 2);
   int deterministic = 0;
   int ending = 0;
   for (int trial = 0; trial < 24; ++trial) {
     const testing::TinyProblem p = testing::tiny_problem(trial, rng);
-    if (!std::isfinite(ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).log_likelihood)) continue;
-    // The tiny MDPs have 2 successors per (s, a) out of 3 states: single-site moves alone
-    // can be reducible there, so stochastic ones also get the block move.
-    options.block = trial % 3 == 0 ? McmcOptions::Block::kAuto : McmcOptions::Block::kAlways;
+    if (!possible(p)) continue;
+    options.block = tiny_block(trial);
     const Agreement a = compare(p, options, 1000 + static_cast<std::uint64_t>(trial));
     EXPECT_LT(a.marginals, kTolerance) << "trial " << trial;
     EXPECT_LT(a.sources, kTolerance) << "trial " << trial;
@@ -58,10 +70,7 @@ TEST(McmcEngine, AgreesWithExactOnRandomTinyProblems) {
 // every state reachable from every (s, a).
 TEST(McmcEngine, SingleSiteUpdatesAloneAgreeOnDenseTransitions) {
   Rng rng(31);
-  McmcOptions options;
-  options.samples = 20000;
-  options.burn_in = 1000;
-  options.chains = 2;
+  McmcOptions options = sweeps(20000, 1000, 2);
   options.block = McmcOptions::Block::kNever;
   for (int trial = 0; trial < 6; ++trial) {
     const testing::TinyProblem p = testing::tiny_problem(trial, rng, /*dense=*/true);
@@ -114,6 +123,83 @@ TEST(McmcEngine, SameSeedSameBits) {
   Rng b(5);
   EXPECT_EQ(mcmc.posterior(p.policy, p.model, p.trajectory, a).marginals,
             mcmc.posterior(p.policy, p.model, p.trajectory, b).marginals);
+}
+
+// The marginals the diagnostics check: those strictly between 0 and 1 (a pair never or
+// always at a step has identical draws).
+long long uncertain_marginals(const RowMatrix& marginals) {
+  return ((marginals.array() > 0.0) && (marginals.array() < 1.0)).count();
+}
+
+// With enough draws the engine's chains pass the thresholds of Vehtari et al. 2021 on
+// the tiny problems (where mixing takes a few sweeps), and every uncertain marginal is
+// checked.
+TEST(McmcEngine, DiagnosticsConvergedWithEnoughSamples) {
+  Rng rng(77);
+  McmcOptions options = sweeps(3000, 300, 4);
+  long long checked = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const testing::TinyProblem p = testing::tiny_problem(trial, rng);
+    if (!possible(p)) continue;
+    options.block = tiny_block(trial);
+    McmcEngine mcmc(p.mdp, options);
+    Rng sampler(500 + static_cast<std::uint64_t>(trial));
+    const TrajectoryPosterior post = mcmc.posterior(p.policy, p.model, p.trajectory, sampler);
+    EXPECT_EQ(post.mcmc.quantities, uncertain_marginals(post.marginals)) << trial;
+    EXPECT_EQ(post.mcmc.chains, 4);
+    if (post.mcmc.quantities == 0) continue;
+    EXPECT_LE(post.mcmc.worst_rhat, 1.05) << trial;
+    EXPECT_GT(post.mcmc.worst_bulk_ess, 500.0) << trial;  // the slowest mixing here gave ~1100
+    checked += post.mcmc.quantities;
+  }
+  EXPECT_GE(checked, 20);
+}
+
+// 20 draws per chain cannot give a bulk ESS of 400: the warning threshold is crossed.
+TEST(McmcEngine, DiagnosticsFlagTooFewSamples) {
+  Rng rng(8);
+  const testing::TinyProblem p = testing::tiny_problem(4, rng);
+  McmcEngine mcmc(p.mdp, sweeps(20, 0, 4));
+  Rng sampler(2);
+  const TrajectoryPosterior post = mcmc.posterior(p.policy, p.model, p.trajectory, sampler);
+  ASSERT_GT(post.mcmc.quantities, 0);
+  EXPECT_LT(post.mcmc.worst_bulk_ess, kBulkEssThreshold);
+  EXPECT_FALSE(post.mcmc.converged());
+  // The exact engine reports nothing.
+  EXPECT_EQ(ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).mcmc.quantities, 0);
+}
+
+// The diagnostics of a pass (40 trajectories: 3 blocks) are the worst over the
+// trajectories, the same bits on 1 and 2 threads, and reach the E-step's result.
+TEST(McmcEngine, DiagnosticsSameBitsWhateverTheThreadCount) {
+  Rng rng(5);
+  const testing::TinyProblem p = testing::tiny_problem(4, rng);
+  ObservationPrior prior;
+  prior.num_symbols = p.model.num_symbols();
+  prior.num_confounders = p.model.num_confounders();
+  prior.subject_alpha = p.model.subject;  // normalised rows: the Dirichlet mean is the model
+  prior.confounder_alpha = p.model.confounders;
+  prior.learn = false;
+  McmcOptions mcmc = sweeps(200, 20, 4);
+  mcmc.block = McmcOptions::Block::kAlways;
+  std::vector<McmcDiagnostics> seen;
+  for (int threads : {1, 2}) {
+    ObservationEStepOptions options;
+    options.engine = mcmc_engine_factory(mcmc);
+    options.threads = threads;
+    const ObservationEStep estep(p.mdp, std::vector<ObservedTrajectory>(40, p.trajectory), prior, options);
+    seen.push_back(estep.statistics(p.policy, p.model, 11).mcmc);
+    EStepState state = estep.initial_state(11);
+    const EStepResult result = estep.expect(p.policy, state);
+    EXPECT_GT(result.mcmc.quantities, 0);
+    EXPECT_TRUE(std::isfinite(result.mcmc.worst_rhat));
+  }
+  ASSERT_GT(seen[0].quantities, 0);
+  EXPECT_TRUE(std::isfinite(seen[0].worst_rhat) && std::isfinite(seen[0].worst_bulk_ess));
+  EXPECT_EQ(seen[0].worst_rhat, seen[1].worst_rhat);
+  EXPECT_EQ(seen[0].worst_bulk_ess, seen[1].worst_bulk_ess);
+  EXPECT_EQ(seen[0].quantities, seen[1].quantities);
+  EXPECT_EQ(seen[0].chains, 4);
 }
 
 }  // namespace

@@ -36,6 +36,18 @@ ObservedGridworld observed_gridworld(std::uint64_t seed, int confounders, int pe
   return g;
 }
 
+// O known (a prior of 1e9 pseudo-counts on the truth): only eta moves, with strength kappa.
+ObservationPrior known_o_prior(const Eigen::MatrixXd& subject, const Eigen::MatrixXd& elements, double kappa) {
+  ObservationPrior prior;
+  prior.num_symbols = static_cast<int>(subject.cols());
+  prior.num_confounders = static_cast<int>(elements.rows());
+  prior.subject_alpha = 1e9 * subject;
+  prior.confounder_alpha = 1e9 * elements;
+  prior.automatic_strength = false;
+  prior.eta_strength = kappa;
+  return prior;
+}
+
 // Paper §Experiments A: EM on a small gridworld with 3 confounding elements and plausible
 // eta recovers the goal corner.
 TEST(HiddenDataEm, GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal) {
@@ -330,15 +342,7 @@ TEST(ObservationEStep, LearnedEtaRecoversTheLabellersCalibration) {
   const GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject, elements, options, rng);
   const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(task.true_weights));
   for (double kappa : {10.0, 1e12}) {
-    ObservationPrior prior;
-    prior.num_symbols = 4;
-    prior.num_confounders = 3;
-    prior.subject_alpha = 1e9 * subject;  // O known: only eta moves
-    prior.confounder_alpha = 1e9 * elements;
-    prior.automatic_strength = false;
-    prior.c = 1.0;
-    prior.eta_strength = kappa;
-    const ObservationEStep estep(task.mdp, observed.trajectories, prior);
+    const ObservationEStep estep(task.mdp, observed.trajectories, known_o_prior(subject, elements, kappa));
     ASSERT_EQ(estep.num_contexts(), 4);  // one per favoured source
     EStepState state = estep.initial_state(1);
     for (int i = 0; i < 30; ++i) estep.expect(policy, state);
@@ -352,6 +356,122 @@ TEST(ObservationEStep, LearnedEtaRecoversTheLabellersCalibration) {
         EXPECT_NEAR(learned(c, 0), 0.8 + 0.2 / 4, 0.03) << learned.row(c);
       }
     }
+  }
+}
+
+// A labeller that states 0.8 for its pick but is right only 40% of the time (|E| = 3):
+// with O known, learned eta converges to its true calibration per context (its pick),
+// not to what it states.
+TEST(ObservationEStep, LearnedEtaRecoversAMiscalibratedLabeller) {
+  Rng rng(5);
+  GridworldTask task = make_gridworld_task({}, 60, 10, rng);
+  const Eigen::MatrixXd subject = gridworld_subject_observation_model(5, 1.0);
+  const Eigen::MatrixXd elements = random_confounder_observation_model(3, rng);
+  GridworldObservationOptions options;
+  options.confounders = 3;
+  GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject, elements, options, rng);
+  const Labeller labeller{0.8, 0.4};
+  assign_labeller_eta(observed, 4, labeller, rng);
+  const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(task.true_weights));
+  const ObservationEStep estep(task.mdp, observed.trajectories, known_o_prior(subject, elements, 10.0));
+  ASSERT_EQ(estep.num_contexts(), 4);  // the labeller's picks
+  EStepState state = estep.initial_state(1);
+  for (int i = 0; i < 40; ++i) estep.expect(policy, state);
+  const RowMatrix learned = *estep.learned_eta(*state.alpha);
+  for (int pick = 0; pick < 4; ++pick) {
+    EXPECT_NEAR(estep.context_eta()(pick, pick), 0.8, 1e-12);
+    const Eigen::VectorXd truth = labeller_calibration(labeller, 4, pick);
+    EXPECT_LT((learned.row(pick).transpose() - truth).cwiseAbs().maxCoeff(), 0.03)
+        << "pick " << pick << ": learned " << learned.row(pick) << ", true " << truth.transpose();
+    EXPECT_GT(estep.context_observations()[pick], 2000.0);
+  }
+}
+
+// With a very strong prior on eta (kappa = 1e13) learned eta stays the stated eta to 1e-9,
+// and EM's answer is fixed eta's.
+TEST(HiddenDataEm, VeryStrongEtaPriorIsFixedEta) {
+  ObservedGridworld g = observed_gridworld(6, 3, 10, EtaKind::kPlausible);
+  std::vector<ObservedTrajectory> data(g.observations.trajectories.begin(), g.observations.trajectories.begin() + 8);
+  g.prior.automatic_strength = false;
+  g.prior.eta_strength = 1e13;
+  g.prior.learn_eta = true;
+  const ObservationEStep learned_estep(g.task.mdp, data, g.prior);
+  g.prior.learn_eta = false;
+  const ObservationEStep fixed_estep(g.task.mdp, data, g.prior);
+  LearnOptions learn;
+  learn.theta_tolerance = 1e-8;
+  learn.likelihood_tolerance = 1e-12;
+  learn.max_em_iterations = 2000;
+  const LearnResult learned = learn_reward(g.task.mdp, learned_estep, learn);
+  const LearnResult fixed = learn_reward(g.task.mdp, fixed_estep, learn);
+  const RowMatrix eta = *learned_estep.learned_eta(*learned.restarts[0].alpha);
+  EXPECT_LT((eta - learned_estep.context_eta()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((learned.theta - fixed.theta).lpNorm<Eigen::Infinity>(), 1e-5 * std::max(1.0, fixed.theta.lpNorm<Eigen::Infinity>()))
+      << learned.theta.transpose() << " vs " << fixed.theta.transpose();
+}
+
+// docs/MODEL.md "Unlisted confounders": under the paper's model (a label per observation,
+// drawn independently) two unlisted elements with fixed O_1, O_2 that the labeller cannot
+// tell apart (eta/2 each) have exactly the likelihood of one source with O = (O_1 + O_2)/2
+// and eta: sum_z eta_z O_z(w) is the same for every observation.
+TEST(ObservationEStep, UnlistedElementsAreOneSourceWithTheirMixture) {
+  Rng rng(41);
+  for (int trial = 0; trial < 60; ++trial) {
+    testing::TinyProblem p = testing::tiny_problem(trial, rng);
+    const int listed = p.model.num_confounders();
+    const int symbols = p.model.num_symbols();
+    const Eigen::MatrixXd unlisted = testing::random_distributions(2, symbols, rng);
+    const double epsilon = 0.05 + 0.5 * rng.uniform();
+    ObservationModel two = p.model, one = p.model;
+    two.confounders.conservativeResize(listed + 2, symbols);
+    two.confounders.bottomRows(2) = unlisted;
+    one.confounders.conservativeResize(listed + 1, symbols);
+    one.confounders.row(listed) = 0.5 * (unlisted.row(0) + unlisted.row(1));
+    ObservedTrajectory with_two = p.trajectory, with_one = p.trajectory;
+    const Eigen::Index n = p.trajectory.eta.rows();
+    with_two.eta.conservativeResize(n, listed + 3);
+    with_one.eta.conservativeResize(n, listed + 2);
+    with_two.eta.leftCols(listed + 1) *= 1.0 - epsilon;
+    with_one.eta.leftCols(listed + 1) *= 1.0 - epsilon;
+    with_two.eta.rightCols(2).setConstant(epsilon / 2.0);
+    with_one.eta.col(listed + 1).setConstant(epsilon);
+    ExactEngine engine(p.mdp);
+    const double a = engine.log_likelihood(p.policy, two, with_two);
+    const double b = engine.log_likelihood(p.policy, one, with_one);
+    ASSERT_TRUE(std::isfinite(a)) << "trial " << trial;
+    EXPECT_NEAR(a, b, 1e-12 * std::max(1.0, std::abs(a))) << "trial " << trial;
+  }
+}
+
+// add_unlisted_source: eta scaled by (1 - epsilon), epsilon to one more source with a flat
+// prior; applying it twice adds it once.
+TEST(ObservationEStep, AddUnlistedSourceAddsOneFlatSource) {
+  Rng rng(8);
+  testing::TinyProblem p = testing::tiny_problem(3, rng);
+  while (p.trajectory.num_observations() == 0) p = testing::tiny_problem(3, rng);
+  ObservationPrior prior;
+  prior.num_symbols = p.model.num_symbols();
+  prior.num_confounders = p.model.num_confounders();
+  prior.subject_alpha = p.model.subject;
+  prior.confounder_alpha = p.model.confounders;
+  prior.unlisted_eta = 0.25;
+  std::vector<ObservedTrajectory> data{p.trajectory};
+  add_unlisted_source(prior, data);
+  add_unlisted_source(prior, data);
+  ASSERT_EQ(prior.num_confounders, p.model.num_confounders() + 1);
+  ASSERT_TRUE(prior.unlisted_added);
+  EXPECT_EQ(prior.confounder_alpha.row(prior.num_confounders - 1), Eigen::RowVectorXd::Ones(prior.num_symbols));
+  ASSERT_EQ(data[0].eta.cols(), p.trajectory.eta.cols() + 1);
+  EXPECT_LT((data[0].eta.leftCols(p.trajectory.eta.cols()) - 0.75 * p.trajectory.eta).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_TRUE((data[0].eta.rightCols(1).array() == 0.25).all());
+  ObservationPrior bad = prior;
+  bad.unlisted_added = false;
+  bad.unlisted_eta = 1.0;
+  try {
+    add_unlisted_source(bad, data);
+    ADD_FAILURE() << "epsilon = 1 accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "observation_model.unlisted_source.eta");
   }
 }
 

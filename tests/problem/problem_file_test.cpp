@@ -130,6 +130,55 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
   expect_error([](json& e) { e["observation_model"]["learn_eta"] = "yes"; }, "observation_model.learn_eta", "true or false");
 }
 
+// Contexts ([symbol, eta, context]) and the unlisted catch-all round-trip through the
+// file; their bad values get one line naming the field.
+TEST(ProblemFile, ContextsAndUnlistedSource) {
+  json d = spec_example();
+  d["observation_model"]["unlisted_source"] = {{"eta", 0.2}};
+  d["demonstration"][0]["steps"][0]["observations"] = json::parse(R"([[3, [0.6, 0.2, 0.2], 4], [1, [0.1, 0.8, 0.1], 0]])");
+  const Problem p = parse_problem(d.dump());
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  for (const Problem* x : {&p, &q}) {
+    EXPECT_EQ(x->observation_model->unlisted_eta, 0.2);
+    EXPECT_FALSE(x->observation_model->unlisted_added);  // the learner adds the catch-all, not the file
+    EXPECT_EQ(x->demonstration[0].steps->contexts, (std::vector<int>{4, 0}));
+  }
+  const Problem plain = parse_problem(spec_example().dump());
+  EXPECT_TRUE(plain.demonstration[0].steps->contexts.empty());
+  EXPECT_EQ(plain.observation_model->unlisted_eta, 0.0);
+  const auto observations = [](json& e) -> json& { return e["demonstration"][0]["steps"][0]["observations"]; };
+  expect_error([&](json& e) { observations(e)[0].push_back(-1); }, "demonstration[0].steps[0].observations[0][2]", "integer");
+  expect_error([&](json& e) { observations(e)[0].push_back(1 << 16); }, "demonstration[0].steps[0].observations[0][2]", "");
+  expect_error([&](json& e) { observations(e)[0].push_back(0.5); }, "demonstration[0].steps[0].observations[0][2]", "integer");
+  expect_error([&](json& e) { observations(e)[1].push_back(2); }, "demonstration[0].steps[0].observations[1]",
+               "has a context, the trajectory's earlier observations none");
+  expect_error([&](json& e) { observations(e)[0].push_back(2); }, "demonstration[0].steps[0].observations[1]",
+               "has no context");
+  for (double bad : {0.0, 1.0, -0.1, 2.0}) {
+    expect_error([&](json& e) { e["observation_model"]["unlisted_source"] = {{"eta", bad}}; },
+                 "observation_model.unlisted_source.eta", "(0, 1)");
+  }
+  expect_error([](json& e) { e["observation_model"]["unlisted_source"] = json::object(); }, "observation_model.unlisted_source.eta",
+               "missing");
+  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = 0.0; }, "observation_model.eta_prior_strength",
+               "(0, 1e12]");
+  // learn_eta said true with nothing to learn: one source, or no observations.
+  expect_error(
+      [](json& e) {
+        e["observation_model"]["learn_eta"] = true;
+        e["observation_model"]["num_confounders"] = 0;
+        e["observation_model"].erase("confounder_alpha");
+        e["demonstration"][0]["steps"][0]["observations"] = json::parse("[[3, [1.0]]]");
+      },
+      "observation_model.learn_eta", "one source");
+  expect_error(
+      [](json& e) {
+        e["observation_model"]["learn_eta"] = true;
+        e["demonstration"][0]["steps"][0]["observations"] = json::array();
+      },
+      "observation_model.learn_eta", "no demonstrated step has observations");
+}
+
 TEST(ProblemFile, MalformedJson) {
   try {
     parse_problem("{\n  \"mdp\": {,\n}");

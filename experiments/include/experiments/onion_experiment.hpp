@@ -39,6 +39,9 @@ struct OnionExperimentOptions {
   std::uint64_t seed = 1;
   int controlled_sorts = 20;
   SceneConfig scene;  // the demonstrations' scene (width, fps, which elements)
+  // The labeller's eta raised to this power and renormalised: 1 as it states, > 1 an
+  // overconfident labeller (its favoured source gets more than it knows), < 1 a timid one.
+  double eta_power = 1.0;
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
   double c = 0.5;
   int max_alpha_iterations = 1;
@@ -64,6 +67,8 @@ struct OnionRun {
 };
 
 std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& options);
+// Each row of eta raised to `power` and renormalised (OnionExperimentOptions::eta_power).
+RowMatrix miscalibrated(const RowMatrix& eta, double power);
 std::string onion_runs_csv(const std::vector<OnionRun>& runs);
 
 }  // namespace hbirl::onion

@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "learner/mcmc_diagnostics.hpp"
 #include "learner/observations.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "learner/trajectory.hpp"
@@ -30,6 +31,9 @@ struct EStepResult {
   // with a watch, estep_observations.hpp): (s, a) marginals per step, empty when none.
   RowMatrix watched;
   double watched_log_likelihood = 0.0;
+  // The MCMC engine's worst convergence diagnostics in the E-step's last pass
+  // (mcmc_diagnostics.hpp); neutral (nothing checked) for the other engines.
+  McmcDiagnostics mcmc;
 };
 
 // What an E-step carries from one EM iteration to the next: the refined Dirichlet

@@ -11,6 +11,7 @@
 // (s, a) marginals:
 //   Pr(Z = 0 | data) = sum_r gamma_t(r) eta(0) O_r(w) / p(w | r)
 //   Pr(Z = e | data) = sum_r gamma_t(r) eta(e) O_e(w) / p(w | r).
+#include "learner/mcmc_diagnostics.hpp"
 #include "learner/mdp.hpp"
 #include "learner/observation_model.hpp"
 #include "learner/soft_value_iteration.hpp"
@@ -21,6 +22,7 @@ struct TrajectoryPosterior {
   double log_likelihood = 0.0;  // log Pr(observations | theta, O); -inf if impossible
   RowMatrix marginals;          // T x (S*A): Pr(s_t = s, a_t = a | data)
   RowMatrix sources;            // one row per observation: Pr(Z = z | data), subject first
+  McmcDiagnostics mcmc;         // the MCMC engine's convergence diagnostics (neutral otherwise)
 };
 
 // What the E-step sums over trajectories.
@@ -37,6 +39,10 @@ struct EStepStatistics {
   // holds it: its (s, a) marginals per step (steps x pairs) and its log-likelihood.
   RowMatrix watched;
   double watched_log_likelihood = 0.0;
+  // The MCMC engine's worst convergence diagnostics over the trajectories' pair marginals
+  // (mcmc_diagnostics.hpp); neutral for the exact engine and for blocks from the bus,
+  // which does not carry them. Summed with max / min: the same bits in any order.
+  McmcDiagnostics mcmc;
 
   static EStepStatistics zero(int pairs, int confounders, int symbols, int contexts = 0);
   EStepStatistics& operator+=(const EStepStatistics& other);

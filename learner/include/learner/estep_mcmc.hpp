@@ -17,6 +17,12 @@
 // Marginals, source posteriors, expected visits and alpha_dot are sample averages over
 // `samples` sweeps after `burn_in`, per chain, over `chains` chains. The log-likelihood
 // cannot be estimated from the chain; it is computed exactly by the forward algorithm.
+//
+// Every run of the chains also reports whether they can be trusted (docs/MODEL.md, "Is
+// the MCMC E-step converged?"): the rank-normalised split-R-hat and the bulk ESS
+// (mcmc_diagnostics.hpp) of every (step, pair) marginal it outputs, whose draws are the
+// indicators "the path is at that pair at that step"; the worst of them go to
+// TrajectoryPosterior::mcmc and EStepStatistics::mcmc.
 #include "learner/estep_exact.hpp"
 #include "learner/estep_observations.hpp"
 
@@ -42,10 +48,11 @@ class McmcEngine final : public PosteriorEngine {
                   const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) override;
 
  private:
-  // Runs the chains; fills marginals (T x P), per-observation source frequencies and
-  // alpha_dot. Returns false if no trajectory of positive probability was found.
+  // Runs the chains; fills marginals (T x P), per-observation source frequencies,
+  // alpha_dot and the chains' convergence diagnostics. Returns false if no trajectory of
+  // positive probability was found.
   bool sample(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory,
-              Rng& rng, RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot);
+              Rng& rng, RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot, McmcDiagnostics& diagnostics);
 
   const Mdp& mdp_;
   McmcOptions options_;

@@ -125,9 +125,14 @@ class ObservationEStep final : public EStep {
   // Learned eta's contexts: their number and stated eta (one row each); 0 when eta is not learned.
   int num_contexts() const { return static_cast<int>(context_eta_.rows()); }
   const RowMatrix& context_eta() const { return context_eta_; }
+  // How many observations each context covers (their multiplicities summed).
+  const Eigen::VectorXd& context_observations() const { return context_observations_; }
   const Mdp& mdp() const { return mdp_; }
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
+  // The trajectory with each observation's eta replaced by its context's row of `eta`
+  // (learned_eta): what the learned model believes of each observation's source.
+  static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
   // Whether the exact engine's passes use one emission per observation kind (see max_kinds).
   bool uses_kind_table() const { return kinds_.has_value(); }
   const ObservationPrior& prior() const { return prior_; }
@@ -139,13 +144,12 @@ class ObservationEStep final : public EStep {
   void assign_contexts();
   // sum over contexts and sources of eta_strength * stated eta * log(learned eta).
   double log_eta_prior_term(const RowMatrix& eta) const;
-  // The trajectory with each observation's eta replaced by its context's row of `eta`.
-  static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
 
   const Mdp& mdp_;
   std::vector<ObservedTrajectory> trajectories_;
   std::optional<ObservationKinds> kinds_;
   RowMatrix context_eta_;
+  Eigen::VectorXd context_observations_;
   ObservationPrior prior_;
   ObservationEStepOptions options_;
 };

@@ -118,9 +118,23 @@ struct ObservationPrior {
   bool learn_eta = true;
   double eta_strength = 10.0;
   RowMatrix eta_alpha;
+  // Unlisted confounders (docs/MODEL.md "Unlisted confounders"): 0 for none, else the
+  // share epsilon in (0, 1) of every stated eta given to one more, catch-all source
+  // (add_unlisted_source). `unlisted_added` says the catch-all is the last confounder.
+  double unlisted_eta = 0.0;
+  bool unlisted_added = false;
   static constexpr double kMinStrength = 1e-3;
   static constexpr double kMaxStrength = 1e3;
 };
+
+// Largest explicit context id + 1 (a problem file's [symbol, eta, context]).
+constexpr int kMaxContexts = 1 << 16;
+
+// Adds the catch-all source for confounders nobody listed (docs/MODEL.md "Unlisted
+// confounders"): one more confounding element with a flat Dirichlet(1) prior, and every
+// observation's eta scaled by (1 - prior.unlisted_eta) with prior.unlisted_eta going to it.
+// Nothing when prior.unlisted_eta is 0 or the source was added already.
+void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory>& trajectories);
 
 // Sets the update and its companion default: eta is learned with the posterior update,
 // taken as given with the paper's.

@@ -50,6 +50,20 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
 // only for kPlausible.
 void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng);
 
+// A labeller that claims more (or less) than it knows (docs/results/eta_sensitivity): it
+// picks the true source with probability `accuracy`, else one of the other sources evenly,
+// and gives its pick `mass` of eta and the other sources the rest evenly. The pick is the
+// observation's context (the labeller's "rule"). With equally likely sources, among the
+// observations it labels z the true source is z with probability `accuracy` and each other
+// one with (1 - accuracy) / |E|: its true calibration, which it states as `mass`.
+struct Labeller {
+  double mass = 0.8;
+  double accuracy = 0.8;
+};
+// The true source distribution of the context "pick = z" over `sources` sources.
+Eigen::VectorXd labeller_calibration(const Labeller& labeller, int sources, int pick);
+void assign_labeller_eta(GridworldObservations& observations, int sources, const Labeller& labeller, Rng& rng);
+
 // The informative subject prior (paper §Experiments A): symbol counts per (s, a) from a controlled run
 // (the subject alone, true states known), plus `pseudo_count` everywhere.
 Eigen::MatrixXd controlled_run_alpha(const Mdp& mdp, const std::vector<Trajectory>& trajectories,

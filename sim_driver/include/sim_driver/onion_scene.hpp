@@ -32,6 +32,10 @@ struct SceneConfig {
   bool other_onions = true;
   bool foreground_person = true;
   bool mirror = true;
+  // The share of the time the foreground person stands in front of the expert (walking in
+  // and out counts half), in (0, 0.95]; 0 keeps the default schedule (6 s in front every
+  // 16-24 s, about 0.4). `hbirl experiment onion-regimes` sweeps it.
+  double foreground_share = 0.0;
 
   static SceneConfig controlled();  // no confounding elements, no mirror
   // "controlled", "all", or a comma-separated list of blue-shirt, other-onions,
@@ -98,6 +102,8 @@ class OnionScene {
   double walk_period_;
   double occlusion_phase_;   // foreground person
   double occlusion_period_;
+  double occlusion_stay_ = 6.0;  // seconds in front of the expert per period
+  static constexpr double kOcclusionWalk = 1.5;  // seconds to walk in (and out)
   cv::Mat background_;
 };
 
