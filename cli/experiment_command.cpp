@@ -600,6 +600,9 @@ Command add_experiment(CLI::App& app) {
   regimes_cmd->add_option("--eta-powers", rg->eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
       ->capture_default_str();
   regimes_cmd->add_option("--trajectories", rg->trajectories, "Sorts learned from")->check(CLI::Range(1, 1000))->capture_default_str();
+  regimes_cmd->add_option("--controlled-sorts", rg->options.base.controlled_sorts, "Sorts in the controlled run that gives the subject prior")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   regimes_cmd->add_option("--methods", rg->methods,
                           "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
       ->capture_default_str();

@@ -338,6 +338,54 @@ TEST_F(Cli, OnionExperimentAtSmallScale) {
   EXPECT_NE(bad.err.find("--trajectories"), std::string::npos) << bad.err;
 }
 
+// The experiments beyond the paper at the smallest scale: files written, rows counted,
+// bad lists refused in one line naming the option.
+TEST_F(Cli, EtaExperimentsAtSmallScale) {
+  const fs::path out = dir_ / "beyond";
+  const Outcome eta = run("experiment eta-sensitivity --runs 1 --confounders 2 --masses 0.8 --accuracies 0.4,1 --per-step 8 "
+                          "--trajectories 6 --out '" + out.string() + "'");
+  ASSERT_EQ(eta.status, 0) << eta.err;
+  EXPECT_NE(eta.out.find("## |E| = 2"), std::string::npos) << eta.out;
+  const std::string eta_csv = slurp(out / "eta_sensitivity_runs.csv");
+  EXPECT_EQ(std::count(eta_csv.begin(), eta_csv.end(), '\n'), 1 + 1 + 2 * 2);  // header, perfect, (fixed, learned) x 2 cells
+  const Outcome unlisted = run("experiment unlisted --runs 1 --confounders 0,2 --told 0 --per-step 8 --trajectories 6 --out '" +
+                               out.string() + "'");
+  ASSERT_EQ(unlisted.status, 0) << unlisted.err;
+  const std::string unlisted_csv = slurp(out / "unlisted_runs.csv");
+  EXPECT_EQ(std::count(unlisted_csv.begin(), unlisted_csv.end(), '\n'), 1 + 2 * 4);
+  EXPECT_TRUE(fs::exists(out / "unlisted_summary.md"));
+  const Outcome regimes = run("experiment onion-regimes --runs 1 --shares 0,0.9 --eta-powers 3 --trajectories 1 --controlled-sorts 2 "
+                              "--methods true_trajectories,plausible_eta --out '" + out.string() + "'");
+  ASSERT_EQ(regimes.status, 0) << regimes.err;
+  const std::string regimes_csv = slurp(out / "onion_regimes_runs.csv");
+  EXPECT_EQ(std::count(regimes_csv.begin(), regimes_csv.end(), '\n'), 1 + 2 * 2 * 2);  // shares x mirror x methods
+  for (const std::string bad : {"experiment eta-sensitivity --masses 0.8,x", "experiment eta-sensitivity --accuracies 1.5",
+                                 "experiment onion-regimes --shares 0.99"}) {
+    const Outcome r = run(bad + " --out '" + out.string() + "'");
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
+// A miscalibrated labeller in one command: the generated file round-trips, and learned
+// eta is printed per context with its observation count.
+TEST_F(Cli, GeneratedMiscalibratedLabellerLearnsEta) {
+  const fs::path file = dir_ / "mis.json";
+  ASSERT_EQ(run("generate gridworld --confounders 2 --per-step 10 --trajectories 6 --controlled 6 --labeller-mass 0.9 "
+                "--labeller-accuracy 0.5 -o '" + file.string() + "'").status, 0);
+  const Outcome r = run("learn --problem '" + file.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::json& contexts = j["observation_model"]["learned_eta"];
+  ASSERT_EQ(contexts.size(), 3u);  // the labeller's picks
+  double covered = 0.0;
+  for (const auto& c : contexts) {
+    EXPECT_NEAR(c["stated"][c["context"].get<size_t>()].get<double>(), 0.9, 1e-12);
+    covered += c["observations"].get<double>();
+  }
+  EXPECT_EQ(covered, 6 * 10 * 10);  // every demonstrated observation, none of the controlled run's
+}
+
 TEST_F(Cli, GridworldExperimentAtSmallScale) {
   const fs::path out = dir_ / "gw";
   const Outcome r = run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +
