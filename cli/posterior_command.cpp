@@ -47,7 +47,18 @@ int run_posterior(const PosteriorArgs& args) {
   }
   const Eigen::VectorXd theta = parse_weights(args.weights, mdp.num_features());
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(theta));
-  const ObservationModel model = dirichlet_mean(*problem.observation_model);
+  // Every trajectory's observations, with the unlisted catch-all added when the file asks
+  // for one (the same sources `hbirl learn` uses).
+  std::vector<ObservedTrajectory> observed;
+  for (size_t i = 0; i < problem.demonstration.size(); ++i) {
+    if (!problem.demonstration[i].steps) {
+      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps", "missing; the posterior needs observations"));
+    }
+    observed.push_back(*problem.demonstration[i].steps);
+  }
+  ObservationPrior prior = *problem.observation_model;
+  add_unlisted_source(prior, observed);
+  const ObservationModel model = dirichlet_mean(prior);
   std::unique_ptr<PosteriorEngine> engine = engine_factory(args.engine)(mdp);
   const Rng root(args.seed);
   nlohmann::ordered_json trajectories = nlohmann::ordered_json::array();
@@ -57,11 +68,8 @@ int run_posterior(const PosteriorArgs& args) {
   McmcDiagnostics mcmc;  // worst over the trajectories (neutral for the exact engine)
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     const DemonstratedTrajectory& item = problem.demonstration[i];
-    if (!item.steps) {
-      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps", "missing; the posterior needs observations"));
-    }
     Rng rng = root.split(i);
-    const TrajectoryPosterior post = engine->posterior(policy, model, *item.steps, rng);
+    const TrajectoryPosterior post = engine->posterior(policy, model, observed[i], rng);
     mcmc += post.mcmc;
     nlohmann::ordered_json traj;
     if (std::isfinite(post.log_likelihood)) {

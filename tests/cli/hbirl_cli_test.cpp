@@ -569,6 +569,26 @@ TEST_F(Cli, PosteriorInTheSpecShape) {
   EXPECT_EQ(r.out.find("[3,0,"), std::string::npos);
 }
 
+// With an unlisted catch-all, learn and posterior both see one more source: its share
+// in every observation's source posterior, and the learned model's last element.
+TEST_F(Cli, UnlistedSourceIsOneMoreSourceInLearnAndPosterior) {
+  json doc = corridor();
+  doc["observation_model"]["unlisted_source"] = {{"eta", 0.2}};
+  const fs::path file = dir_ / "unlisted.json";
+  std::ofstream(file) << doc.dump();
+  const Outcome post = run("posterior --weights 1,0 --problem '" + file.string() + "'");
+  ASSERT_EQ(post.status, 0) << post.err;
+  for (const auto& src : json::parse(post.out)["trajectories"][0]["steps"][0]["sources"]) {
+    ASSERT_EQ(src.size(), 3u);  // subject, the listed element, the catch-all
+    EXPECT_GT(src[2].get<double>(), 0.0);
+  }
+  const Outcome learned = run("learn --problem '" + file.string() + "'");
+  ASSERT_EQ(learned.status, 0) << learned.err;
+  const json om = json::parse(learned.out)["observation_model"];
+  EXPECT_EQ(om["unlisted_source"]["index"], 1);
+  EXPECT_EQ(om["confounders"].size(), 2u);
+}
+
 // `hbirl posterior` against brute-force enumeration of every trajectory and labelling,
 // on a small file with a terminal state, an occluded step and two confounders.
 TEST_F(Cli, PosteriorMatchesBruteForce) {
