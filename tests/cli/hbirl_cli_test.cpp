@@ -578,7 +578,8 @@ TEST_F(Cli, UnlistedSourceIsOneMoreSourceInLearnAndPosterior) {
   std::ofstream(file) << doc.dump();
   const Outcome post = run("posterior --weights 1,0 --problem '" + file.string() + "'");
   ASSERT_EQ(post.status, 0) << post.err;
-  for (const auto& src : json::parse(post.out)["trajectories"][0]["steps"][0]["sources"]) {
+  const json posterior = json::parse(post.out);
+  for (const auto& src : posterior["trajectories"][0]["steps"][0]["sources"]) {
     ASSERT_EQ(src.size(), 3u);  // subject, the listed element, the catch-all
     EXPECT_GT(src[2].get<double>(), 0.0);
   }
