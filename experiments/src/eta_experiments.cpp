@@ -5,6 +5,7 @@
 #include <chrono>
 #include <sstream>
 
+#include "experiments/summary.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
@@ -104,12 +105,6 @@ void run_items(std::vector<Run>& runs, int threads, const std::function<void(int
     const int finished = ++done;
     if (progress) progress(finished, total);
   });
-}
-
-std::string csv_text(std::string s) {
-  std::replace(s.begin(), s.end(), ',', ';');
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  return s;
 }
 
 // The unlisted experiment's labeller (eta_experiments.hpp): it knows the subject and the

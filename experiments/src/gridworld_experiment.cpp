@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "experiments/gridworld_scenario.hpp"
+#include "experiments/summary.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
@@ -180,9 +181,7 @@ std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
     out << ",";
     if (r.strength >= 0.0) out << r.strength;
-    std::string error = r.error;
-    std::replace(error.begin(), error.end(), ',', ';');
-    std::replace(error.begin(), error.end(), '\n', ' ');
+    const std::string error = csv_text(r.error);
     out << "," << r.seconds << "," << error << "\n";
   }
   return out.str();

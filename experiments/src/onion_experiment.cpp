@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "experiments/onion_data.hpp"
+#include "experiments/summary.hpp"
 #include "learner/controlled_prior.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
@@ -225,9 +226,7 @@ std::string onion_runs_csv(const std::vector<OnionRun>& runs) {
   out.precision(10);
   out << "run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,log_likelihood,seconds,error\n";
   for (const auto& r : runs) {
-    std::string error = r.error;
-    std::replace(error.begin(), error.end(), ',', ';');
-    std::replace(error.begin(), error.end(), '\n', ' ');
+    const std::string error = csv_text(r.error);
     out << r.run << "," << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << ","
         << r.policy_agreement << "," << r.em_iterations << "," << r.log_likelihood << "," << r.seconds << "," << error << "\n";
   }

@@ -67,13 +67,9 @@ std::string onion_regimes_csv(const std::vector<OnionRegimeRun>& runs) {
   out.precision(10);
   out << "foreground_share,mirror,eta_power,run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,seconds,error\n";
   for (const auto& [regime, r] : runs) {
-    std::string error = r.error;
-    for (char& c : error) {
-      if (c == ',' || c == '\n') c = ' ';
-    }
     out << regime.foreground_share << "," << (regime.mirror ? 1 : 0) << "," << regime.eta_power << "," << r.run << ","
         << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << "," << r.policy_agreement
-        << "," << r.em_iterations << "," << r.seconds << "," << error << "\n";
+        << "," << r.em_iterations << "," << r.seconds << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }

@@ -285,9 +285,7 @@ std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
     if (r.strength >= 0.0) out << r.strength;
     out << ",";
     for (size_t k = 0; k < r.theta.size(); ++k) out << (k ? ";" : "") << r.theta[k];
-    std::string error = r.error;
-    std::replace(error.begin(), error.end(), ',', ';');
-    std::replace(error.begin(), error.end(), '\n', ' ');
+    const std::string error = csv_text(r.error);
     out << "," << r.seconds << "," << error << "\n";
   }
   return out.str();

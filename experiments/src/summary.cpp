@@ -2,6 +2,7 @@
 
 
 #include <boost/math/distributions/students_t.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -10,6 +11,12 @@
 #include <vector>
 
 namespace hbirl {
+
+std::string csv_text(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ';');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
 
 SummaryRow mean_and_ci(const std::vector<double>& values) {
   SummaryRow row;

@@ -17,6 +17,10 @@ struct SummaryRow {
   double ci95 = 0.0;  // half-width: t_{0.975, n-1} * sd / sqrt(n)
 };
 
+// A free-text field (an error message) made safe for one CSV cell: commas become ';',
+// newlines spaces.
+std::string csv_text(std::string text);
+
 // The mean, standard deviation and 95% t-interval of `values` (method and x left empty).
 SummaryRow mean_and_ci(const std::vector<double>& values);
 
