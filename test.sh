@@ -6,13 +6,20 @@
 # compiling) but not run; see docs/BENCHMARKS.md.
 set -euo pipefail
 cd "$(dirname "$0")"
+start=$(date +%s)
+# One line per stage with the time so far: a run that is slow says where.
+stage() { echo "== test.sh: $1 ($(($(date +%s) - start)) s so far)"; }
+stage "installing what is missing"
 scripts/install-deps.sh
 jobs="$(nproc)"
 
+stage "Release build"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DHBIRL_WERROR=ON >/dev/null
 cmake --build build -j"$jobs"
+stage "Release tests"
 ctest --test-dir build --output-on-failure -j"$jobs"
 
+stage "sanitizer build"
 # -O1 with line tables only: half the compile time of -O2 -g, and still file:line in
 # the sanitizers' reports.
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
@@ -25,12 +32,16 @@ cmake --build build-sanitize -j"$jobs" --target hbirl_tests hbirl hbirl_lcmtypes
 # in Release and minutes under the sanitizers (the E-step, EM and the experiment runners
 # they drive run under the sanitizers in the other tests).
 heavy='^(HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal|ObservationEStep\.LearnedEtaRecoversTheLabellersCalibration|Cli\.EveryGeneratedRandomTaskValidates|Cli\.OnionExperimentAtSmallScale)$'
+stage "sanitizer tests"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"
 
+stage "learner-only build and tests"
 scripts/learner-only-check.sh build-learner-only "$jobs"
 
 # libFuzzer (clang, ASan + UBSan): every reader of files and of the bus, and the
 # dashboard's HTTP handling, 10 s each on its seed corpus (tests/fuzz; the long runs are
 # in tests/fuzz/RESULTS.md). Fails on any crash, leak, timeout or huge allocation.
+stage "fuzz targets"
 scripts/fuzz.sh build-fuzz 10
+stage "all passed"

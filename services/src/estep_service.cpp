@@ -274,6 +274,21 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
   return out;
 }
 
+// The blocks spot-checked this pass: the first block of each worker never checked (a
+// worker that always lies is caught before any of its answers is used; it costs one block
+// per worker once), or, once all are, one block at random (a worker that lies now and then
+// is caught in time, never by construction).
+std::vector<int> BusBlockExecutor::spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const {
+  std::vector<int> out;
+  std::set<std::string> unchecked;
+  for (int b : todo) {
+    const std::string& w = assigned[static_cast<size_t>(b)];
+    if (!w.empty() && !workers_[w].checked && unchecked.insert(w).second) out.push_back(b);
+  }
+  if (out.empty() && !todo.empty()) out.push_back(todo[static_cast<size_t>(spot_rng_() % todo.size())]);
+  return out;
+}
+
 // The spot check: the block's answer against the one computed here. Workers that compute
 // with the same numerics give the same bits; others (--same-numerics-only off) may differ
 // in the last bits, so they are held to a relative 1e-9.
@@ -292,7 +307,10 @@ void BusBlockExecutor::check_spot(int block, const EStepStatistics& here) const 
                     (answer->log_likelihood == here.log_likelihood ||
                      std::abs(answer->log_likelihood - here.log_likelihood) <= tolerance * (1.0 + std::abs(here.log_likelihood))) &&
                     answer->impossible == here.impossible;
-  if (same) return;
+  if (same) {
+    workers_[liar].checked = true;
+    return;
+  }
   ++stats_.liars;
   workers_[liar].distrusted = true;
   counters_.bad(channels::kEStepResult, "worker '" + liar + "' answered block " + std::to_string(block) +
@@ -334,8 +352,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   answered_.clear();
   assigned_.assign(static_cast<size_t>(blocks_), {});
   answered_by_.assign(static_cast<size_t>(blocks_), std::string());
-  std::optional<int> spot;  // the block checked here this pass, and its statistics
-  EStepStatistics spot_result;
+  std::vector<int> spots;  // the blocks checked here this pass, and their statistics
+  std::vector<EStepStatistics> spot_results;
 
   hbirl::estep_request_t request{};
   request.utime = 0;
@@ -386,9 +404,9 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     for (int b : todo) assigned_[static_cast<size_t>(b)].insert(request.assigned_worker[static_cast<size_t>(b)]);
     publish(bus_, channels::kEStepRequest, request, counters_);
     if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
-      spot = todo[static_cast<size_t>(spot_rng_() % todo.size())];
-      spot_result = estep.block_statistics(policy, model, seed, {*spot}, options_.local_threads).front();
-      ++stats_.spot_checks;
+      spots = spot_blocks(todo, request.assigned_worker);
+      spot_results = estep.block_statistics(policy, model, seed, spots, options_.local_threads);
+      stats_.spot_checks += static_cast<std::int64_t>(spots.size());
     }
     const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
     while (!missing().empty() && Clock::now() < deadline) {
@@ -402,7 +420,15 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       if (!w.empty() && !answered_.count(w)) workers_[w].suspect = true;
     }
   }
-  if (spot && received_[static_cast<size_t>(*spot)]) check_spot(*spot, spot_result);
+  for (size_t k = 0; k < spots.size(); ++k) {
+    auto& slot = received_[static_cast<size_t>(spots[k])];
+    if (slot) {
+      check_spot(spots[k], spot_results[k]);
+    } else {
+      slot = std::move(spot_results[k]);  // not answered: computed here already
+      ++stats_.local_blocks;
+    }
+  }
   const std::vector<int> rest = missing();
   if (!rest.empty()) {
     const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads);

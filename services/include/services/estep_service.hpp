@@ -72,10 +72,12 @@ struct BusExecutorOptions {
   // bit-identical to a one-process run whatever machines join. Off: they all work, and
   // stats().other_numerics counts the ones that may change the last bits.
   bool same_numerics_only = false;
-  // Each pass, the optimiser also computes one block a worker was given (chosen from the
-  // pass's seed) while the workers compute, and compares the answer bit for bit: a worker
-  // whose block differs gets no more work, is reported, and every block it answered in the
-  // pass is computed here instead (docs/RELIABILITY.md).
+  // Each pass, the optimiser also computes blocks the workers were given while they
+  // compute -- one block of every worker whose answers were never checked, else one block
+  // chosen at random -- and compares the answers bit for bit: a worker whose block differs
+  // gets no more work, is reported, and every block it answered in the pass is computed
+  // here instead. So a worker that always lies is caught before any of its answers is
+  // used (docs/RELIABILITY.md).
   bool spot_check = true;
 };
 
@@ -118,11 +120,13 @@ class BusBlockExecutor final : public BlockExecutor {
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
     bool distrusted = false;  // answered a spot-checked block wrong: never gets work again
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
+    bool checked = false;      // one of its answers matched the optimiser's own computation
   };
   void on_status(const hbirl::service_status_t& m) const;
   void on_result(const hbirl::estep_result_t& m) const;
   std::vector<std::string> live_workers() const;
   std::vector<std::string> assignment(const std::vector<int>& todo, std::vector<std::string> workers) const;
+  std::vector<int> spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
   void check_spot(int block, const EStepStatistics& here) const;
 
   Bus& bus_;
@@ -146,8 +150,8 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable std::set<std::string> answered_;  // workers that answered this request
   mutable std::vector<std::set<std::string>> assigned_;  // per block: the workers it was given to (any attempt)
   mutable std::vector<std::string> answered_by_;         // per block: who answered it
-  // Which block is spot-checked: unpredictable to the workers (the request's seed is not),
-  // and it never changes a result (a checked block's bits are the same either way).
+  // Which block of checked workers is spot-checked: unpredictable to them (the request's
+  // seed is not), and it never changes a result (a checked block's bits are the same either way).
   mutable std::mt19937_64 spot_rng_{std::random_device{}()};
   mutable Stats stats_;
   Subscriptions subs_;  // last: ends first
