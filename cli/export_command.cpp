@@ -16,6 +16,7 @@ struct ExportArgs {
   DomainArgs domain;
   AlphaUpdate update = AlphaUpdate::kPosterior;
   bool update_given = false;
+  std::string eta;  // empty: the domain's default
 };
 
 // The domain and the data set as the live optimiser had them; the observation model is
@@ -30,6 +31,7 @@ int run_export(const ExportArgs& args) {
   if (r.data.observed.empty()) throw InputError(args.log, "the log holds no demonstrations");
   services::LearningOptions options;
   if (args.update_given) options.update = args.update;
+  if (!args.eta.empty()) options.learn_eta = args.eta == "learned";
   Problem problem;
   problem.mdp = domain->mdp();
   const DomainNames names = domain->names(r.data.num_sources);
@@ -76,6 +78,8 @@ Command add_export(CLI::App& app) {
   cmd->add_flag("--allow-incomplete", args->allow_incomplete,
                 "Export a recording whose run never reached its end (END_RUN): the episodes that finished");
   add_alpha_update_option(cmd, args->update)->each([args](const std::string&) { args->update_given = true; });
+  cmd->add_option("--eta", args->eta, "As the run's hbirl-optimiser --eta, when it was given: 'stated' or 'learned'")
+      ->check(CLI::IsMember({"stated", "learned"}));
   return [args] { return run_export(*args); };
 }
 

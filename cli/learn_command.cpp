@@ -118,6 +118,7 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
 int run_learn_from_log(const LearnArgs& args) {
   services::LearningOptions options;
   options.seed = args.seed;
+  if (args.eta != "file") options.learn_eta = args.eta == "learned";
   services::Counters counters;
   counters.service = "hbirl learn";
   const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
@@ -135,6 +136,7 @@ int run_learn_from_log(const LearnArgs& args) {
   if (r.learned.ile) out["ile"] = *r.learned.ile;
   out["log_likelihood"] = r.learned.log_likelihood;
   out["em_iterations"] = r.learned.em_iterations;
+  if (r.learned.eta) out["learned_eta"] = services::learned_eta_json(*r.learned.eta);
   out["demonstrations"] = r.learned.trajectories;
   out["controlled_episodes"] = r.data.controlled_observed.size();
   out["dataset_digest"] = r.learned.digest;
@@ -241,20 +243,7 @@ int run_learn(const LearnArgs& args) {
       om["prior_strength_chosen"] = used.automatic_strength;
       if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
     }
-    if (const std::optional<RowMatrix> eta = observed->learned_eta(used)) {
-      // Per context (the file's, or each distinct stated eta): stated and learned source
-      // distributions and how many observations the context covers.
-      nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
-      for (Eigen::Index c = 0; c < eta->rows(); ++c) {
-        const Eigen::VectorXd stated = observed->context_eta().row(c).transpose();
-        const Eigen::VectorXd learned_row = eta->row(c).transpose();
-        contexts.push_back({{"context", c},
-                            {"stated", to_vector(stated)},
-                            {"learned", to_vector(learned_row)},
-                            {"observations", observed->context_observations()[c]}});
-      }
-      om["learned_eta"] = contexts;
-    }
+    if (const std::optional<LearnedEta> eta = observed->learned_eta_report(used)) om["learned_eta"] = services::learned_eta_json(*eta);
     out["observation_model"] = om;
   }
   out["selected_restart"] = learned.selected_restart;
@@ -367,8 +356,8 @@ Command add_learn(CLI::App& app) {
   update->default_str("the file's observation_model.update");
   cmd->add_option("--eta", args->eta,
                   "'stated': take every observation's eta as given; 'learned': learn it per context (docs/MODEL.md); "
-                  "'file': as the file's observation_model.learn_eta says (default: learned). The service set takes eta "
-                  "as stated: use 'stated' to learn what hbirl-optimiser learns from the same data")
+                  "'file': as the file's (or with --log, the domain's) observation_model.learn_eta says (default: learned "
+                  "with the posterior update). hbirl-optimiser learns it the same way (its --eta)")
       ->check(CLI::IsMember({"file", "stated", "learned"}))
       ->capture_default_str();
   cmd->add_flag("--verbose,-v", args->verbose, "Report every EM iteration on stderr");

@@ -22,6 +22,7 @@ sensor=""
 confounders=3
 trajectories=20
 eta=plausible
+learn_eta_args=()
 config=all
 sorts=6
 controlled_sorts=20
@@ -59,6 +60,9 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          publish does), so the run is authenticated with a sensor too
   --workers N            sampler workers (default $workers)
   --seed S               seed of the run (default $seed)
+  --learn-eta K          the optimiser takes the sensor's eta as stated, or learns it per
+                         context (the labeller's rule): stated or learned (default: learned,
+                         or a domain file's observation_model.learn_eta)
  onion:
   --config C             demonstrations' scene: all, controlled, or a list of
                          blue-shirt, other-onions, foreground, mirror (default $config)
@@ -110,6 +114,7 @@ while [ $# -gt 0 ]; do
     --sorts) sorts="$2"; shift 2 ;;
     --controlled-sorts) controlled_sorts="$2"; shift 2 ;;
     --seed) seed="$2"; shift 2 ;;
+    --learn-eta) learn_eta_args=(--eta "$2"); shift 2 ;;
     --fps) fps="$2"; shift 2 ;;
     --max-fps) max_fps="$2"; shift 2 ;;
     --record) record=1; shift ;;
@@ -317,7 +322,7 @@ if [ "$no_sim" = 0 ]; then
 fi
 : >"$out/logs/optimiser.log"
 : >"$out/logs/optimiser.err"
-start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" --out "$out/result.json"
+start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" --out "$out/result.json"
 optimiser_index=$((${#names[@]} - 1))
 if [ "$no_sim" = 0 ]; then
   # Each domain's simulator reads the options that concern it.

@@ -118,6 +118,30 @@ void theta_figure(const json& s, const std::string& stem, Report& r) {
   (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
 }
 
+// Learned eta: the subject's share of eta as the labeller stated it and as learned, per
+// context (those covering the most observations, as the live page shows them).
+void eta_figure(const json& s, const std::string& stem, Report& r) {
+  const json& e = s["eta"];
+  if (e.is_null() || e["contexts"].empty()) return;
+  const json& names = s["names"]["contexts"];
+  std::ostringstream data;
+  data << "$eta << EOD\n";
+  for (const auto& c : e["contexts"]) {
+    const auto k = c["context"].get<size_t>();
+    std::string name = k < names.size() ? names[k].get<std::string>() : "context " + std::to_string(k);
+    name.erase(std::remove(name.begin(), name.end(), '"'), name.end());  // a data column in double quotes
+    data << '"' << name << " (" << number(c["observations"], 4) << ")\" " << number(c["stated"][0], 10) << " "
+         << number(c["learned"][0], 10) << "\n";
+  }
+  data << "EOD\nset title " << gnuplot_quoted("Learned η per context, EM iteration " + std::to_string(e["iteration"].get<int>()))
+       << "\nset style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.85 border -1\n"
+       << "set yrange [0:1.05]\nset grid ytics\nset key top right box opaque\nset xtics rotate by -40 font ',8'\n"
+       << "set ylabel 'η(subject)'\nset bmargin 9\nset rmargin 10\n";
+  const std::string plot = "plot $eta using 2:xtic(1) lc rgb '#9e9e9e' title 'stated', '' using 3 lc rgb '#1565c0' title 'learned'\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot, 1000, 500);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
 void posterior_figure(const json& s, const std::string& stem, Report& r) {
   const json& p = s["posterior"];
   if (p.is_null() || p["steps"].get<int>() == 0) return;
@@ -233,6 +257,7 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   theta_figure(s, (dir / "theta").string(), report);
   posterior_figure(s, (dir / "posterior").string(), report);
   model_figure(s, (dir / "observation_model").string(), report);
+  eta_figure(s, (dir / "eta").string(), report);
 
   std::ostringstream page;
   page << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hbirl report</title>\n"
@@ -273,7 +298,9 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
       {"theta", "Learned reward weights against the expert's true weights."},
       {"posterior", "The expert's posterior state at each step of the newest demonstration (sources summed out), "
                     "with the ground truth."},
-      {"observation_model", "The learned observation model: the subject's per (state, action), and each confounding element's."}};
+      {"observation_model", "The learned observation model: the subject's per (state, action), and each confounding element's."},
+      {"eta", "Learned η: per context (the labeller's rule, else each distinct stated η), the subject's share as stated and as "
+              "learned from the data, for the contexts that cover the most observations (their number in brackets)."}};
   for (const auto& [stem, caption] : captions) {
     const std::string path = (dir / stem).string();
     if (std::find(report.figures.begin(), report.figures.end(), path) == report.figures.end()) continue;

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
+#include "learner/observations.hpp"
 #include "services/channels.hpp"
 #include "services/frame_header.hpp"
 
@@ -53,6 +54,31 @@ void check_rows(const Rows& rows, const std::string& field, double lo, double hi
 }
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+// Learned eta for the page: the contexts that cover the most observations (a labeller
+// has a few dozen rules; each distinct eta of a sensor without contexts is one), each
+// with its stated and learned eta.
+constexpr size_t kShownContexts = 24;
+nlohmann::json learned_eta_json(const hbirl::observation_model_t& m) {
+  std::vector<int> order;
+  for (int c = 0; c < m.num_contexts; ++c) {
+    if (m.context_observations[static_cast<size_t>(c)] > 0.0) order.push_back(c);
+  }
+  const size_t shown = std::min(order.size(), kShownContexts);
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(shown), order.end(), [&m](int a, int b) {
+    const double na = m.context_observations[static_cast<size_t>(a)], nb = m.context_observations[static_cast<size_t>(b)];
+    return na != nb ? na > nb : a < b;
+  });
+  nlohmann::json contexts = nlohmann::json::array();
+  for (size_t k = 0; k < shown; ++k) {
+    const auto c = static_cast<size_t>(order[k]);
+    contexts.push_back({{"context", order[k]},
+                        {"observations", m.context_observations[c]},
+                        {"stated", m.stated_eta[c]},
+                        {"learned", m.learned_eta[c]}});
+  }
+  return {{"iteration", m.iteration}, {"contexts", contexts}, {"with_observations", order.size()}};
+}
 
 }  // namespace
 
@@ -251,6 +277,15 @@ void DashboardState::on_model(const hbirl::observation_model_t& m) {
   }
   check_rows(m.subject, "observation_model.subject", 0.0, 1.0);
   check_rows(m.confounders, "observation_model.confounders", 0.0, 1.0);
+  if (m.num_contexts < 0 || m.num_contexts > kMaxContexts) throw InputError("observation_model.num_contexts", "out of range");
+  if (m.num_contexts > 0 && m.num_sources != 1 + m.num_confounders) {
+    throw InputError("observation_model.num_sources", "must be 1 + num_confounders");
+  }
+  check_rows(m.stated_eta, "observation_model.stated_eta", 0.0, 1.0 + 1e-9);
+  check_rows(m.learned_eta, "observation_model.learned_eta", 0.0, 1.0 + 1e-9);
+  for (double n : m.context_observations) {
+    if (!(std::isfinite(n) && n >= 0.0)) throw InputError("observation_model.context_observations", "must be finite and >= 0");
+  }
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   model_ = m;
@@ -308,7 +343,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   DomainNames names;
   if (domain_object_) names = domain_object_->names(num_sources_);
   j["names"] = {{"states", names.states},     {"actions", names.actions}, {"features", names.features},
-                {"symbols", names.symbols},   {"sources", names.sources}};
+                {"symbols", names.symbols},   {"sources", names.sources}, {"contexts", names.contexts}};
   std::vector<std::string> colours;
   for (const auto& c : source_colours()) {
     char hex[8];
@@ -434,6 +469,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
                                        {"subject", model_->subject},
                                        {"confounders", model_->confounders}}
                       : nlohmann::json(nullptr);
+  j["eta"] = model_ && model_->num_contexts > 0 ? learned_eta_json(*model_) : nlohmann::json(nullptr);
 
   // Service health.
   nlohmann::json services = nlohmann::json::array();

@@ -199,6 +199,31 @@ function showModel(s) {
   filled('panel-model');
 }
 
+// Learned eta: per context (a labeller rule, or each distinct stated eta), the subject's
+// share as the labeller stated it and as learned, for the contexts covering the most
+// observations; the whole distributions in the tooltip.
+function showEta(s) {
+  const e = s.eta;
+  if (!e || !e.contexts.length) return;
+  const names = s.names.sources;
+  const count = (x) => (x >= 100 ? `${Math.round(x)}` : fmt(x, 3));
+  const labels = e.contexts.map((c) => `${s.names.contexts[c.context] || `context ${c.context}`} (${count(c.observations)})`);
+  const whole = (row) => row.map((v, z) => `${names[z] || `source ${z}`} ${fmt(v, 2)}`).join(', ');
+  lineOrBar('eta-chart', 'bar', labels, [
+    { label: 'stated η(subject)', data: e.contexts.map((c) => c.stated[0]), backgroundColor: '#9e9e9e' },
+    { label: 'learned η(subject)', data: e.contexts.map((c) => c.learned[0]), backgroundColor: '#1565c0' },
+  ], {
+    scales: { y: { min: 0, max: 1, title: { display: true, text: 'η(subject)' } } },
+    plugins: { tooltip: { callbacks: { afterLabel: (item) => {
+      const c = e.contexts[item.dataIndex];
+      return item.datasetIndex === 0 ? `stated: ${whole(c.stated)}` : `learned: ${whole(c.learned)}`;
+    } } } },
+  });
+  $('eta-caption').textContent = `after EM iteration ${e.iteration}: ${e.contexts.length} of the ${e.with_observations} contexts ` +
+    `with observations (most observations first; in brackets). Grey: the subject's share of η as stated; blue: as learned.`;
+  filled('panel-eta');
+}
+
 function showServices(s) {
   if (!s.services.length) return;
   $('services').querySelector('tbody').innerHTML = s.services.map((x) => {
@@ -235,7 +260,7 @@ async function poll() {
     $('connection').textContent = '';
     if (s.version !== shownVersion) {
       shownVersion = s.version;
-      for (const show of [showRun, showCamera, showPosterior, showEm, showTheta, showModel]) draw(show, s);
+      for (const show of [showRun, showCamera, showPosterior, showEm, showTheta, showModel, showEta]) draw(show, s);
     }
     draw(showServices, s);  // heartbeat ages change with the clock
   } catch (e) {

@@ -25,6 +25,7 @@ OnionDemonstration demonstrate(const Mdp& mdp, const SceneConfig& config, const 
         for (const perception::Observation& o : perception::label(detector.detect(frame), labels)) {
           observed.symbols.push_back(o.symbol);
           eta.insert(eta.end(), o.eta.begin(), o.eta.end());
+          if (options.rule_contexts) observed.contexts.push_back(o.rule);
         }
       }
       observed.step_begin.push_back(static_cast<int>(observed.symbols.size()));

@@ -34,6 +34,7 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
     }
   }
+  if (options_.executor) input_digest_ = dataset_digest(trajectories_);
   if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();
@@ -44,9 +45,6 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
 }
 
 void ObservationEStep::assign_contexts() {
-  if (options_.executor) {
-    throw InputError("observation_model.learn_eta", "is not supported with remote E-step workers (the bus carries stated eta)");
-  }
   if (!(prior_.eta_strength > 0.0)) throw InputError("observation_model.eta_prior_strength", "must be positive");
   // Explicit contexts are numbered from 0; without them each distinct eta is one. A
   // context's stated eta is the weighted mean of its observations' eta.
@@ -103,6 +101,12 @@ std::optional<RowMatrix> ObservationEStep::learned_eta(const ObservationPrior& a
     if (total > 0.0) eta.row(c) /= total;
   }
   return eta;
+}
+
+std::optional<LearnedEta> ObservationEStep::learned_eta_report(const ObservationPrior& alpha) const {
+  std::optional<RowMatrix> learned = learned_eta(alpha);
+  if (!learned) return std::nullopt;
+  return LearnedEta{context_eta_, std::move(*learned), context_observations_};
 }
 
 EStepState ObservationEStep::initial_state(std::uint64_t seed) const {
@@ -182,7 +186,7 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
                                              std::uint64_t seed, const RowMatrix* eta) const {
   std::vector<EStepStatistics> partial;
   if (options_.executor) {
-    partial = options_.executor->run(*this, policy, model, seed);
+    partial = options_.executor->run(*this, policy, model, seed, eta);
     if (static_cast<int>(partial.size()) != num_blocks()) {
       throw std::runtime_error("E-step executor returned " + std::to_string(partial.size()) + " blocks, expected " +
                                std::to_string(num_blocks()));

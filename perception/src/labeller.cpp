@@ -25,6 +25,7 @@ std::vector<Observation> label(const std::vector<Detection>& detections, const L
       const double area = std::max(1.0, static_cast<double>(d.area));
       const double r = round_to_twentieths(std::min(area, o.gripper_area) / std::max(area, o.gripper_area));
       obs.eta = {r, 1.0 - r, 0.0, 0.0};
+      obs.rule = static_cast<int>(std::lround(r * 20.0)) - 1;
     } else {
       obs.symbol = d.dark_share > o.dark_share ? kDarkOnion : kBrightOnion;
       bool near = false;
@@ -35,10 +36,13 @@ std::vector<Observation> label(const std::vector<Detection>& detections, const L
       }
       if (near) {
         obs.eta = {0.8, 0.0, 0.1, 0.1};
+        obs.rule = kOnionNearGripperRule;
       } else if (d.area > o.large_onion * o.onion_area) {
         obs.eta = {0.1, 0.05, 0.25, 0.6};
+        obs.rule = kLargeOnionRule;
       } else {
         obs.eta = {0.1, 0.05, 0.6, 0.25};
+        obs.rule = kSmallOnionRule;
       }
     }
     if (o.uniform_eta) obs.eta.fill(1.0 / kNumSources);

@@ -272,6 +272,12 @@ int optimiser(int argc, char** argv) {
       ->check(CLI::IsMember({"posterior", "paper"}));
   CLI::Option* c_option = app.add_option("--c", step_size, "The paper's step size (--alpha-update paper only; default: the domain's, else 0.1)")
                               ->check(CLI::Range(1e-6, 1.0));
+  std::string eta;
+  app.add_option("--eta", eta,
+                 "'stated': take every observation's eta as the sensor gives it; 'learned': learn one source\n"
+                 "distribution per context (the labeller's rule, else each distinct eta; docs/MODEL.md). Default: the\n"
+                 "domain file's observation_model.learn_eta, else learned with the posterior update")
+      ->check(CLI::IsMember({"stated", "learned"}));
   app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
@@ -281,6 +287,7 @@ int optimiser(int argc, char** argv) {
     o.learning.update = u;
   }
   if (c_option->count() > 0) o.learning.c = step_size;
+  if (!eta.empty()) o.learning.learn_eta = eta == "learned";
   o.executor.spot_check = !no_spot_check;
   o.max_dataset_bytes = max_dataset_mb << 20;
   if (!d.spec.empty()) o.domain = open_domain_args(d);
@@ -308,6 +315,7 @@ int optimiser(int argc, char** argv) {
   if (result->learned.ile) j["ile"] = *result->learned.ile;
   j["log_likelihood"] = result->learned.log_likelihood;
   j["em_iterations"] = result->learned.em_iterations;
+  if (result->learned.eta) j["learned_eta"] = learned_eta_json(*result->learned.eta);
   j["demonstrations"] = result->learned.trajectories;
   j["controlled_episodes"] = result->data.controlled_observed.size();
   j["dataset_digest"] = result->learned.digest;

@@ -127,7 +127,20 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
     throw InputError("observations.step", "step or frame out of range");
   }
   if (m.episode < 0) throw InputError("observations.episode", "is negative");
+  if (m.num_context != 0 && m.num_context != m.n) throw InputError("observations.num_context", "must be 0 or n");
+  const bool with_contexts = m.num_context > 0;
+  if (m.n > 0 && contexts_given_ && *contexts_given_ != with_contexts) {
+    throw InputError("observations.num_context", with_contexts ? "the run's earlier observations gave no contexts"
+                                                               : "the run's earlier observations gave contexts");
+  }
   Frame f;
+  for (int i = 0; i < m.num_context; ++i) {
+    const int c = m.context[static_cast<size_t>(i)];
+    if (c < 0 || c >= kMaxContexts) {
+      throw InputError("observations.context[" + std::to_string(i) + "]", "is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+    }
+    f.contexts.push_back(c);
+  }
   for (int i = 0; i < m.n; ++i) {
     const int s = m.symbol[static_cast<size_t>(i)];
     if (s < 0 || s >= m.num_symbols) throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
@@ -139,9 +152,11 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   }
   num_symbols_ = m.num_symbols;
   num_sources_ = m.num_sources;
+  if (m.n > 0) contexts_given_ = with_contexts;
   Episode& e = episode(m.episode);
   if (e.frames.count({m.step, m.frame})) return;  // a repeat is ignored
-  const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size()) + 8 * static_cast<std::int64_t>(f.eta.size());
+  const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
+                             8 * static_cast<std::int64_t>(f.eta.size());
   if (bytes_ + bytes > max_bytes_) {
     throw InputError("observations", "the run's data would take more than --max-dataset-mb " + std::to_string(max_bytes_ >> 20) +
                                          " MB: frame not kept");
@@ -252,6 +267,7 @@ Dataset DatasetBuilder::build() const {
            it != e.frames.end() && it->first.first == step && it->first.second < e.frames_per_step; ++it) {
         t.symbols.insert(t.symbols.end(), it->second.symbols.begin(), it->second.symbols.end());
         eta.insert(eta.end(), it->second.eta.begin(), it->second.eta.end());
+        t.contexts.insert(t.contexts.end(), it->second.contexts.begin(), it->second.contexts.end());
       }
       t.step_begin.push_back(static_cast<int>(t.symbols.size()));
     }

@@ -77,6 +77,8 @@ hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count
   m.eta = lcm_rows(t.eta);
   m.num_weights = static_cast<std::int32_t>(t.weights.size());
   m.weights = t.weights;
+  m.num_context = static_cast<std::int32_t>(t.contexts.size());
+  m.context = t.contexts;
   return m;
 }
 
@@ -107,6 +109,11 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
     if (!(std::isfinite(w) && w > 0.0)) throw InputError("trajectory.weights", "must be finite and > 0");
   }
   t.weights = m.weights;
+  if (m.num_context != 0 && m.num_context != m.n) throw InputError("trajectory.num_context", "must be 0 or n");
+  for (int c : m.context) {
+    if (c < 0 || c >= kMaxContexts) throw InputError("trajectory.context", std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+  }
+  t.contexts = m.context;
   t.ends_in_terminal = m.ends_in_terminal;
   return t;
 }
@@ -144,6 +151,20 @@ void BusBlockExecutor::publish_dataset() const {
 
 namespace {
 constexpr size_t kMaxWorkers = 4096;  // workers remembered at once (a sender can make up any number of names)
+
+// Two blocks' statistics equal, or within a relative `tolerance` (0: bit for bit).
+bool same_statistics(const EStepStatistics& a, const EStepStatistics& b, double tolerance) {
+  const auto close = [tolerance](const auto& x, const auto& y) {
+    if (x.rows() != y.rows() || x.cols() != y.cols()) return false;
+    if (tolerance == 0.0) return x == y;
+    return ((x - y).array().abs() <= tolerance * (1.0 + y.array().abs())).all();
+  };
+  return close(a.counts, b.counts) && close(a.alpha_dot.subject, b.alpha_dot.subject) &&
+         close(a.alpha_dot.confounders, b.alpha_dot.confounders) && close(a.source_counts, b.source_counts) &&
+         (a.log_likelihood == b.log_likelihood ||
+          std::abs(a.log_likelihood - b.log_likelihood) <= tolerance * (1.0 + std::abs(b.log_likelihood))) &&
+         a.impossible == b.impossible;
+}
 }  // namespace
 
 void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
@@ -192,7 +213,7 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     throw InputError("estep_result.log_likelihood", "is NaN or +inf");
   }
   auto& slot = received_[static_cast<size_t>(m.block)];
-  if (slot) {
+  if (slot && answered_by_[static_cast<size_t>(m.block)] != m.worker) {  // answered already, by the worker it was given to
     ++stats_.duplicates;
     return;
   }
@@ -200,7 +221,10 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     ++stats_.unassigned;
     throw InputError("estep_result.worker", "'" + m.worker + "' was not given block " + std::to_string(m.block));
   }
-  EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_);
+  if (workers_[m.worker].distrusted) {
+    throw InputError("estep_result.worker", "'" + m.worker + "' answered wrong before: its answers are not used");
+  }
+  EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_, contexts_);
   s.counts = eigen_vector(m.counts);
   s.alpha_dot.subject = eigen_rows(m.alpha_subject, symbols_);
   s.alpha_dot.confounders = eigen_rows(m.alpha_confounder, symbols_);
@@ -220,8 +244,28 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     if (!std::isfinite(m.watched_log_likelihood)) throw InputError("estep_result.watched_log_likelihood", "must be finite");
     s.watched_log_likelihood = m.watched_log_likelihood;
   }
+  if (m.num_contexts != contexts_ || (contexts_ > 0 && m.num_sources != 1 + confounders_)) {
+    throw InputError("estep_result.num_contexts", "is not the request's number of contexts and sources");
+  }
+  if (contexts_ > 0) {
+    s.source_counts = eigen_rows<RowMatrix>(m.source_counts, 1 + confounders_);
+    if (!s.source_counts.allFinite() || (s.source_counts.array() < 0).any()) {
+      throw InputError("estep_result.source_counts", "must be finite and >= 0");
+    }
+  }
   s.log_likelihood = m.log_likelihood;
   s.impossible = m.impossible;
+  if (slot) {
+    // A worker computes a block's bits the same way every time: two different answers
+    // under one name mean one is forged (without a run key anyone can use any name), and
+    // nothing says which. Every block answered under that name is computed here.
+    if (!same_statistics(*slot, s, 0.0)) {
+      distrust(m.worker, "answered block " + std::to_string(m.block) + " twice, differently (a forger under its name?)");
+      return;
+    }
+    ++stats_.duplicates;
+    return;
+  }
   slot = std::move(s);
   answered_.insert(m.worker);
   answered_by_[static_cast<size_t>(m.block)] = m.worker;
@@ -293,33 +337,27 @@ std::vector<int> BusBlockExecutor::spot_blocks(const std::vector<int>& todo, con
 // with the same numerics give the same bits; others (--same-numerics-only off) may differ
 // in the last bits, so they are held to a relative 1e-9.
 void BusBlockExecutor::check_spot(int block, const EStepStatistics& here) const {
-  auto& answer = received_[static_cast<size_t>(block)];
-  const std::string liar = answered_by_[static_cast<size_t>(block)];
-  const auto it = workers_.find(liar);
+  const std::string worker = answered_by_[static_cast<size_t>(block)];
+  const auto it = workers_.find(worker);
   const double tolerance = it != workers_.end() && it->second.numerics == numerics_ ? 0.0 : 1e-9;
-  const auto close = [tolerance](const auto& a, const auto& b) {
-    if (a.size() != b.size()) return false;
-    if (tolerance == 0.0) return a == b;
-    return ((a - b).array().abs() <= tolerance * (1.0 + b.array().abs())).all();
-  };
-  const bool same = close(answer->counts, here.counts) && close(answer->alpha_dot.subject, here.alpha_dot.subject) &&
-                    close(answer->alpha_dot.confounders, here.alpha_dot.confounders) &&
-                    (answer->log_likelihood == here.log_likelihood ||
-                     std::abs(answer->log_likelihood - here.log_likelihood) <= tolerance * (1.0 + std::abs(here.log_likelihood))) &&
-                    answer->impossible == here.impossible;
-  if (same) {
-    workers_[liar].checked = true;
+  if (same_statistics(*received_[static_cast<size_t>(block)], here, tolerance)) {
+    workers_[worker].checked = true;
     return;
   }
-  ++stats_.liars;
-  workers_[liar].distrusted = true;
-  counters_.bad(channels::kEStepResult, "worker '" + liar + "' answered block " + std::to_string(block) +
-                                            " unlike the optimiser's own computation: it gets no more work, and its blocks "
-                                            "of this pass are computed here");
-  for (int b = 0; b < blocks_; ++b) {
-    if (answered_by_[static_cast<size_t>(b)] == liar) received_[static_cast<size_t>(b)].reset();
-  }
+  distrust(worker, "answered block " + std::to_string(block) + " unlike the optimiser's own computation");
   received_[static_cast<size_t>(block)] = here;
+}
+
+// A worker caught answering wrong: no more work, no more of its answers, and every block
+// it answered in this pass is computed again.
+void BusBlockExecutor::distrust(const std::string& worker, const std::string& why) const {
+  ++stats_.liars;
+  workers_[worker].distrusted = true;
+  counters_.bad(channels::kEStepResult,
+                "worker '" + worker + "' " + why + ": it gets no more work, and its blocks of this pass are computed here");
+  for (int b = 0; b < blocks_; ++b) {
+    if (answered_by_[static_cast<size_t>(b)] == worker) received_[static_cast<size_t>(b)].reset();
+  }
 }
 
 BusBlockExecutor::Stats BusBlockExecutor::stats() const {
@@ -328,7 +366,7 @@ BusBlockExecutor::Stats BusBlockExecutor::stats() const {
 }
 
 std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep, const SoftSolution& policy,
-                                                   const ObservationModel& model, std::uint64_t seed) const {
+                                                   const ObservationModel& model, std::uint64_t seed, const RowMatrix* eta) const {
   const std::lock_guard<std::recursive_mutex> lock(mutex_);
   if (options_.stop && options_.stop()) throw Stopped();
   const auto start = Clock::now();
@@ -337,7 +375,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   for (int k = 0; k < 100000 && bus_.handle(0) > 0; ++k) {
   }
   // The workers compute with the exact engine on this executor's data set: the pass must too.
-  if (dataset_digest(estep.trajectories()) != merged_digest_) {
+  if (estep.input_digest() != merged_digest_) {
     throw std::logic_error("BusBlockExecutor: the E-step's trajectories are not the data set the workers have");
   }
   if (dynamics_digest(estep.mdp()) != mdp_digest_) throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
@@ -348,6 +386,10 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   pairs_ = estep.mdp().num_pairs();
   symbols_ = model.num_symbols();
   confounders_ = model.num_confounders();
+  contexts_ = eta ? static_cast<int>(eta->rows()) : 0;
+  if (eta && (eta->rows() != estep.num_contexts() || eta->cols() != 1 + confounders_)) {
+    throw std::logic_error("BusBlockExecutor: learned eta does not have one row per context and a column per source");
+  }
   received_.assign(static_cast<size_t>(blocks_), std::nullopt);
   answered_.clear();
   assigned_.assign(static_cast<size_t>(blocks_), {});
@@ -376,6 +418,9 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   request.num_confounders = confounders_;
   request.subject_o = lcm_rows(model.subject);
   request.confounder_o = lcm_rows(model.confounders);
+  request.num_contexts = contexts_;
+  request.num_sources = 1 + confounders_;
+  if (eta) request.context_eta = lcm_rows(*eta);
 
   const auto missing = [this] {
     std::vector<int> out;
@@ -405,7 +450,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     publish(bus_, channels::kEStepRequest, request, counters_);
     if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
       spots = spot_blocks(todo, request.assigned_worker);
-      spot_results = estep.block_statistics(policy, model, seed, spots, options_.local_threads);
+      spot_results = estep.block_statistics(policy, model, seed, spots, options_.local_threads, eta);
       stats_.spot_checks += static_cast<std::int64_t>(spots.size());
     }
     const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
@@ -431,7 +476,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   }
   const std::vector<int> rest = missing();
   if (!rest.empty()) {
-    const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads);
+    const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads, eta);
     for (size_t k = 0; k < rest.size(); ++k) received_[static_cast<size_t>(rest[k])] = local[k];
     stats_.local_blocks += static_cast<std::int64_t>(rest.size());
   }

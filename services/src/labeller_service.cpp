@@ -44,9 +44,11 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
   o.num_symbols = perception::kNumSymbols;
   o.num_sources = perception::kNumSources;
   o.n = static_cast<std::int32_t>(obs.size());
+  o.num_context = o.n;  // the rule that gave each eta: learned eta is one distribution per rule
   for (const auto& x : obs) {
     o.symbol.push_back(static_cast<std::int16_t>(x.symbol));
     o.eta.emplace_back(x.eta.begin(), x.eta.end());
+    o.context.push_back(x.rule);
   }
   publish(bus_, channels::kObservations, o, counters_);
 }

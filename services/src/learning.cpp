@@ -5,6 +5,17 @@
 
 namespace hbirl::services {
 
+// Per context (the file's or the sensor's, else each distinct stated eta): stated and
+// learned source distributions and how many observations the context covers.
+nlohmann::ordered_json learned_eta_json(const LearnedEta& eta) {
+  nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
+  const auto row = [](const RowMatrix& m, Eigen::Index r) { return std::vector<double>(m.row(r).begin(), m.row(r).end()); };
+  for (Eigen::Index c = 0; c < eta.learned.rows(); ++c) {
+    contexts.push_back({{"context", c}, {"stated", row(eta.stated, c)}, {"learned", row(eta.learned, c)}, {"observations", eta.observations[c]}});
+  }
+  return contexts;
+}
+
 std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data) {
   std::optional<Eigen::VectorXd> w = data.true_weights ? data.true_weights : domain.true_weights();
   if (w && w->size() != domain.mdp().num_features()) return std::nullopt;
@@ -34,7 +45,7 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data, co
   }
   if (options.update) use_alpha_update(prior, *options.update);
   if (options.c) prior.c = *options.c;
-  prior.learn_eta = false;  // the bus carries the stated eta only
+  if (options.learn_eta) prior.learn_eta = *options.learn_eta;
   return prior;
 }
 
@@ -51,14 +62,20 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const Lear
   learn.seed = options.seed;
   learn.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)
   if (progress) {
-    learn.on_iteration = [&progress, &prior](int, int iteration, double ll, const Eigen::VectorXd& theta, const EStepResult& e,
-                                             const ObservationPrior* alpha) { progress(iteration, ll, theta, alpha ? *alpha : prior, e); };
+    learn.on_iteration = [&progress, &prior, &estep](int, int iteration, double ll, const Eigen::VectorXd& theta,
+                                                     const EStepResult& e, const ObservationPrior* alpha) {
+      const ObservationPrior& now = alpha ? *alpha : prior;
+      const std::optional<LearnedEta> eta = estep.learned_eta_report(now);
+      progress(iteration, ll, theta, now, e, eta ? &*eta : nullptr);
+    };
   }
   const LearnResult result = learn_reward(mdp, estep, learn);
   Learned out;
   out.theta = result.theta;
   out.log_likelihood = result.log_likelihood;
-  out.em_iterations = result.restarts[static_cast<size_t>(result.selected_restart)].em_iterations;
+  const RestartResult& best = result.restarts[static_cast<size_t>(result.selected_restart)];
+  out.em_iterations = best.em_iterations;
+  out.eta = estep.learned_eta_report(best.alpha ? *best.alpha : prior);
   out.trajectories = static_cast<int>(data.observed.size());
   out.digest = dataset_digest(data.observed);
   if (const auto truth = true_weights_of(domain, data)) out.ile = inverse_learning_error(mdp, *truth, out.theta).ile;

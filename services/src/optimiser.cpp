@@ -21,7 +21,7 @@ namespace {
 // For the dashboard: the learned observation model, and the newest demonstration's
 // posterior as the E-step's last pass computed it (nothing is computed again here).
 void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& data, std::int64_t utime, int iteration,
-                   const ObservationPrior& alpha, const EStepResult& estep) {
+                   const ObservationPrior& alpha, const EStepResult& estep, const LearnedEta* eta) {
   const ObservationModel model = dirichlet_mean(alpha);
   hbirl::observation_model_t o{};
   o.utime = utime;
@@ -34,6 +34,13 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   o.num_confounders = model.num_confounders();
   o.subject = lcm_rows(model.subject);
   o.confounders = lcm_rows(model.confounders);
+  if (eta) {
+    o.num_contexts = static_cast<std::int32_t>(eta->learned.rows());
+    o.num_sources = static_cast<std::int32_t>(eta->learned.cols());
+    o.stated_eta = lcm_rows(eta->stated);
+    o.learned_eta = lcm_rows(eta->learned);
+    o.context_observations = lcm_vector(eta->observations);
+  }
   publish(bus, channels::kObservationModel, o, counters);
   if (data.observed.empty() || estep.watched.rows() == 0) return;  // an impossible trajectory has none
   hbirl::posterior_t p{};
@@ -135,10 +142,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   try {
     result.learned = learn_from_dataset(*domain, result.data, options.learning, executor,
                                         [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha,
-                                            const EStepResult& estep) {
+                                            const EStepResult& estep, const LearnedEta* eta) {
                                           if (stop && stop()) throw Stopped();  // also when computing alone
                                           if (options.beat) options.beat("learning");
-                                          publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep);
+                                          publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep, eta);
                                           hbirl::em_progress_t p{};
                                           p.utime = utime;
                                           p.restart = 0;

@@ -16,7 +16,8 @@ using Clock = std::chrono::steady_clock;
 // bookkeeping of a map node): what --max-dataset-mb counts.
 std::int64_t held_bytes(const hbirl::trajectory_t& m) {
   return 256 + 4 * static_cast<std::int64_t>(m.step_begin.size()) + 4 * static_cast<std::int64_t>(m.symbol.size()) +
-         8 * static_cast<std::int64_t>(m.n) * std::max(1, m.num_sources) + 8 * static_cast<std::int64_t>(m.weights.size());
+         8 * static_cast<std::int64_t>(m.n) * std::max(1, m.num_sources) + 8 * static_cast<std::int64_t>(m.weights.size()) +
+         4 * static_cast<std::int64_t>(m.context.size());
 }
 
 }  // namespace
@@ -134,9 +135,17 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the data set's eta");
   }
   if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
+  if (m.num_contexts < 0 || m.num_contexts > kMaxContexts) throw InputError("estep_request.num_contexts", "out of range");
+  const bool learned_eta = m.num_contexts > 0;
+  if (learned_eta && (E < 1 || m.num_sources != 1 + E)) {
+    throw InputError("estep_request.num_sources", "learned eta needs 1 + num_confounders sources and a confounder");
+  }
   if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds ||
-      estep_->options().watch != m.watch) {
-    ObservationPrior shape;  // the worker never refines alpha: only its shape matters here
+      estep_->options().watch != m.watch || estep_->prior().learn_eta != learned_eta) {
+    // The worker never refines alpha or eta: only the prior's shape matters here, and with
+    // learned eta that it numbers the data's contexts as the optimiser's E-step does.
+    ObservationPrior shape;
+    shape.learn_eta = learned_eta;
     shape.num_symbols = W;
     shape.num_confounders = E;
     shape.subject_alpha = Eigen::MatrixXd::Ones(P, W);
@@ -159,10 +168,20 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
       (model.confounders.array() < 0).any()) {
     throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
   }
+  std::optional<RowMatrix> eta;
+  if (learned_eta) {
+    if (m.num_contexts != estep_->num_contexts()) {
+      throw InputError("estep_request.num_contexts", std::to_string(m.num_contexts) + ", the data set has " +
+                                                         std::to_string(estep_->num_contexts()) + " contexts");
+    }
+    eta = eigen_rows<RowMatrix>(m.context_eta, m.num_sources);
+    if (!eta->allFinite() || (eta->array() < 0).any()) throw InputError("estep_request.context_eta", "must be finite and >= 0");
+  }
   // One block at a time, each answer sent as soon as it is ready.
   for (const int block : mine) {
     const auto start = Clock::now();
-    const EStepStatistics s = estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), {block}, 1).front();
+    const EStepStatistics s =
+        estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), {block}, 1, eta ? &*eta : nullptr).front();
     hbirl::estep_result_t r{};
     r.utime = m.utime;
     r.request_id = m.request_id;
@@ -182,6 +201,9 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     r.num_watched_steps = static_cast<std::int32_t>(s.watched.rows());
     r.watched = lcm_rows(s.watched);
     r.watched_log_likelihood = s.watched_log_likelihood;
+    r.num_contexts = learned_eta ? m.num_contexts : 0;
+    r.num_sources = learned_eta ? m.num_sources : 0;
+    if (learned_eta) r.source_counts = lcm_rows(s.source_counts);
     publish(bus_, channels::kEStepResult, r, counters_);
     ++blocks_computed_;
   }

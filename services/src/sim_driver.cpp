@@ -37,6 +37,10 @@ hbirl::observations_t step_observations(const ObservedTrajectory& tr, int t, int
   for (int n = begin; n < end; ++n) m.symbol.push_back(static_cast<std::int16_t>(tr.symbols[static_cast<size_t>(n)]));
   m.eta = lcm_rows(tr.eta.middleRows(begin, end - begin));
   m.n = static_cast<std::int32_t>(m.symbol.size());
+  if (!tr.contexts.empty()) {  // the sensor's contexts (a problem file's [symbol, eta, context])
+    m.context.assign(tr.contexts.begin() + begin, tr.contexts.begin() + end);
+    m.num_context = m.n;
+  }
   return m;
 }
 

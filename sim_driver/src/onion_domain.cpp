@@ -80,6 +80,11 @@ class OnionDomain final : public Domain {
     n.sources = {"subject (expert)", "blue-shirt person", "other onions", "foreground person"};
     n.sources.resize(static_cast<size_t>(std::max(num_sources, 1)));
     for (int e = 4; e < num_sources; ++e) n.sources[static_cast<size_t>(e)] = "element " + std::to_string(e);
+    // The labeller's rules (perception/labeller.hpp): the gripper rule per size ratio, then the onion rules.
+    for (int k = 0; k < perception::kGripperRatioRules; ++k) n.contexts.push_back("gripper, size ratio " + std::to_string(5 * (k + 1)) + "%");
+    n.contexts.push_back("onion near the gripper");
+    n.contexts.push_back("large onion");
+    n.contexts.push_back("small onion");
     return n;
   }
 

@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "expect_refused.hpp"
 #include "learner/input_error.hpp"
 #include "services/channels.hpp"
 #include "services/memory_bus.hpp"
@@ -211,6 +212,57 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
 // Hostile or stale input: dimensions whose product fools a naive check, frames that are
 // never completed (dropped in arrival order, whatever their numbers), text that is not
 // UTF-8 (replaced when sent, never a failed page).
+// Learned eta per context: the contexts that cover observations, most first, each with
+// its stated and learned eta; a model whose eta does not fit its sources, or is not a
+// probability, or counts observations negatively is refused naming the field, and the
+// page keeps the model it had.
+TEST(DashboardState, LearnedEtaPerContext) {
+  DashboardState state;
+  hbirl::observation_model_t m{};
+  m.iteration = 4;
+  m.num_states = 1;
+  m.num_actions = 1;
+  m.num_pairs = 1;
+  m.num_symbols = 2;
+  m.num_confounders = 1;
+  m.subject = {{0.5, 0.5}};
+  m.confounders = {{0.2, 0.8}};
+  EXPECT_TRUE(state.json(0)["eta"].is_null());
+  state.on_model(m);
+  EXPECT_TRUE(state.json(0)["eta"].is_null()) << "eta taken as stated: nothing to show";
+  m.num_contexts = 3;
+  m.num_sources = 2;
+  m.stated_eta = {{0.8, 0.2}, {0.5, 0.5}, {0.3, 0.7}};
+  m.learned_eta = {{0.4, 0.6}, {0.5, 0.5}, {0.1, 0.9}};
+  m.context_observations = {10.0, 0.0, 25.0};
+  state.on_model(m);
+  const nlohmann::json eta = state.json(0)["eta"];
+  EXPECT_EQ(eta["iteration"], 4);
+  EXPECT_EQ(eta["with_observations"], 2);
+  ASSERT_EQ(eta["contexts"].size(), 2u);
+  EXPECT_EQ(eta["contexts"][0]["context"], 2);
+  EXPECT_EQ(eta["contexts"][0]["observations"], 25.0);
+  EXPECT_EQ(eta["contexts"][1]["context"], 0);
+  EXPECT_EQ(eta["contexts"][1]["stated"][0], 0.8);
+  EXPECT_EQ(eta["contexts"][1]["learned"][0], 0.4);
+  const auto refused = [&state](const hbirl::observation_model_t& bad, const std::string& field) {
+    hbirl::testing::expect_refused([&] { state.on_model(bad); }, field);
+  };
+  hbirl::observation_model_t bad = m;
+  bad.num_sources = 3;
+  refused(bad, "observation_model.num_sources");
+  bad = m;
+  bad.learned_eta[1][0] = 1.5;
+  refused(bad, "observation_model.learned_eta");
+  bad = m;
+  bad.stated_eta[0][1] = std::nan("");
+  refused(bad, "observation_model.stated_eta");
+  bad = m;
+  bad.context_observations[2] = -1.0;
+  refused(bad, "observation_model.context_observations");
+  EXPECT_EQ(state.json(0)["eta"]["contexts"].size(), 2u);
+}
+
 TEST(DashboardState, HostileInputCannotBreakThePage) {
   DashboardState state;
   hbirl::posterior_t p{};

@@ -51,7 +51,7 @@ long max_rss_kb() {
   return u.ru_maxrss;
 }
 
-// A 48-byte message whose length field says 100 million observations: lcm-gen's decoder
+// A 52-byte message whose length field says 100 million observations: lcm-gen's decoder
 // would allocate and zero them (200 MB of symbols, 2.4 GB of eta rows) before noticing
 // the bytes are not there; the generated headers are bounded (lcmtypes/bound_arrays.cmake)
 // and refuse it at once.
@@ -59,7 +59,7 @@ TEST(LcmTypes, HostileLengthFieldsAreRefusedWithoutAllocating) {
   hbirl::observations_t m = observations(1, 0);
   std::vector<std::uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
   ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
-  ASSERT_EQ(bytes.size(), 48u);  // hash, 2 x int64, 6 x int32 (n last)
+  ASSERT_EQ(bytes.size(), 52u);  // hash, 2 x int64, 6 x int32 (n at 44), num_context
   const std::uint32_t n = 100000000;
   for (int i = 0; i < 4; ++i) bytes[44 + static_cast<size_t>(i)] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
   const long before = max_rss_kb();

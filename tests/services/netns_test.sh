@@ -157,18 +157,37 @@ PY
     ;;
   publish_problem)
     # hbirl publish streams a problem file into a live optimiser (with a worker) as a sensor
-    # would: the theta of hbirl learn on the same file with eta as stated, bit for bit.
+    # would: the theta of hbirl learn on the same file, bit for bit -- eta as stated, and
+    # eta learned (the default) per context: each distinct eta of the corridor, and the
+    # contexts a miscalibrated labeller gives in a generated Gridworld (they go over the
+    # bus with the observations, and to the worker with the data set).
     "$build/hbirl-sampler" --url "$url" >"$tmp/sampler.log" 2>&1 &
-    "$build/hbirl-optimiser" --url "$url" --workers 1 --domain "$repo/examples/corridor.json" --out "$tmp/live.json" \
-      >/dev/null 2>"$tmp/optimiser.err" &
-    optimiser=$!
-    "$build/hbirl" publish --problem "$repo/examples/corridor.json" --url "$url" --rate 0 >"$tmp/publish.log" 2>&1 ||
-      { cat "$tmp/publish.log"; fail "hbirl publish failed"; }
-    wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
-    "$build/hbirl" learn --problem "$repo/examples/corridor.json" --eta stated --out "$tmp/offline.json"
-    same_theta "$tmp/live.json" "$tmp/offline.json" || fail "published and learned live: another theta than hbirl learn"
-    grep -q '"remote_blocks": 0,' "$tmp/live.json" && fail "the worker computed nothing"
-    echo "hbirl publish into a live optimiser: the theta of hbirl learn"
+    "$build/hbirl" generate gridworld --confounders 3 --per-step 6 --trajectories 12 --controlled 8 --labeller-mass 0.8 \
+      --labeller-accuracy 0.4 --out "$tmp/labelled.json"
+    for case in "corridor.json stated" "corridor.json learned" "labelled.json learned"; do
+      read -r file eta <<<"$case"
+      problem="$repo/examples/$file"
+      [ "$file" = labelled.json ] && problem="$tmp/$file"
+      "$build/hbirl-optimiser" --url "$url" --workers 1 --domain "$problem" --eta "$eta" --out "$tmp/live.json" \
+        >/dev/null 2>"$tmp/optimiser.err" &
+      optimiser=$!
+      "$build/hbirl" publish --problem "$problem" --url "$url" --rate 0 >"$tmp/publish.log" 2>&1 ||
+        { cat "$tmp/publish.log"; fail "hbirl publish failed"; }
+      wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
+      "$build/hbirl" learn --problem "$problem" --eta "$eta" --out "$tmp/offline.json"
+      same_theta "$tmp/live.json" "$tmp/offline.json" || fail "$case: published and learned live: another theta than hbirl learn"
+      grep -q '"remote_blocks": 0,' "$tmp/live.json" && fail "$case: the worker computed nothing"
+      if [ "$eta" = learned ]; then
+        python3 - "$tmp/live.json" "$tmp/offline.json" <<'PY' || fail "$case: another learned eta than hbirl learn"
+import json, sys
+live = json.load(open(sys.argv[1]))["learned_eta"]
+offline = json.load(open(sys.argv[2]))["observation_model"]["learned_eta"]
+assert live == offline, (live[:2], offline[:2])
+print(f"  {len(live)} contexts, learned eta the same")
+PY
+      fi
+      echo "hbirl publish ($case) into a live optimiser: the theta of hbirl learn"
+    done
     ;;
   example_sensor)
     # examples/sensor/corridor_sensor, a sensor written outside hbirl (LCM and the message

@@ -1,6 +1,8 @@
 #include "services/labeller_service.hpp"
 #include "services/optimiser.hpp"
 #include "services/perception_service.hpp"
+#include "expect_refused.hpp"
+#include "perception/labeller.hpp"
 #include "services/sim_driver.hpp"
 
 #include <gtest/gtest.h>
@@ -129,12 +131,14 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   controlled.fps = run.simulation.scene.fps;
   onion::DemonstrationOptions controlled_sorts;
   controlled_sorts.sorts = run.simulation.controlled_sorts;
+  controlled_sorts.rule_contexts = true;  // as the labeller service gives them
   const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.simulation.seed + 1);
   double end = 0.0;
   for (const auto& t : c.truth) end += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
   onion::DemonstrationOptions demo_sorts;
   demo_sorts.sorts = run.simulation.sorts;
   demo_sorts.start_time = end;
+  demo_sorts.rule_contexts = true;
   const onion::OnionDemonstration d = onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed);
   EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(d.observed));
   EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed));
@@ -148,11 +152,19 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   same.controlled_observed = c.observed;
   const Learned local = learn_from_dataset(*builtin_domain("onion"), same, LearningOptions{});
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
+  // Eta was learned per labeller rule, over the bus as here: the same learned eta.
+  ASSERT_FALSE(live->data.observed[0].contexts.empty());
+  ASSERT_TRUE(live->learned.eta.has_value());
+  ASSERT_TRUE(local.eta.has_value());
+  EXPECT_LE(live->learned.eta->learned.rows(), perception::kNumRules);
+  EXPECT_EQ(live->learned.eta->learned, local.eta->learned);
   // The recorded log replays to the same data and the same theta.
   Counters replay_counters = quiet("replay");
   const OptimiserResult replay = learn_from_log({log_path.string(), "", false}, LearningOptions{}, replay_counters);
   EXPECT_EQ(replay.learned.digest, live->learned.digest);
   for (int k = 0; k < 4; ++k) EXPECT_EQ(replay.learned.theta[k], live->learned.theta[k]) << k;
+  ASSERT_TRUE(replay.learned.eta.has_value());
+  EXPECT_EQ(replay.learned.eta->learned, live->learned.eta->learned);
   std::filesystem::remove(log_path);
 }
 
@@ -180,10 +192,12 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   onion::DemonstrationOptions demo_sorts;
   demo_sorts.sorts = run.simulation.sorts;
   demo_sorts.start_time = 0.0;
+  demo_sorts.rule_contexts = true;  // as the labeller service gives them
   onion::SceneConfig controlled = onion::SceneConfig::controlled();
   controlled.fps = run.simulation.scene.fps;
   onion::DemonstrationOptions controlled_sorts;
   controlled_sorts.sorts = run.simulation.controlled_sorts;
+  controlled_sorts.rule_contexts = true;
   const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.simulation.seed + 1);
   for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
   EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed).observed));
@@ -378,6 +392,51 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
 // Made-up frames under ever new (episode, step, frame) keys cannot grow the optimiser's
 // data set past its limit (--max-dataset-mb): the frames beyond it are refused, naming
 // the option, and not kept; repeats of kept frames still pass as repeats.
+// A sensor's contexts (the labeller's rules) are kept per observation; a frame that gives
+// none in a run whose frames gave them (or the other way round), a context count that is
+// not 0 or n and a context out of range are refused naming the field, and what was
+// accepted before stays.
+TEST(DatasetBuilder, ContextsAreAllOrNoneAndInRange) {
+  DatasetBuilder b;
+  hbirl::observations_t o{};
+  o.num_symbols = 4;
+  o.num_sources = 2;
+  o.n = 2;
+  o.symbol = {1, 2};
+  o.eta = {{0.5, 0.5}, {0.9, 0.1}};
+  o.num_context = 2;
+  o.context = {3, 65535};
+  b.on_observations(o);
+  const auto refused = [&b](const hbirl::observations_t& m, const std::string& field) {
+    hbirl::testing::expect_refused([&] { b.on_observations(m); }, field);
+  };
+  o.step = 1;
+  hbirl::observations_t bad = o;
+  bad.num_context = 0;
+  bad.context.clear();
+  refused(bad, "observations.num_context");
+  bad = o;
+  bad.num_context = 1;
+  bad.context = {3};
+  refused(bad, "observations.num_context");
+  bad = o;
+  bad.context[0] = 65536;
+  refused(bad, "observations.context[0]");
+  bad = o;
+  bad.context[1] = -1;
+  refused(bad, "observations.context[1]");
+  hbirl::observations_t occluded = o;  // no observations: nothing to give a context to
+  occluded.n = 0;
+  occluded.symbol.clear();
+  occluded.eta.clear();
+  occluded.num_context = 0;
+  occluded.context.clear();
+  occluded.step = 2;
+  b.on_observations(occluded);
+  b.on_observations(o);
+  EXPECT_EQ(b.frames(), 3);
+}
+
 TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {
   DatasetBuilder b;
   b.limit(64 * 1024);

@@ -59,13 +59,15 @@ class ObservationEStep;
 
 // Computes an E-step pass's blocks somewhere else -- e.g. on sampler workers over a bus
 // (services/). run() must return, for every block b in [0, estep.num_blocks()), exactly
-// what estep.block_statistics(policy, model, seed, {b}) returns, in block order; the
-// pass then sums them in that order, so the result is bit-identical to a local pass.
+// what estep.block_statistics(policy, model, seed, {b}, 1, eta) returns, in block order;
+// the pass then sums them in that order, so the result is bit-identical to a local pass.
+// `eta`: learned eta, one row per context of the E-step (null: the stated eta).
 class BlockExecutor {
  public:
   virtual ~BlockExecutor() = default;
   virtual std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy,
-                                           const ObservationModel& model, std::uint64_t seed) const = 0;
+                                           const ObservationModel& model, std::uint64_t seed,
+                                           const RowMatrix* eta = nullptr) const = 0;
 };
 
 struct ObservationEStepOptions {
@@ -86,6 +88,14 @@ struct ObservationEStepOptions {
   int watch = -1;
 };
 
+// Learned eta as a report shows it: per context (row), the eta its observations stated
+// (their mean), the learned one, and how many observations it covers.
+struct LearnedEta {
+  RowMatrix stated;
+  RowMatrix learned;
+  Eigen::VectorXd observations;
+};
+
 class ObservationEStep final : public EStep {
  public:
   ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories, ObservationPrior prior,
@@ -94,6 +104,8 @@ class ObservationEStep final : public EStep {
   // The learned source distribution of each context at `alpha` (its eta_alpha's mean),
   // or null when eta is not learned.
   std::optional<RowMatrix> learned_eta(const ObservationPrior& alpha) const;
+  // The same with each context's stated eta and observations, for reports.
+  std::optional<LearnedEta> learned_eta_report(const ObservationPrior& alpha) const;
 
   EStepState initial_state(std::uint64_t seed) const override;
   EStepResult expect(const SoftSolution& policy, EStepState& state) const override;
@@ -130,6 +142,10 @@ class ObservationEStep final : public EStep {
   const Mdp& mdp() const { return mdp_; }
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
+  // The digest (dataset_digest) of the trajectories as given, merged, before learned eta
+  // gave them contexts: what a BlockExecutor compares with the data its workers hold
+  // (they give the same contexts the same way). Set only with an executor.
+  std::uint64_t input_digest() const { return input_digest_; }
   // The trajectory with each observation's eta replaced by its context's row of `eta`
   // (learned_eta): what the learned model believes of each observation's source.
   static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
@@ -150,6 +166,7 @@ class ObservationEStep final : public EStep {
   std::optional<ObservationKinds> kinds_;
   RowMatrix context_eta_;
   Eigen::VectorXd context_observations_;
+  std::uint64_t input_digest_ = 0;
   ObservationPrior prior_;
   ObservationEStepOptions options_;
 };

@@ -17,6 +17,12 @@
 //     blue-shirt person.
 // eta's subject share is rounded to 0.05 (and kept in [0.05, 0.95]): the labeller's
 // estimate is coarse by nature, and few distinct eta make the E-step cheap.
+//
+// Each observation also says which rule gave its eta (its context for learned eta,
+// docs/MODEL.md "Learned eta"): the gripper rule once per size ratio r = 0.05 .. 0.95
+// (contexts 0 .. 18: each ratio is its own claim), then the three onion rules. With the
+// Uniform-eta variant the rules still fire: learned eta then finds each rule's
+// calibration from a flat start.
 #include <array>
 #include <vector>
 
@@ -32,9 +38,16 @@ constexpr int kNumSymbols = kDarkOnion + 1;                 // 22
 constexpr int kNumSources = 4;
 enum Source { kSubject = 0, kBlueShirtPerson = 1, kOtherOnions = 2, kForegroundPerson = 3 };
 
+constexpr int kGripperRatioRules = 19;                         // r = 0.05, 0.10, .., 0.95
+constexpr int kOnionNearGripperRule = kGripperRatioRules;      // 19
+constexpr int kLargeOnionRule = kOnionNearGripperRule + 1;     // 20
+constexpr int kSmallOnionRule = kLargeOnionRule + 1;           // 21
+constexpr int kNumRules = kSmallOnionRule + 1;                 // 22
+
 struct Observation {
   int symbol = 0;
   std::array<double, kNumSources> eta{};
+  int rule = 0;  // the rule that gave eta (above)
 };
 
 struct LabellerOptions {

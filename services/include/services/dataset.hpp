@@ -75,6 +75,7 @@ class DatasetBuilder {
   struct Frame {
     std::vector<int> symbols;
     std::vector<double> eta;  // rows of num_sources
+    std::vector<int> contexts;  // one per symbol, or none
   };
   struct Episode {
     bool controlled = false;
@@ -96,6 +97,7 @@ class DatasetBuilder {
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
+  std::optional<bool> contexts_given_;  // the run's sensor gives contexts (decided by its first observation)
   bool run_ended_ = false;
   int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
   std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept

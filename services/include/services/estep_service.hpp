@@ -91,7 +91,7 @@ class BusBlockExecutor final : public BlockExecutor {
   BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, std::vector<ObservedTrajectory> dataset,
                    Counters& counters, BusExecutorOptions options = {});
   std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
-                                   std::uint64_t seed) const override;
+                                   std::uint64_t seed, const RowMatrix* eta = nullptr) const override;
 
   // Publishes the MDP and the data set (all trajectories) now.
   void publish_dataset() const;
@@ -128,6 +128,7 @@ class BusBlockExecutor final : public BlockExecutor {
   std::vector<std::string> assignment(const std::vector<int>& todo, std::vector<std::string> workers) const;
   std::vector<int> spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
   void check_spot(int block, const EStepStatistics& here) const;
+  void distrust(const std::string& worker, const std::string& why) const;
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
@@ -144,7 +145,7 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable std::chrono::steady_clock::time_point last_dataset_sent_{};
   // The pass in flight.
   mutable std::int64_t request_id_ = 0;
-  mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0;
+  mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0, contexts_ = 0;
   mutable int watch_ = -1, watch_steps_ = 0;  // the pass's watched trajectory and its length
   mutable std::vector<std::optional<EStepStatistics>> received_;
   mutable std::set<std::string> answered_;  // workers that answered this request

@@ -8,6 +8,8 @@
 #include <memory>
 #include <optional>
 
+#include <nlohmann/json.hpp>
+
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "services/dataset.hpp"
@@ -17,12 +19,13 @@ namespace hbirl::services {
 
 // How the optimiser learns: as `hbirl learn` does with the same problem (HiddenDataEM's
 // and the E-step's defaults; the domain's stated observation model when it has one), so
-// a run learned live and the same data learned offline give the same theta. The bus
-// carries the stated eta only (remote workers cannot compute with learned eta), so eta
-// is never learned here.
+// a run learned live and the same data learned offline give the same theta. Eta is
+// learned per context (the sensor's, else each distinct eta) as `hbirl learn` learns it;
+// the workers get each pass's learned eta with the request (estep_service.hpp).
 struct LearningOptions {
   std::optional<AlphaUpdate> update;  // overrides the domain's (default: the posterior update)
   std::optional<double> c;            // the paper's step size, overriding the domain's
+  std::optional<bool> learn_eta;      // overrides the domain's (default: learned with the posterior update)
   std::uint64_t seed = 1;
 };
 
@@ -33,12 +36,19 @@ struct Learned {
   int em_iterations = 0;
   int trajectories = 0;
   std::uint64_t digest = 0;          // of the demonstrations learned from
+  std::optional<LearnedEta> eta;     // when eta was learned
 };
 
 // Called after every EM iteration: iteration, log-likelihood, theta, the observation
-// model's refined Dirichlet parameters, and the E-step's result, whose `watched` is the
-// newest demonstration's posterior from the E-step's last pass.
-using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&, const EStepResult&)>;
+// model's refined Dirichlet parameters, the E-step's result, whose `watched` is the
+// newest demonstration's posterior from the E-step's last pass, and learned eta (null
+// when eta is taken as stated).
+using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&, const EStepResult&,
+                                      const LearnedEta*)>;
+
+// Learned eta as hbirl learn and hbirl-optimiser print it: per context, its id, the
+// stated and learned source distributions and how many observations it covers.
+nlohmann::ordered_json learned_eta_json(const LearnedEta& eta);
 
 // The expert's true weights, for the ILE: the ground truth's, else the domain's; none when
 // they do not fit the domain's features.

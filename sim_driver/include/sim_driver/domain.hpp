@@ -29,6 +29,7 @@ namespace hbirl {
 // The names the dashboard, reports and results label things with.
 struct DomainNames {
   std::vector<std::string> states, actions, features, symbols, sources;
+  std::vector<std::string> contexts;  // of learned eta, when the domain's sensor gives them (its labeller's rules)
 };
 
 // How a simulator runs; each domain reads the options that concern it.

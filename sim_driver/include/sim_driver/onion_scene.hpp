@@ -120,6 +120,9 @@ struct DemonstrationOptions {
   double blemished = 0.5;
   bool uniform_eta = false;    // the labeller's Uniform-eta variant (labeller_options)
   double start_time = 0.0;     // sim time of the first sort
+  // Give each observation the labeller's rule as its context, as the labeller service
+  // does (perception/labeller.hpp); off, each distinct eta is a context (the experiments).
+  bool rule_contexts = false;
 };
 
 // The sorts a demonstration renders: the expert's steps and each onion's quality and
