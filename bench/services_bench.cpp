@@ -35,7 +35,7 @@ const Data& data() {
     out.prior.num_confounders = 3;
     out.prior.subject_alpha = Eigen::MatrixXd::Ones(out.task.mdp.num_pairs(), 4);
     out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
-    out.prior.learn_eta = false;  // as the service set learns: the bus carries the stated eta
+    out.prior.learn_eta = false;  // eta as stated: the pass's cost without the contexts' counts
     return out;
   }();
   return d;

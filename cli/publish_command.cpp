@@ -80,7 +80,7 @@ Command add_publish(CLI::App& app) {
       "Stream a problem file's demonstration onto the bus exactly as a sensor would (README.md \"Your own task\"):\n"
       "EPISODE markers, one OBSERVATIONS message per step, and GROUND_TRUTH for the trajectories marked\n"
       "\"controlled\". A live optimiser started with --domain on the same file learns what `hbirl learn\n"
-      "--problem FILE --eta stated` learns, bit for bit. Waits for the optimiser's heartbeat first, and\n"
+      "--problem FILE` learns (with the same --eta), bit for bit. Waits for the optimiser's heartbeat first, and\n"
       "afterwards sends steps lost on the way again until the optimiser's reward.");
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
   cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");

@@ -135,7 +135,7 @@ void eta_figure(const json& s, const std::string& stem, Report& r) {
   }
   data << "EOD\nset title " << gnuplot_quoted("Learned η per context, EM iteration " + std::to_string(e["iteration"].get<int>()))
        << "\nset style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.85 border -1\n"
-       << "set yrange [0:1.05]\nset grid ytics\nset key top right box opaque\nset xtics rotate by -40 font ',8'\n"
+       << "set yrange [0:1.2]\nset ytics 0, 0.2, 1\nset grid ytics\nset key top center horizontal box opaque\nset xtics rotate by -40 font ',8'\n"
        << "set ylabel 'η(subject)'\nset bmargin 9\nset rmargin 10\n";
   const std::string plot = "plot $eta using 2:xtic(1) lc rgb '#9e9e9e' title 'stated', '' using 3 lc rgb '#1565c0' title 'learned'\n";
   const std::string why = run_gnuplot(stem, data.str(), plot, 1000, 500);

@@ -133,6 +133,9 @@ void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory
     RowMatrix eta(t.eta.rows(), sources + 1);
     eta.leftCols(sources) = (1.0 - epsilon) * t.eta;
     eta.col(sources).setConstant(epsilon);
+    // Rows that rounding took past normalise_eta's tolerance are brought back, so that a
+    // reader that normalises (a sampler worker receiving the data set) keeps their bits.
+    for (Eigen::Index n = 0; n < eta.rows(); ++n) normalise_eta(eta.row(n).data(), static_cast<int>(sources + 1));
     t.eta = std::move(eta);
   }
   Eigen::MatrixXd confounders(prior.num_confounders + 1, prior.num_symbols);

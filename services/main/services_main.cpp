@@ -327,6 +327,7 @@ int optimiser(int argc, char** argv) {
                 {"stale", result->estep.stale},               {"duplicates", result->estep.duplicates},
                 {"unassigned_answers", result->estep.unassigned},
                 {"spot_checks", result->estep.spot_checks},   {"workers_caught_lying", result->estep.liars},
+                {"conflicting_answers", result->estep.conflicts},
                 {"workers_with_other_numerics", result->estep.other_numerics},
                 {"round_trip_seconds", result->estep.round_trip_s}};
   j["bad_messages"] = counters.bad_messages;

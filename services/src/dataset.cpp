@@ -128,11 +128,6 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   }
   if (m.episode < 0) throw InputError("observations.episode", "is negative");
   if (m.num_context != 0 && m.num_context != m.n) throw InputError("observations.num_context", "must be 0 or n");
-  const bool with_contexts = m.num_context > 0;
-  if (m.n > 0 && contexts_given_ && *contexts_given_ != with_contexts) {
-    throw InputError("observations.num_context", with_contexts ? "the run's earlier observations gave no contexts"
-                                                               : "the run's earlier observations gave contexts");
-  }
   Frame f;
   for (int i = 0; i < m.num_context; ++i) {
     const int c = m.context[static_cast<size_t>(i)];
@@ -152,7 +147,6 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   }
   num_symbols_ = m.num_symbols;
   num_sources_ = m.num_sources;
-  if (m.n > 0) contexts_given_ = with_contexts;
   Episode& e = episode(m.episode);
   if (e.frames.count({m.step, m.frame})) return;  // a repeat is ignored
   const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
@@ -250,6 +244,25 @@ bool DatasetBuilder::complete() const {
   return missing_frames() == 0 && missing_truth() == 0;
 }
 
+namespace {
+
+// Contexts are all or none (as in a problem file): when some observations of `set` came
+// with contexts and others without, none are kept -- each distinct eta is then a context
+// -- and `note` says so. (A frame cannot decide this for the run: the first one might be
+// a forgery, and a sensor may give contexts in its demonstrations only.)
+void keep_contexts_if_all_given(std::vector<ObservedTrajectory>& set, const std::string& what, std::string& note) {
+  bool any = false, all = true;
+  for (const auto& t : set) {
+    any = any || !t.contexts.empty();
+    all = all && (t.num_observations() == 0 || static_cast<int>(t.contexts.size()) == t.num_observations());
+  }
+  if (!any || all) return;
+  for (auto& t : set) t.contexts.clear();
+  note += (note.empty() ? "" : "; ") + what + ": some observations came with a context and others without: contexts ignored";
+}
+
+}  // namespace
+
 Dataset DatasetBuilder::build() const {
   Dataset d;
   d.domain = domain_;
@@ -292,6 +305,8 @@ Dataset DatasetBuilder::build() const {
       if (truth_complete) d.truth.push_back(std::move(truth));
     }
   }
+  keep_contexts_if_all_given(d.observed, "demonstrations", d.contexts_note);
+  keep_contexts_if_all_given(d.controlled_observed, "controlled run", d.contexts_note);
   if (d.truth.size() != d.observed.size()) d.truth.clear();  // ground truth only when complete
   return d;
 }

@@ -163,7 +163,9 @@ bool same_statistics(const EStepStatistics& a, const EStepStatistics& b, double 
          close(a.alpha_dot.confounders, b.alpha_dot.confounders) && close(a.source_counts, b.source_counts) &&
          (a.log_likelihood == b.log_likelihood ||
           std::abs(a.log_likelihood - b.log_likelihood) <= tolerance * (1.0 + std::abs(b.log_likelihood))) &&
-         a.impossible == b.impossible;
+         a.impossible == b.impossible && close(a.watched, b.watched) &&
+         (a.watched_log_likelihood == b.watched_log_likelihood ||
+          std::abs(a.watched_log_likelihood - b.watched_log_likelihood) <= tolerance * (1.0 + std::abs(b.watched_log_likelihood)));
 }
 }  // namespace
 
@@ -221,8 +223,8 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     ++stats_.unassigned;
     throw InputError("estep_result.worker", "'" + m.worker + "' was not given block " + std::to_string(m.block));
   }
-  if (workers_[m.worker].distrusted) {
-    throw InputError("estep_result.worker", "'" + m.worker + "' answered wrong before: its answers are not used");
+  if (workers_[m.worker].distrusted || doubted_.count(m.worker)) {
+    throw InputError("estep_result.worker", "'" + m.worker + "' answered wrong: its answers are not used");
   }
   EStepStatistics s = EStepStatistics::zero(pairs_, confounders_, symbols_, contexts_);
   s.counts = eigen_vector(m.counts);
@@ -247,20 +249,31 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
   if (m.num_contexts != contexts_ || (contexts_ > 0 && m.num_sources != 1 + confounders_)) {
     throw InputError("estep_result.num_contexts", "is not the request's number of contexts and sources");
   }
-  if (contexts_ > 0) {
-    s.source_counts = eigen_rows<RowMatrix>(m.source_counts, 1 + confounders_);
-    if (!s.source_counts.allFinite() || (s.source_counts.array() < 0).any()) {
+  if (m.num_counted < 0 || m.num_counted > contexts_) throw InputError("estep_result.num_counted", "out of range");
+  for (int k = 0; k < m.num_counted; ++k) {
+    const int c = m.counted_context[static_cast<size_t>(k)];
+    if (c < 0 || c >= contexts_ || (k > 0 && c <= m.counted_context[static_cast<size_t>(k) - 1])) {
+      throw InputError("estep_result.counted_context", "must be increasing contexts of the request");
+    }
+    const std::vector<double>& row = m.source_counts[static_cast<size_t>(k)];
+    if (!std::all_of(row.begin(), row.end(), [](double x) { return std::isfinite(x) && x >= 0.0; })) {
       throw InputError("estep_result.source_counts", "must be finite and >= 0");
     }
+    s.source_counts.row(c) = Eigen::Map<const Eigen::RowVectorXd>(row.data(), static_cast<Eigen::Index>(row.size()));
   }
   s.log_likelihood = m.log_likelihood;
   s.impossible = m.impossible;
   if (slot) {
     // A worker computes a block's bits the same way every time: two different answers
     // under one name mean one is forged (without a run key anyone can use any name), and
-    // nothing says which. Every block answered under that name is computed here.
+    // nothing says which. The blocks answered under that name are computed here this
+    // pass; the name keeps its work (a forger must not be able to bench a worker).
     if (!same_statistics(*slot, s, 0.0)) {
-      distrust(m.worker, "answered block " + std::to_string(m.block) + " twice, differently (a forger under its name?)");
+      ++stats_.conflicts;
+      doubted_.insert(m.worker);
+      counters_.bad(channels::kEStepResult, "two different answers to block " + std::to_string(m.block) + " under the name '" +
+                                                m.worker + "' (one forged?): its blocks of this pass are computed here");
+      forget_answers_of(m.worker);
       return;
     }
     ++stats_.duplicates;
@@ -318,17 +331,18 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
   return out;
 }
 
-// The blocks spot-checked this pass: the first block of each worker never checked (a
-// worker that always lies is caught before any of its answers is used; it costs one block
-// per worker once), or, once all are, one block at random (a worker that lies now and then
-// is caught in time, never by construction).
+// The blocks spot-checked this pass: one block, at random, of each worker never checked
+// (a worker that always lies is caught before any of its answers is used; it costs one
+// block per worker once), or, once all are, one block at random (a worker that lies now
+// and then is caught in time, never by construction). Unpredictable to the workers.
 std::vector<int> BusBlockExecutor::spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const {
-  std::vector<int> out;
-  std::set<std::string> unchecked;
+  std::map<std::string, std::vector<int>> unchecked;  // worker -> its blocks
   for (int b : todo) {
     const std::string& w = assigned[static_cast<size_t>(b)];
-    if (!w.empty() && !workers_[w].checked && unchecked.insert(w).second) out.push_back(b);
+    if (!w.empty() && !workers_[w].checked) unchecked[w].push_back(b);
   }
+  std::vector<int> out;
+  for (const auto& [w, blocks] : unchecked) out.push_back(blocks[static_cast<size_t>(spot_rng_() % blocks.size())]);
   if (out.empty() && !todo.empty()) out.push_back(todo[static_cast<size_t>(spot_rng_() % todo.size())]);
   return out;
 }
@@ -346,6 +360,7 @@ void BusBlockExecutor::check_spot(int block, const EStepStatistics& here) const 
   }
   distrust(worker, "answered block " + std::to_string(block) + " unlike the optimiser's own computation");
   received_[static_cast<size_t>(block)] = here;
+  ++stats_.local_blocks;
 }
 
 // A worker caught answering wrong: no more work, no more of its answers, and every block
@@ -355,8 +370,17 @@ void BusBlockExecutor::distrust(const std::string& worker, const std::string& wh
   workers_[worker].distrusted = true;
   counters_.bad(channels::kEStepResult,
                 "worker '" + worker + "' " + why + ": it gets no more work, and its blocks of this pass are computed here");
+  forget_answers_of(worker);
+}
+
+// The blocks `worker` answered in this pass are missing again (computed here, or by
+// another worker in a later attempt).
+void BusBlockExecutor::forget_answers_of(const std::string& worker) const {
   for (int b = 0; b < blocks_; ++b) {
-    if (answered_by_[static_cast<size_t>(b)] == worker) received_[static_cast<size_t>(b)].reset();
+    if (answered_by_[static_cast<size_t>(b)] != worker) continue;
+    received_[static_cast<size_t>(b)].reset();
+    answered_by_[static_cast<size_t>(b)].clear();
+    --stats_.remote_blocks;
   }
 }
 
@@ -390,12 +414,28 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   if (eta && (eta->rows() != estep.num_contexts() || eta->cols() != 1 + confounders_)) {
     throw std::logic_error("BusBlockExecutor: learned eta does not have one row per context and a column per source");
   }
+  if (contexts_ > options_.max_contexts) {
+    // A sensor without contexts whose every eta differs has about one context per
+    // observation: each pass would send them all to every worker. Computed here instead.
+    if (!said_too_many_contexts_) {
+      counters_.note("learned eta has " + std::to_string(contexts_) + " contexts (each distinct eta is one), more than the " +
+                     std::to_string(options_.max_contexts) + " a request carries: the E-step is computed here, not by the workers "
+                     "(give the observations contexts, or --eta stated)");
+      said_too_many_contexts_ = true;
+    }
+    std::vector<int> all(static_cast<size_t>(blocks_));
+    for (int b = 0; b < blocks_; ++b) all[static_cast<size_t>(b)] = b;
+    stats_.local_blocks += blocks_;
+    return estep.block_statistics(policy, model, seed, all, options_.local_threads, eta);
+  }
   received_.assign(static_cast<size_t>(blocks_), std::nullopt);
   answered_.clear();
   assigned_.assign(static_cast<size_t>(blocks_), {});
   answered_by_.assign(static_cast<size_t>(blocks_), std::string());
+  doubted_.clear();
   std::vector<int> spots;  // the blocks checked here this pass, and their statistics
   std::vector<EStepStatistics> spot_results;
+  std::vector<std::string> spot_workers;  // whom each spot block was given to
 
   hbirl::estep_request_t request{};
   request.utime = 0;
@@ -434,6 +474,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     if (todo.empty()) break;
     // First attempt: every live worker. Later ones: those that answered this request.
     std::vector<std::string> workers = live_workers();
+    workers.erase(std::remove_if(workers.begin(), workers.end(), [this](const std::string& w) { return doubted_.count(w) > 0; }),
+                  workers.end());
     if (attempt > 0) {
       std::vector<std::string> proven;
       for (const auto& w : workers) {
@@ -450,11 +492,20 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     publish(bus_, channels::kEStepRequest, request, counters_);
     if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
       spots = spot_blocks(todo, request.assigned_worker);
+      for (int b : spots) spot_workers.push_back(request.assigned_worker[static_cast<size_t>(b)]);
       spot_results = estep.block_statistics(policy, model, seed, spots, options_.local_threads, eta);
       stats_.spot_checks += static_cast<std::int64_t>(spots.size());
     }
     const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
-    while (!missing().empty() && Clock::now() < deadline) {
+    // Waiting is pointless once every missing block is a refused worker's.
+    const auto awaited = [&] {
+      for (int b : missing()) {
+        const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
+        if (!w.empty() && !doubted_.count(w) && !workers_[w].distrusted) return true;
+      }
+      return false;
+    };
+    while (!missing().empty() && awaited() && Clock::now() < deadline) {
       if (options_.stop && options_.stop()) throw Stopped();
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
       if (bus_.handle(static_cast<int>(std::clamp<long long>(left, 0, 50))) < 0) break;
@@ -473,6 +524,10 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       slot = std::move(spot_results[k]);  // not answered: computed here already
       ++stats_.local_blocks;
     }
+    // A worker never checked that left its checked block to someone else: none of its
+    // answers of this pass was checked, so none is used.
+    const auto meant = workers_.find(spot_workers[k]);
+    if (meant != workers_.end() && !meant->second.checked && !meant->second.distrusted) forget_answers_of(spot_workers[k]);
   }
   const std::vector<int> rest = missing();
   if (!rest.empty()) {

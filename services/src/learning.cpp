@@ -49,15 +49,22 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data, co
   return prior;
 }
 
+LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options) {
+  if (data.observed.empty()) throw InputError("demonstrations", "none received");
+  LearningInput in{observation_prior(domain, data, options), data.observed};
+  add_unlisted_source(in.prior, in.observed);
+  return in;
+}
+
 Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
                            std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
-  if (data.observed.empty()) throw InputError("demonstrations", "none received");
   const Mdp& mdp = domain.mdp();
-  ObservationPrior prior = observation_prior(domain, data, options);
+  LearningInput in = learning_input(domain, data, options);
+  const ObservationPrior& prior = in.prior;
   ObservationEStepOptions estep_options;
   estep_options.executor = std::move(executor);
   if (progress) estep_options.watch = static_cast<int>(data.observed.size()) - 1;  // the newest demonstration, for display
-  const ObservationEStep estep(mdp, data.observed, prior, estep_options);
+  const ObservationEStep estep(mdp, std::move(in.observed), prior, estep_options);
   LearnOptions learn;
   learn.seed = options.seed;
   learn.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)

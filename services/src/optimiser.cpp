@@ -34,7 +34,9 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   o.num_confounders = model.num_confounders();
   o.subject = lcm_rows(model.subject);
   o.confounders = lcm_rows(model.confounders);
-  if (eta) {
+  // Learned eta for display; a sensor without contexts whose every eta differs has as many
+  // contexts as observations, which no page shows: then none.
+  if (eta && eta->learned.rows() <= kMaxContexts) {
     o.num_contexts = static_cast<std::int32_t>(eta->learned.rows());
     o.num_sources = static_cast<std::int32_t>(eta->learned.cols());
     o.stated_eta = lcm_rows(eta->stated);
@@ -128,7 +130,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const Mdp& mdp = domain->mdp();
   BusExecutorOptions executor_options = options.executor;
   if (!executor_options.stop) executor_options.stop = stop;
-  auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), result.data.observed, counters, executor_options);
+  // The workers get the demonstrations as learned from (with an unlisted catch-all's share of eta, if any).
+  auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), learning_input(*domain, result.data, options.learning).observed,
+                                                     counters, executor_options);
+  if (!result.data.contexts_note.empty()) say(result.data.contexts_note);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
       std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");
   if (options.workers > 0) {

@@ -135,7 +135,8 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the data set's eta");
   }
   if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
-  if (m.num_contexts < 0 || m.num_contexts > kMaxContexts) throw InputError("estep_request.num_contexts", "out of range");
+  // (Each distinct eta may be a context: their number is checked against the data set's below.)
+  if (m.num_contexts < 0) throw InputError("estep_request.num_contexts", "is negative");
   const bool learned_eta = m.num_contexts > 0;
   if (learned_eta && (E < 1 || m.num_sources != 1 + E)) {
     throw InputError("estep_request.num_sources", "learned eta needs 1 + num_confounders sources and a confounder");
@@ -203,7 +204,12 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
     r.watched_log_likelihood = s.watched_log_likelihood;
     r.num_contexts = learned_eta ? m.num_contexts : 0;
     r.num_sources = learned_eta ? m.num_sources : 0;
-    if (learned_eta) r.source_counts = lcm_rows(s.source_counts);
+    for (Eigen::Index c = 0; c < s.source_counts.rows(); ++c) {  // only the contexts the block has
+      if ((s.source_counts.row(c).array() == 0.0).all()) continue;
+      r.counted_context.push_back(static_cast<std::int32_t>(c));
+      r.source_counts.emplace_back(s.source_counts.row(c).begin(), s.source_counts.row(c).end());
+    }
+    r.num_counted = static_cast<std::int32_t>(r.counted_context.size());
     publish(bus_, channels::kEStepResult, r, counters_);
     ++blocks_computed_;
   }

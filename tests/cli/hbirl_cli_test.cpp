@@ -296,7 +296,7 @@ TEST_F(Cli, UnknownKeysOnlyWarn) {
   const fs::path p = write("warn.json", d.dump());
   const Outcome r = run("learn --from truth --problem '" + p.string() + "'");
   EXPECT_EQ(r.status, 0) << r.err;
-  EXPECT_NO_THROW(json::parse(r.out));
+  EXPECT_TRUE(json::accept(r.out)) << r.out;
   EXPECT_NE(r.err.find("hbirl: warning: " + p.string() + ": mdp.discout: unknown key, ignored (did you mean \"discount\"?)"),
             std::string::npos)
       << r.err;

@@ -52,7 +52,7 @@ const Task& task() {
     out.prior.subject_alpha = controlled_run_alpha(out.task.mdp, controlled, subject, 6, 1.0, rng);
     out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
     out.prior.c = 0.5;
-    out.prior.learn_eta = false;  // as the service set learns: the bus carries the stated eta
+    out.prior.learn_eta = false;  // eta as stated here; with_learned_eta() below learns it
     return out;
   }();
   return t;
@@ -270,6 +270,70 @@ TEST(EStepService, LearnedEtaOverTheBusIsBitIdentical) {
     EXPECT_EQ(stats.local_blocks, 0);
     EXPECT_EQ(stats.liars, 0);
   }
+}
+
+// Learned eta with more contexts than a request carries (BusExecutorOptions::max_contexts;
+// a sensor whose every eta differs has one per observation) is computed by the optimiser
+// itself: the same bits, no work for the workers.
+TEST(EStepService, TooManyContextsForTheBusAreComputedHere) {
+  const Task t = with_learned_eta(true);  // five contexts
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, "sampler-a");
+  BusExecutorOptions options;
+  options.max_contexts = 4;
+  Optimiser opt(hub, options, t);
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  expect_identical(learn(t, opt.executor), learn(t, nullptr));
+  const auto stats = opt.executor->stats();
+  EXPECT_EQ(stats.remote_blocks, 0);
+  EXPECT_GT(stats.local_blocks, 0);
+  EXPECT_EQ(worker.worker().blocks_computed(), 0);
+}
+
+// Two different answers to one block under one worker's name -- here the worker's own
+// answer to block 0 followed at once by a forged copy, added by a relay between the
+// worker and the optimiser, so the order is certain -- make the optimiser compute every
+// block of that pass answered under the name itself: theta bit-identical, the conflict
+// counted each pass, and the worker keeps its work (a forger must not be able to bench it).
+TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
+  auto hub = std::make_shared<MemoryHub>();     // the optimiser's side
+  auto behind = std::make_shared<MemoryHub>();  // the worker's side of the relay
+  WorkerThread worker(behind, "sampler-a");
+  MemoryBus front(hub), back(behind);
+  std::atomic<int> forged{0};
+  const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
+  for (const std::string& channel : {channels::kEStepRequest, channels::kMdp, channels::kTrajectory}) {
+    front.subscribe(channel, forward_to(back), 100000);
+  }
+  back.subscribe(channels::kStatus, forward_to(front), 1000);
+  back.subscribe(channels::kEStepResult, [&](const Message& m) {
+    front.publish(m.channel, m.data, m.size);
+    hbirl::estep_result_t r;
+    if (r.decode(m.data, 0, m.size) < 0 || r.block != 0 || r.counts.empty()) return;
+    r.counts[0] += 1.0;
+    std::vector<std::uint8_t> bytes(static_cast<size_t>(r.getEncodedSize()));
+    r.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    front.publish(m.channel, bytes.data(), static_cast<int>(bytes.size()));
+    ++forged;
+  }, 100000);
+  std::atomic<bool> stop{false};
+  std::thread relay([&] {
+    while (!stop) {
+      front.handle(1);
+      back.handle(1);
+    }
+  });
+  Optimiser opt(hub);
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  expect_identical(learn(opt.executor), local());
+  stop = true;
+  relay.join();
+  const auto stats = opt.executor->stats();
+  EXPECT_GT(forged, 0);
+  EXPECT_EQ(stats.conflicts, stats.requests);  // block 0 of every pass
+  EXPECT_EQ(stats.remote_blocks, 0);            // no answer under the name was used
+  EXPECT_EQ(stats.liars, 0);                    // and it was not benched
+  EXPECT_GT(worker.worker().blocks_computed(), 3);
 }
 
 // A worker dies mid-run: its blocks time out, go to the worker that answers, and the

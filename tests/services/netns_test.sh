@@ -164,10 +164,17 @@ PY
     "$build/hbirl-sampler" --url "$url" >"$tmp/sampler.log" 2>&1 &
     "$build/hbirl" generate gridworld --confounders 3 --per-step 6 --trajectories 12 --controlled 8 --labeller-mass 0.8 \
       --labeller-accuracy 0.4 --out "$tmp/labelled.json"
-    for case in "corridor.json stated" "corridor.json learned" "labelled.json learned"; do
+    # ... and with the catch-all source for unlisted confounders (the workers get its share of eta).
+    python3 - "$tmp/labelled.json" "$tmp/unlisted.json" <<'PY'
+import json, sys
+p = json.load(open(sys.argv[1]))
+p["observation_model"]["unlisted_source"] = {"eta": 0.1}
+json.dump(p, open(sys.argv[2], "w"))
+PY
+    for case in "corridor.json stated" "corridor.json learned" "labelled.json learned" "unlisted.json learned"; do
       read -r file eta <<<"$case"
       problem="$repo/examples/$file"
-      [ "$file" = labelled.json ] && problem="$tmp/$file"
+      [ "$file" != corridor.json ] && problem="$tmp/$file"
       "$build/hbirl-optimiser" --url "$url" --workers 1 --domain "$problem" --eta "$eta" --out "$tmp/live.json" \
         >/dev/null 2>"$tmp/optimiser.err" &
       optimiser=$!

@@ -392,49 +392,61 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
 // Made-up frames under ever new (episode, step, frame) keys cannot grow the optimiser's
 // data set past its limit (--max-dataset-mb): the frames beyond it are refused, naming
 // the option, and not kept; repeats of kept frames still pass as repeats.
-// A sensor's contexts (the labeller's rules) are kept per observation; a frame that gives
-// none in a run whose frames gave them (or the other way round), a context count that is
-// not 0 or n and a context out of range are refused naming the field, and what was
-// accepted before stays.
+// A sensor's contexts (the labeller's rules) are kept per observation; a context count
+// that is not 0 or n and a context out of range are refused naming the field. Contexts
+// are all or none over the demonstrations: when some frames gave them and others not
+// (a forged frame, a sensor that gives them in part of the run) none are kept, and the
+// data set says so -- a frame cannot decide it for the whole run.
 TEST(DatasetBuilder, ContextsAreAllOrNoneAndInRange) {
-  DatasetBuilder b;
-  hbirl::observations_t o{};
-  o.num_symbols = 4;
-  o.num_sources = 2;
-  o.n = 2;
-  o.symbol = {1, 2};
-  o.eta = {{0.5, 0.5}, {0.9, 0.1}};
-  o.num_context = 2;
-  o.context = {3, 65535};
-  b.on_observations(o);
-  const auto refused = [&b](const hbirl::observations_t& m, const std::string& field) {
-    hbirl::testing::expect_refused([&] { b.on_observations(m); }, field);
+  const auto run = [](bool second_frame_with_contexts) {
+    DatasetBuilder b;
+    hbirl::episode_marker_t e{};
+    e.domain = "test";
+    e.episode = 0;
+    e.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+    e.frames_per_step = 1;
+    b.on_marker(e);
+    hbirl::observations_t o{};
+    o.num_symbols = 4;
+    o.num_sources = 2;
+    o.n = 2;
+    o.symbol = {1, 2};
+    o.eta = {{0.5, 0.5}, {0.9, 0.1}};
+    o.num_context = 2;
+    o.context = {3, 65535};
+    b.on_observations(o);
+    const auto refused = [&b](const hbirl::observations_t& m, const std::string& field) {
+      hbirl::testing::expect_refused([&] { b.on_observations(m); }, field);
+    };
+    o.step = 1;
+    hbirl::observations_t bad = o;
+    bad.num_context = 1;
+    bad.context = {3};
+    refused(bad, "observations.num_context");
+    bad = o;
+    bad.context[0] = 65536;
+    refused(bad, "observations.context[0]");
+    bad = o;
+    bad.context[1] = -1;
+    refused(bad, "observations.context[1]");
+    if (!second_frame_with_contexts) {
+      o.num_context = 0;
+      o.context.clear();
+    }
+    b.on_observations(o);
+    e.kind = hbirl::episode_marker_t::END_EPISODE;
+    e.num_steps = 2;
+    b.on_marker(e);
+    return b.build();
   };
-  o.step = 1;
-  hbirl::observations_t bad = o;
-  bad.num_context = 0;
-  bad.context.clear();
-  refused(bad, "observations.num_context");
-  bad = o;
-  bad.num_context = 1;
-  bad.context = {3};
-  refused(bad, "observations.num_context");
-  bad = o;
-  bad.context[0] = 65536;
-  refused(bad, "observations.context[0]");
-  bad = o;
-  bad.context[1] = -1;
-  refused(bad, "observations.context[1]");
-  hbirl::observations_t occluded = o;  // no observations: nothing to give a context to
-  occluded.n = 0;
-  occluded.symbol.clear();
-  occluded.eta.clear();
-  occluded.num_context = 0;
-  occluded.context.clear();
-  occluded.step = 2;
-  b.on_observations(occluded);
-  b.on_observations(o);
-  EXPECT_EQ(b.frames(), 3);
+  const Dataset all = run(true);
+  ASSERT_EQ(all.observed.size(), 1u);
+  EXPECT_EQ(all.observed[0].contexts, (std::vector<int>{3, 65535, 3, 65535}));
+  EXPECT_TRUE(all.contexts_note.empty());
+  const Dataset some = run(false);
+  ASSERT_EQ(some.observed.size(), 1u);
+  EXPECT_TRUE(some.observed[0].contexts.empty());
+  EXPECT_NE(some.contexts_note.find("contexts ignored"), std::string::npos) << some.contexts_note;
 }
 
 TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {

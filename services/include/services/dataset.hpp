@@ -33,6 +33,7 @@ struct Dataset {
   std::optional<Eigen::VectorXd> true_weights;  // the expert's, when the ground truth gave them
   std::int64_t last_utime = 0;                  // sim time of the newest message used
   int skipped_controlled = 0;                   // controlled episodes left out: ground truth incomplete
+  std::string contexts_note;                    // non-empty: contexts were given for some observations only, and ignored
 };
 
 class DatasetBuilder {
@@ -97,7 +98,6 @@ class DatasetBuilder {
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
-  std::optional<bool> contexts_given_;  // the run's sensor gives contexts (decided by its first observation)
   bool run_ended_ = false;
   int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
   std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept

@@ -79,6 +79,10 @@ struct BusExecutorOptions {
   // here instead. So a worker that always lies is caught before any of its answers is
   // used (docs/RELIABILITY.md).
   bool spot_check = true;
+  // Learned eta with more contexts than this (a sensor without contexts whose every eta
+  // differs has one per observation) is not sent each pass: the optimiser computes the
+  // E-step itself, and says so once.
+  int max_contexts = kMaxContexts;
 };
 
 // The optimiser's side: a BlockExecutor that farms blocks out to the workers it hears
@@ -105,6 +109,7 @@ class BusBlockExecutor final : public BlockExecutor {
     std::int64_t stale = 0, duplicates = 0, foreign = 0;  // ignored answers
     std::int64_t unassigned = 0;                          // answers from a worker not given that block (refused)
     std::int64_t spot_checks = 0, liars = 0;              // blocks checked here; workers caught answering wrong
+    std::int64_t conflicts = 0;                           // two different answers to a block under one name (a pass's blocks of that name computed here)
     std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
     double round_trip_s = 0.0;                            // summed over requests
   };
@@ -118,7 +123,7 @@ class BusBlockExecutor final : public BlockExecutor {
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
-    bool distrusted = false;  // answered a spot-checked block wrong: never gets work again
+    bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
     bool checked = false;      // one of its answers matched the optimiser's own computation
   };
@@ -129,6 +134,7 @@ class BusBlockExecutor final : public BlockExecutor {
   std::vector<int> spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
   void check_spot(int block, const EStepStatistics& here) const;
   void distrust(const std::string& worker, const std::string& why) const;
+  void forget_answers_of(const std::string& worker) const;
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
@@ -151,6 +157,8 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable std::set<std::string> answered_;  // workers that answered this request
   mutable std::vector<std::set<std::string>> assigned_;  // per block: the workers it was given to (any attempt)
   mutable std::vector<std::string> answered_by_;         // per block: who answered it
+  mutable bool said_too_many_contexts_ = false;
+  mutable std::set<std::string> doubted_;  // names that gave two different answers to a block in this pass
   // Which block of checked workers is spot-checked: unpredictable to them (the request's
   // seed is not), and it never changes a result (a checked block's bits are the same either way).
   mutable std::mt19937_64 spot_rng_{std::random_device{}()};

@@ -58,6 +58,16 @@ std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Datas
 // do not fit the domain (symbols, sources) or there is no subject prior.
 ObservationPrior observation_prior(const Domain& domain, const Dataset& data, const LearningOptions& options);
 
+// What is learned from: the observation prior above and the demonstrations, with the
+// catch-all source for unlisted confounders added to both when the domain's
+// observation_model asks for one (add_unlisted_source). The optimiser sends the workers
+// these demonstrations, so that both sides hold the data the E-step computes on.
+struct LearningInput {
+  ObservationPrior prior;
+  std::vector<ObservedTrajectory> observed;
+};
+LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options);
+
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
 // subject prior, symbols outside the domain).
 Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
