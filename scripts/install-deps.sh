@@ -13,6 +13,7 @@ packages=(
   chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev ninja-build
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 
 missing=()

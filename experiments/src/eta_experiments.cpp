@@ -80,7 +80,7 @@ void record(const Fit& f, Run& r) {
   r.ile_relative = f.ile_relative;
   r.goal_recovered = f.goal_recovered;
   r.label_accuracy = f.label_accuracy;
-  r.em_iterations = f.evaluations;
+  r.em_evaluations = f.evaluations;
 }
 
 std::uint64_t run_seed(std::uint64_t seed, int run, int confounders, int cell) {
@@ -170,12 +170,12 @@ std::vector<EtaRun> run_eta_sensitivity(const EtaSensitivityOptions& o) {
 std::string eta_runs_csv(const std::vector<EtaRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,confounders,mass,accuracy,method,ile,ile_relative,goal_recovered,subject_eta,label_accuracy,em_iterations,seconds,error\n";
+  out << "run,confounders,mass,accuracy,method,ile,ile_relative,goal_recovered,subject_eta,label_accuracy,em_evaluations,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << r.confounders << "," << r.mass << "," << r.accuracy << "," << r.method << "," << r.ile << ","
         << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << ",";
     if (r.subject_eta >= 0.0) out << r.subject_eta;
-    out << "," << r.label_accuracy << "," << r.em_iterations << "," << r.seconds << "," << csv_text(r.error) << "\n";
+    out << "," << r.label_accuracy << "," << r.em_evaluations << "," << r.seconds << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }
@@ -213,10 +213,10 @@ std::vector<UnlistedRun> run_unlisted(const UnlistedOptions& o) {
 std::string unlisted_runs_csv(const std::vector<UnlistedRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,confounders,told,method,ile,ile_relative,goal_recovered,label_accuracy,em_iterations,seconds,error\n";
+  out << "run,confounders,told,method,ile,ile_relative,goal_recovered,label_accuracy,em_evaluations,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << r.confounders << "," << r.told << "," << r.method << "," << r.ile << "," << r.ile_relative << ","
-        << (r.goal_recovered ? 1 : 0) << "," << r.label_accuracy << "," << r.em_iterations << "," << r.seconds << ","
+        << (r.goal_recovered ? 1 : 0) << "," << r.label_accuracy << "," << r.em_evaluations << "," << r.seconds << ","
         << csv_text(r.error) << "\n";
   }
   return out.str();

@@ -90,7 +90,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   Eigen::Index best_feature = 0;
   learned.theta.maxCoeff(&best_feature);
   result.goal_recovered = best_feature == s.task.goal;
-  result.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
+  result.em_evaluations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
   result.log_likelihood = learned.log_likelihood;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -174,10 +174,10 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,strength,seconds,error\n";
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,strength,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
-        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_iterations << "," << r.log_likelihood << ",";
+        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_evaluations << "," << r.log_likelihood << ",";
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
     out << ",";
     if (r.strength >= 0.0) out << r.strength;

@@ -207,7 +207,7 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
           r.ile = ile.ile;
           r.ile_relative = ile.relative();
           r.policy_agreement = policy_agreement(mdp, expert_weights(), learned.theta);
-          r.em_iterations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
+          r.em_evaluations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
           r.log_likelihood = learned.log_likelihood;
         } catch (const std::exception& e) {
           r.error = e.what();  // one failed run must not lose the others
@@ -224,11 +224,11 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
 std::string onion_runs_csv(const std::vector<OnionRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,log_likelihood,seconds,error\n";
+  out << "run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,log_likelihood,seconds,error\n";
   for (const auto& r : runs) {
     const std::string error = csv_text(r.error);
     out << r.run << "," << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << ","
-        << r.policy_agreement << "," << r.em_iterations << "," << r.log_likelihood << "," << r.seconds << "," << error << "\n";
+        << r.policy_agreement << "," << r.em_evaluations << "," << r.log_likelihood << "," << r.seconds << "," << error << "\n";
   }
   return out.str();
 }

@@ -65,11 +65,11 @@ std::vector<OnionRegimeRun> run_onion_regimes(const OnionRegimesOptions& o) {
 std::string onion_regimes_csv(const std::vector<OnionRegimeRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "foreground_share,mirror,eta_power,run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,seconds,error\n";
+  out << "foreground_share,mirror,eta_power,run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,seconds,error\n";
   for (const auto& [regime, r] : runs) {
     out << regime.foreground_share << "," << (regime.mirror ? 1 : 0) << "," << regime.eta_power << "," << r.run << ","
         << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << "," << r.policy_agreement
-        << "," << r.em_iterations << "," << r.seconds << "," << csv_text(r.error) << "\n";
+        << "," << r.em_evaluations << "," << r.seconds << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }

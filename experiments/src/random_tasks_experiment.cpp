@@ -87,7 +87,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   r.ile_relative = ile.relative();
   r.optimal = r.ile_relative <= kOptimalTolerance;
   r.policy_agreement = policy_agreement(task.mdp, task.true_weights, learned.theta);
-  r.em_iterations = best.em_evaluations;  // the cost
+  r.em_evaluations = best.em_evaluations;  // the cost
   r.converged = best.converged;
   r.log_likelihood = learned.log_likelihood;
   if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) r.strength = best.alpha->strength;
@@ -274,13 +274,13 @@ std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
   out.precision(10);
   out << "seed,draw,method,layout,states,actions,features,goals,traps,symbols,confounders,per_step,demonstrations,"
          "controlled,decisiveness,informativeness,subject_share,occlusion,discount,eta,ile,ile_relative,optimal,policy_agreement,"
-         "em_iterations,converged,log_likelihood,strength,theta,seconds,error\n";
+         "em_evaluations,converged,log_likelihood,strength,theta,seconds,error\n";
   for (const auto& r : runs) {
     out << r.seed << "," << r.draw << "," << r.method << "," << r.layout << "," << r.states << "," << r.actions << ","
         << r.features << "," << r.goals << "," << r.traps << "," << r.symbols << "," << r.confounders << "," << r.per_step
         << "," << r.demonstrations << "," << r.controlled << "," << r.decisiveness << "," << r.informativeness << "," << r.subject_share << ","
         << r.occlusion << "," << r.discount << "," << r.eta << "," << r.ile << "," << r.ile_relative << ","
-        << (r.optimal ? 1 : 0) << "," << r.policy_agreement << "," << r.em_iterations << "," << (r.converged ? 1 : 0)
+        << (r.optimal ? 1 : 0) << "," << r.policy_agreement << "," << r.em_evaluations << "," << (r.converged ? 1 : 0)
         << "," << r.log_likelihood << ",";
     if (r.strength >= 0.0) out << r.strength;
     out << ",";
@@ -329,7 +329,7 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
       r.ile_relative = std::stod(f[i++]);
       r.optimal = f[i++] == "1";
       r.policy_agreement = std::stod(f[i++]);
-      r.em_iterations = std::stoi(f[i++]);
+      r.em_evaluations = std::stoi(f[i++]);
       r.converged = f[i++] == "1";
       r.log_likelihood = std::stod(f[i++]);
       const std::string strength = f[i++];
@@ -441,14 +441,14 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
           << worse << ".\n";
     }
   }
-  out << "\n## EM\n\n| method | runs | converged | median EM iterations | median seconds |\n|---|---|---|---|---|\n";
+  out << "\n## EM\n\n| method | runs | converged | median EM evaluations | median seconds |\n|---|---|---|---|---|\n";
   for (const auto& m : methods) {
     std::vector<double> iterations;
     std::vector<double> seconds;
     int converged = 0;
     for (const auto& r : runs) {
       if (r.method != m || !r.error.empty()) continue;
-      iterations.push_back(r.em_iterations);
+      iterations.push_back(r.em_evaluations);
       seconds.push_back(r.seconds);
       converged += r.converged ? 1 : 0;
     }

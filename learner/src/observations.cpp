@@ -131,6 +131,10 @@ void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory
                                             std::to_string(sources));
     }
     RowMatrix eta(t.eta.rows(), sources + 1);
+    if (t.num_observations() == 0) {  // its eta may have any number of columns (none to scale)
+      t.eta = std::move(eta);
+      continue;
+    }
     eta.leftCols(sources) = (1.0 - epsilon) * t.eta;
     eta.col(sources).setConstant(epsilon);
     // Rows that rounding took past normalise_eta's tolerance are brought back, so that a

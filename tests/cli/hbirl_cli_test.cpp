@@ -330,7 +330,7 @@ TEST_F(Cli, OnionExperimentAtSmallScale) {
             std::string::npos) << r.out;
   const std::string csv = slurp(out / "onion_runs.csv");
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "run,method,trajectories,ile,ile_relative,policy_agreement,em_iterations,log_likelihood,seconds,error");
+            "run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,log_likelihood,seconds,error");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
   EXPECT_TRUE(fs::exists(out / "onion_summary.md"));
   const Outcome bad = run("experiment onion --trajectories 0,2 --out '" + out.string() + "'");
@@ -395,7 +395,7 @@ TEST_F(Cli, GridworldExperimentAtSmallScale) {
             std::string::npos) << r.out;
   const std::string csv = slurp(out / "gridworld_runs.csv");
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_iterations,log_likelihood,source_accuracy,strength,seconds,error");
+            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,strength,seconds,error");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.csv"));
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.md"));

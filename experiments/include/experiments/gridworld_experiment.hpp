@@ -62,7 +62,7 @@ struct GridworldRun {
   double ile = 0.0;
   double ile_relative = 0.0;
   bool goal_recovered = false;
-  int em_iterations = 0;
+  int em_evaluations = 0;
   double log_likelihood = 0.0;    // of the data at the learned weights (observations or true steps)
   double source_accuracy = -1.0;  // share of observations whose most probable source is the true one; -1 if n/a
   double strength = -1.0;         // the posterior update's chosen subject prior strength; -1 if n/a

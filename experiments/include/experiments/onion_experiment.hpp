@@ -60,7 +60,7 @@ struct OnionRun {
   double ile = 0.0;
   double ile_relative = 0.0;
   double policy_agreement = 0.0;
-  int em_iterations = 0;
+  int em_evaluations = 0;
   double log_likelihood = 0.0;
   double seconds = 0.0;
   std::string error;

@@ -57,7 +57,7 @@ struct RandomTaskRun {
   double ile_relative = 0.0;
   bool optimal = false;
   double policy_agreement = 0.0;
-  int em_iterations = 0;
+  int em_evaluations = 0;
   bool converged = false;
   double log_likelihood = 0.0;
   double strength = -1.0;  // the posterior update's chosen prior strength; -1 if n/a
