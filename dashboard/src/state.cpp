@@ -59,7 +59,7 @@ nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 // has a few dozen rules; each distinct eta of a sensor without contexts is one), each
 // with its stated and learned eta.
 constexpr size_t kShownContexts = 24;
-nlohmann::json learned_eta_json(const hbirl::observation_model_t& m) {
+nlohmann::json eta_panel_json(const hbirl::observation_model_t& m) {
   std::vector<int> order;
   for (int c = 0; c < m.num_contexts; ++c) {
     if (m.context_observations[static_cast<size_t>(c)] > 0.0) order.push_back(c);
@@ -469,7 +469,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
                                        {"subject", model_->subject},
                                        {"confounders", model_->confounders}}
                       : nlohmann::json(nullptr);
-  j["eta"] = model_ && model_->num_contexts > 0 ? learned_eta_json(*model_) : nlohmann::json(nullptr);
+  j["eta"] = model_ && model_->num_contexts > 0 ? eta_panel_json(*model_) : nlohmann::json(nullptr);
 
   // Service health.
   nlohmann::json services = nlohmann::json::array();
