@@ -4,8 +4,7 @@
 #include "commands.hpp"
 #include "learner/input_error.hpp"
 #include "problem/json_format.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld_problem.hpp"
 #include "sim_driver/random_task.hpp"
 
 namespace hbirl::cli {
@@ -13,99 +12,19 @@ namespace hbirl::cli {
 namespace {
 
 struct GridworldArgs {
-  int size = 5;
-  int trajectories = 20;
-  int length = 10;
-  int goal = -1;
-  double goal_weight = 1.0;
-  double intended = 0.9;
-  double discount = 0.95;
-  std::uint64_t seed = 1;
-  // Watched through the paper's sensor (--confounders): observations labelled by a
-  // labeller of stated mass and true accuracy, and a controlled run for the subject prior.
-  int confounders = -1;  // -1: true steps only
-  int per_step = 40;
-  Labeller labeller;
-  int controlled = 20;
+  GridworldProblemOptions problem;
   std::string out;
 };
 
-// The demonstrations watched by the paper's Gridworld sensor with |E| elements, eta from
-// `labeller` (its pick as each observation's context), the truth kept; a controlled run
-// (the subject alone) as "controlled" trajectories; O learned with learned eta.
-void watch_gridworld(const GridworldArgs& args, const GridworldTask& task, Rng& rng, Problem& problem) {
-  const int sources = 1 + args.confounders;
-  const Eigen::MatrixXd subject_o = gridworld_subject_observation_model(args.size, 1.0);
-  const Eigen::MatrixXd elements = random_confounder_observation_model(args.confounders, rng);
-  GridworldObservationOptions options;
-  options.confounders = args.confounders;
-  options.per_step = args.per_step;
-  GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject_o, elements, options, rng);
-  assign_labeller_eta(observed, sources, args.labeller, rng);
-  const std::vector<Trajectory> controlled =
-      soft_expert_demonstration(task.mdp, task.true_weights, args.controlled, args.length, rng);
-  options.confounders = 0;
-  options.eta = EtaKind::kTrue;
-  GridworldObservations alone = observe_gridworld(task.mdp, controlled, subject_o, Eigen::MatrixXd(0, 4), options, rng);
-  for (size_t i = 0; i < controlled.size(); ++i) {
-    DemonstratedTrajectory item;
-    item.controlled = true;
-    ObservedTrajectory steps = alone.trajectories[i];
-    steps.eta = RowMatrix::Zero(steps.num_observations(), sources);
-    steps.eta.col(0).setOnes();  // the subject alone
-    steps.contexts.assign(static_cast<size_t>(steps.num_observations()), 0);
-    item.steps = std::move(steps);
-    item.truth = controlled[i];
-    problem.demonstration.push_back(std::move(item));
-  }
-  for (size_t i = 0; i < task.trajectories.size(); ++i) {
-    DemonstratedTrajectory item;
-    item.steps = observed.trajectories[i];
-    item.truth = task.trajectories[i];
-    problem.demonstration.push_back(std::move(item));
-  }
-  ObservationPrior prior;
-  prior.num_symbols = 4;
-  prior.num_confounders = args.confounders;
-  prior.subject_alpha = Eigen::MatrixXd::Ones(task.mdp.num_pairs(), 4);  // replaced by the controlled run's
-  prior.confounder_alpha = Eigen::MatrixXd::Ones(args.confounders, 4);
-  problem.observation_model = prior;
-}
-
 int run_gridworld(const GridworldArgs& args) {
-  GridworldOptions options;
-  options.size = args.size;
-  options.intended = args.intended;
-  options.discount = args.discount;
-  Rng rng(args.seed);
-  GridworldTask task = make_gridworld_task(options, args.trajectories, args.length, rng);
-  if ((args.goal >= 0 && args.goal != task.goal) || args.goal_weight != 1.0) {
-    if (args.goal >= 0) task.goal = args.goal;
-    task.true_weights.setZero();
-    task.true_weights[task.goal] = args.goal_weight;
-    task.trajectories = soft_expert_demonstration(task.mdp, task.true_weights, args.trajectories, args.length, rng);
-  }
-  Problem problem;
-  problem.mdp = task.mdp;
-  problem.state_names = gridworld_state_names(args.size);
-  problem.action_names = gridworld_action_names();
-  problem.feature_names = gridworld_feature_names();
-  if (args.confounders >= 0) {
-    watch_gridworld(args, task, rng, problem);
-  } else {
-    for (auto& trajectory : task.trajectories) {
-      DemonstratedTrajectory item;
-      item.truth = std::move(trajectory);
-      problem.demonstration.push_back(std::move(item));
-    }
-  }
-  problem.true_weights = task.true_weights;
+  const GridworldProblemOptions& o = args.problem;
+  const Problem problem = gridworld_problem(o);
   nlohmann::ordered_json doc;
-  if (args.confounders >= 0) {
+  if (o.confounders >= 0) {
     std::ostringstream comment;
-    comment << "hbirl generate gridworld: " << args.confounders << " confounding element(s), " << args.per_step
-            << " observations per step; the labeller gives its pick " << args.labeller.mass << " of eta but picks the true source with probability "
-            << args.labeller.accuracy << " (its pick is each observation's context); the first " << args.controlled
+    comment << "hbirl generate gridworld: " << o.confounders << " confounding element(s), " << o.per_step
+            << " observations per step; the labeller gives its pick " << o.labeller.mass << " of eta but picks the true source with probability "
+            << o.labeller.accuracy << " (its pick is each observation's context); the first " << o.controlled
             << " trajectories are the controlled run (the subject alone) that gives the subject prior.";
     doc["comment"] = comment.str();
   }
@@ -171,38 +90,38 @@ Command add_generate(CLI::App& app) {
       "--intended and otherwise slip to one of the other three moves' cells, features =\n"
       "being in each corner, a goal corner with weight 1, and --trajectories demonstrations\n"
       "of --length steps by the soft expert (true state-action pairs only).");
-  grid->add_option("--size", g->size, "Cells per side")->check(CLI::Range(2, 1000))->capture_default_str();
-  grid->add_option("--trajectories", g->trajectories, "Number of trajectories")
+  grid->add_option("--size", g->problem.size, "Cells per side")->check(CLI::Range(2, 1000))->capture_default_str();
+  grid->add_option("--trajectories", g->problem.trajectories, "Number of trajectories")
       ->check(CLI::Range(1, 10000000))
       ->capture_default_str();
-  grid->add_option("--length", g->length, "Steps per trajectory")->check(CLI::Range(1, 1000000))->capture_default_str();
-  grid->add_option("--goal", g->goal,
+  grid->add_option("--length", g->problem.length, "Steps per trajectory")->check(CLI::Range(1, 1000000))->capture_default_str();
+  grid->add_option("--goal", g->problem.goal,
                    "Goal corner: 0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right (default: drawn from the seed)")
       ->check(CLI::Range(0, 3));
-  grid->add_option("--goal-weight", g->goal_weight,
+  grid->add_option("--goal-weight", g->problem.goal_weight,
                    "Reward weight of the goal corner; larger = a more decisive soft expert")
       ->check(CLI::Range(-1000.0, 1000.0))
       ->capture_default_str();
-  grid->add_option("--intended", g->intended, "Probability that a move goes where intended")
+  grid->add_option("--intended", g->problem.intended, "Probability that a move goes where intended")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--discount", g->discount, "Discount gamma in [0, 1)")
+  grid->add_option("--discount", g->problem.discount, "Discount gamma in [0, 1)")
       ->check(CLI::Range(0.0, 0.999999))
       ->capture_default_str();
-  grid->add_option("--seed", g->seed, "Seed of the goal and the demonstrations")->capture_default_str();
-  grid->add_option("--confounders", g->confounders,
+  grid->add_option("--seed", g->problem.seed, "Seed of the goal and the demonstrations")->capture_default_str();
+  grid->add_option("--confounders", g->problem.confounders,
                    "Watch the demonstrations through the paper's sensor with this many confounding elements (default: true "
                    "steps only): observations, a labeller's eta with its pick as context, and a controlled run for the prior")
       ->check(CLI::Range(0, 64));
-  grid->add_option("--per-step", g->per_step, "With --confounders: observations per step")->check(CLI::Range(1, 10000))->capture_default_str();
-  grid->add_option("--labeller-mass", g->labeller.mass, "With --confounders: the share of eta the labeller gives its pick (what it claims)")
+  grid->add_option("--per-step", g->problem.per_step, "With --confounders: observations per step")->check(CLI::Range(1, 10000))->capture_default_str();
+  grid->add_option("--labeller-mass", g->problem.labeller.mass, "With --confounders: the share of eta the labeller gives its pick (what it claims)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--labeller-accuracy", g->labeller.accuracy,
+  grid->add_option("--labeller-accuracy", g->problem.labeller.accuracy,
                    "With --confounders: the probability that its pick is the true source (what it knows)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--controlled", g->controlled, "With --confounders: trajectories of the controlled run")
+  grid->add_option("--controlled", g->problem.controlled, "With --confounders: trajectories of the controlled run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   grid->add_option("--out,-o", g->out, "Write the problem file here instead of stdout");

@@ -13,6 +13,7 @@
 #include "learner/metrics.hpp"
 #include "learner/observation_support.hpp"
 #include "problem/json_format.hpp"
+#include "problem/problem_observations.hpp"
 #include "services/optimiser.hpp"
 
 namespace hbirl::cli {
@@ -50,35 +51,15 @@ std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.da
 
 // The observation-based E-step for the problem (every trajectory needs steps).
 std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, const LearnArgs& args) {
-  if (!problem.observation_model) {
-    throw in_file(args.problem, InputError("observation_model", "missing; learning from observations needs it (or use --from truth)"));
+  ProblemObservations in;
+  try {
+    in = problem_observations(problem);
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
   }
-  std::vector<ObservedTrajectory> trajectories, controlled_observed;
-  std::vector<Trajectory> controlled_truth;
-  std::vector<size_t> demonstration_index;  // of each trajectory learned from, for messages
-  for (size_t i = 0; i < problem.demonstration.size(); ++i) {
-    if (problem.demonstration[i].controlled) {  // the subject prior's, below
-      controlled_observed.push_back(*problem.demonstration[i].steps);
-      controlled_truth.push_back(*problem.demonstration[i].truth);
-      continue;
-    }
-    if (!problem.demonstration[i].steps) {
-      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps",
-                                             "missing; learning from observations needs it for every trajectory"));
-    }
-    trajectories.push_back(*problem.demonstration[i].steps);
-    demonstration_index.push_back(i);
-  }
-  if (trajectories.empty()) throw in_file(args.problem, InputError("demonstration", "has only controlled-run trajectories"));
-  ObservationPrior prior = *problem.observation_model;
-  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/domain.hpp).
-  if (!controlled_observed.empty()) {
-    try {
-      prior.subject_alpha = controlled_run_prior(problem.mdp, controlled_truth, controlled_observed, prior.num_symbols);
-    } catch (const InputError& e) {
-      throw in_file(args.problem, e);
-    }
-  }
+  std::vector<ObservedTrajectory>& trajectories = in.trajectories;
+  const std::vector<size_t>& demonstration_index = in.demonstration_index;  // of each trajectory learned from, for messages
+  ObservationPrior& prior = in.prior;
   try {
     add_unlisted_source(prior, trajectories);  // before the check: the catch-all can produce anything
   } catch (const InputError& e) {
@@ -202,7 +183,7 @@ int run_learn(const LearnArgs& args) {
   std::optional<ObservationModel> model;
   std::optional<McmcDiagnostics> mcmc;  // of this last E-step pass, at the returned point
   if (observed != nullptr) {
-    model = dirichlet_mean(best.alpha ? *best.alpha : *problem.observation_model);
+    model = dirichlet_mean(best.alpha ? *best.alpha : observed->prior());  // the prior learned from (controlled run, catch-all)
     const EStepStatistics stats = observed->statistics(policy, *model, args.seed);
     counts = stats.counts;
     if (args.engine.name == "mcmc") mcmc = stats.mcmc;

@@ -1,28 +1,241 @@
-"""hbirl for Python: inverse reinforcement learning with hbirl's C++ core, numpy in and out.
+"""hbirl for Python: inverse reinforcement learning in partially-controlled environments
+(Bogert & Doshi, IROS 2021) with hbirl's C++ core, numpy in and out.
 
     import hbirl
-    problem = hbirl.load_problem("examples/corridor.json")
-    irl = hbirl.MaxCausalEntIRL().fit(problem.mdp, problem.truth_trajectories())
-    irl.theta_, irl.policy_, hbirl.ile(problem.mdp, problem.true_weights, irl.theta_)
+    problem = hbirl.gridworld(size=5, confounders=3, seed=1)   # or hbirl.load_problem(path)
+    model = hbirl.HierarchicalIRL().fit(problem.mdp, problem.observations(), problem.observation_prior)
+    model.theta_, hbirl.ile(problem.mdp, problem.true_weights, model.theta_)
 
-Shapes: an MDP's transitions are an (S, A, S) array, its features (S, A, K); a policy is
-(S, A); a trajectory of true steps is a (T, 2) integer array of (state, action). Bad input
-raises ValueError with the command line's one-line message (README.md "Python").
+Shapes (S states, A actions, K features, W symbols, E confounding elements, J = 1 + E
+sources, the subject first):
+  Mdp: transitions (S, A, S) dense, a scipy.sparse (S*A, S) matrix, or (M, 4) rows
+       [s, a, s', p]; features (S, A, K) dense or (M, 4) rows [s, a, k, value].
+  policy (S, A); reward (S, A); soft values (S,); theta (K,).
+  True trajectories: a list of (T, 2) integer arrays of (state, action).
+  Observations: a list of trajectories, each a list of steps, each a pair (symbols (n,),
+       eta (n, J)) or a triple with contexts (n,); or the flat form Observations(symbols
+       (N,), eta (N, J), step_index (N,), lengths (trajectories,)) -- hmmlearn's `lengths`.
+Bad input raises ValueError with the command line's one-line message, naming the
+argument (README.md "Python"). Every long call releases the GIL.
 """
-from ._hbirl import Mdp, Problem, __version__, ile, load_problem
+import inspect
 
-__all__ = ["Mdp", "Problem", "MaxCausalEntIRL", "ile", "load_problem", "__version__"]
+import numpy as np
+
+from . import _hbirl
+from ._hbirl import Mdp, ObservationPrior, Problem, __version__, ile, load_problem
+
+__all__ = [
+    "Mdp", "ObservationPrior", "Observations", "Problem", "MaxCausalEntIRL", "HierarchicalIRL",
+    "controlled_run_prior", "gridworld", "ile", "load_problem", "onion", "__version__",
+]
 
 
-class MaxCausalEntIRL:
+class Observations:
+    """Observations of demonstrations in the flat form (hmmlearn's `lengths`).
+
+    symbols (N,) int: observation n's symbol, in [0, W).
+    eta (N, J) float: its source distribution (rows sum to 1, the subject first).
+    step_index (N,) int: the step it was made at, counting the steps of all trajectories in
+        turn (nondecreasing): trajectory i's steps are sum(lengths[:i]) ... sum(lengths[:i+1]) - 1.
+        A step without observations (occluded) simply has none.
+    lengths (trajectories,) int: steps per trajectory.
+    contexts (N,) int, optional: which rule of the labeller gave each eta (learned eta
+        shares one source distribution per context; without them each distinct eta is one).
+    ends_in_terminal (trajectories,) bool, optional: the trajectory's last action led into a
+        terminal state (rather than being cut off).
+    """
+
+    def __init__(self, symbols, eta, step_index, lengths, contexts=None, ends_in_terminal=None):
+        self.symbols = np.ascontiguousarray(symbols, dtype=np.int64)
+        self.eta = np.ascontiguousarray(eta, dtype=np.float64)
+        self.step_index = np.ascontiguousarray(step_index, dtype=np.int64)
+        self.lengths = np.ascontiguousarray(lengths, dtype=np.int64)
+        self.contexts = None if contexts is None else np.ascontiguousarray(contexts, dtype=np.int64)
+        self.ends_in_terminal = None if ends_in_terminal is None else [bool(x) for x in ends_in_terminal]
+
+    @classmethod
+    def from_list(cls, trajectories):
+        """From a list of trajectories, each a list of steps, each (symbols, eta) or
+        (symbols, eta, contexts): symbols (n,), eta (n, J), contexts (n,); n may be 0."""
+        if isinstance(trajectories, Observations):
+            return trajectories
+        symbols, eta, steps, contexts, lengths = [], [], [], [], []
+        sources = None
+        with_contexts = None
+        step = 0
+        for i, trajectory in enumerate(trajectories):
+            trajectory = list(trajectory)
+            if not trajectory:
+                raise ValueError(f"observations[{i}]: has no steps; a trajectory needs at least one")
+            for t, item in enumerate(trajectory):
+                where = f"observations[{i}][{t}]"
+                if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
+                    raise ValueError(f"{where}: a step is (symbols, eta) or (symbols, eta, contexts)")
+                w = np.asarray(item[0])
+                if w.ndim != 1:
+                    raise ValueError(f"{where}: symbols must be a 1-D array")
+                if w.size and not np.issubdtype(w.dtype, np.integer):
+                    raise ValueError(f"{where}: symbols must be integers")
+                e = np.asarray(item[1], dtype=np.float64)
+                if w.size == 0:
+                    e = e.reshape(0, sources or 1) if e.size == 0 else e
+                if e.ndim != 2 or e.shape[0] != w.size:
+                    raise ValueError(f"{where}: eta must be an (n, J) array, one row per symbol")
+                if w.size:
+                    if sources is None:
+                        sources = e.shape[1]
+                    elif e.shape[1] != sources:
+                        raise ValueError(f"{where}: eta has {e.shape[1]} columns, the earlier observations {sources}")
+                    has = len(item) == 3
+                    if with_contexts is None:
+                        with_contexts = has
+                    elif has != with_contexts:
+                        raise ValueError(f"{where}: contexts are given for all observations or for none")
+                    if has:
+                        c = np.asarray(item[2])
+                        if c.shape != w.shape:
+                            raise ValueError(f"{where}: contexts must have one entry per symbol")
+                        contexts.append(c.astype(np.int64))
+                    symbols.append(w.astype(np.int64))
+                    eta.append(e)
+                    steps.append(np.full(w.size, step, dtype=np.int64))
+                step += 1
+            lengths.append(len(trajectory))
+        if not lengths:
+            raise ValueError("observations: none given")
+        cat = (lambda parts, dtype: np.concatenate(parts) if parts else np.zeros(0, dtype=dtype))
+        return cls(
+            cat(symbols, np.int64),
+            np.concatenate(eta) if eta else np.zeros((0, sources or 1)),
+            cat(steps, np.int64),
+            np.asarray(lengths, dtype=np.int64),
+            cat(contexts, np.int64) if with_contexts else None,
+        )
+
+    def to_list(self):
+        """The list form: trajectories of steps of (symbols, eta[, contexts])."""
+        out = []
+        first = 0
+        for length in self.lengths:
+            trajectory = []
+            for step in range(first, first + int(length)):
+                lo, hi = np.searchsorted(self.step_index, [step, step + 1])
+                item = (self.symbols[lo:hi], self.eta[lo:hi])
+                if self.contexts is not None:
+                    item += (self.contexts[lo:hi],)
+                trajectory.append(item)
+            out.append(trajectory)
+            first += int(length)
+        return out
+
+    def __len__(self):
+        return len(self.lengths)
+
+    def __repr__(self):
+        return f"Observations({len(self)} trajectories, {int(self.lengths.sum())} steps, {self.symbols.size} observations)"
+
+    def _tuple(self):
+        return (self.symbols, self.eta, self.step_index, self.lengths, self.contexts, self.ends_in_terminal)
+
+    @classmethod
+    def _of(cls, parts):
+        return cls(*parts)
+
+
+def _as_observations(observations):
+    if isinstance(observations, Observations):
+        return observations
+    if isinstance(observations, tuple) and 4 <= len(observations) <= 6 and all(
+            isinstance(x, np.ndarray) or x is None for x in observations):
+        return Observations(*observations)
+    return Observations.from_list(observations)
+
+
+def _problem_observations(self):
+    """The demonstrations' observations (the controlled run's left out), as `hbirl learn`
+    learns from them."""
+    return Observations._of(self._observations())
+
+
+Problem.observations = _problem_observations
+
+
+def controlled_run_prior(mdp, truth, observations, num_symbols):
+    """The subject's Dirichlet prior from a controlled run (paper §Experiments): symbol
+    counts per (s, a) plus one, from the run's true steps (a list of (T, 2) arrays) and its
+    observations (the subject alone: eta (n, 1) of ones). Returns an (S, A, W) array for
+    ObservationPrior(subject_alpha=...)."""
+    return _hbirl.controlled_run_prior(mdp, [np.asarray(t) for t in truth], _as_observations(observations)._tuple(),
+                                       int(num_symbols))
+
+
+def gridworld(size=5, trajectories=20, length=10, goal=None, goal_weight=1.0, intended=0.9, discount=0.95, seed=1,
+              confounders=None, per_step=40, labeller_mass=0.8, labeller_accuracy=0.8, controlled=20):
+    """The paper's Gridworld (§Experiments A) as a Problem, exactly as `hbirl generate
+    gridworld` makes it from the same seed: size x size cells, moves that succeed with
+    probability `intended`, a goal corner (0 top-left ... 3 bottom-right; None: drawn from
+    the seed) of weight goal_weight, and `trajectories` demonstrations of `length` steps by
+    the soft expert. With `confounders` (|E|) the demonstrations are watched through the
+    paper's sensor: per_step observations per step, eta from a labeller that gives its
+    pick labeller_mass but picks the true source with probability labeller_accuracy (its
+    pick is each observation's context), and a controlled run of `controlled` trajectories
+    for the subject prior (Problem.observation_prior)."""
+    o = _hbirl._GridworldOptions()
+    o.size, o.trajectories, o.length = int(size), int(trajectories), int(length)
+    o.goal = -1 if goal is None else int(goal)
+    o.goal_weight, o.intended, o.discount, o.seed = float(goal_weight), float(intended), float(discount), int(seed)
+    o.confounders = -1 if confounders is None else int(confounders)
+    o.per_step, o.controlled = int(per_step), int(controlled)
+    o.labeller_mass, o.labeller_accuracy = float(labeller_mass), float(labeller_accuracy)
+    return _hbirl.gridworld(o)
+
+
+def onion():
+    """The onion sorter (paper §Experiments B) as a Problem: its MDP, names and the
+    expert's weights (no demonstrations: a run of the service set makes them)."""
+    return _hbirl.onion()
+
+
+class _Estimator:
+    """scikit-learn conventions: hyper-parameters in the constructor, get_params/set_params,
+    fit returns self, fitted attributes end in "_"."""
+
+    @classmethod
+    def _param_names(cls):
+        return [p for p in inspect.signature(cls.__init__).parameters if p != "self"]
+
+    def get_params(self, deep=True):
+        """The constructor's parameters, as a dict."""
+        return {name: getattr(self, name) for name in self._param_names()}
+
+    def set_params(self, **params):
+        """Set constructor parameters; returns self."""
+        names = self._param_names()
+        for name, value in params.items():
+            if name not in names:
+                raise ValueError(f"{name}: not a parameter of {type(self).__name__} ({', '.join(names)})")
+            setattr(self, name, value)
+        return self
+
+    def __repr__(self):
+        return type(self).__name__ + "(" + ", ".join(f"{k}={v!r}" for k, v in self.get_params().items()) + ")"
+
+    def _check_fitted(self):
+        if not hasattr(self, "theta_"):
+            raise ValueError(f"{type(self).__name__}: not fitted yet; call fit first")
+
+
+class MaxCausalEntIRL(_Estimator):
     """Maximum causal entropy IRL from the expert's true steps (Ziebart et al.), as
     `hbirl learn --from truth` computes it: the same C++ code and the same defaults, so the
     same theta bit for bit.
 
-    Parameters (scikit-learn style: set here, fitted attributes end in "_"):
+    Parameters:
       optimizer: "lbfgs" (default) or "eg" (exponentiated gradient on an L1 ball).
       l2: penalty on ||theta||^2 per demonstrated step (default 0).
-      restarts: random restarts of the optimiser (default 1).
+      restarts: random restarts of the optimiser (default 1, as the CLI: more changed
+        nothing on average on random tasks, docs/results/random_tasks).
       seed: seed of the restarts.
       max_iterations, tolerance: the optimiser's budget and gradient tolerance.
       threads: 0 for one per core; the result does not depend on it.
@@ -40,25 +253,9 @@ class MaxCausalEntIRL:
         self.tolerance = tolerance
         self.threads = threads
 
-    _params = ("optimizer", "l2", "restarts", "seed", "max_iterations", "tolerance", "threads")
-
-    def get_params(self, deep=True):
-        """The constructor's parameters, as a dict."""
-        return {name: getattr(self, name) for name in self._params}
-
-    def set_params(self, **params):
-        """Set constructor parameters; returns self."""
-        for name, value in params.items():
-            if name not in self._params:
-                raise ValueError(f"{name}: not a parameter of MaxCausalEntIRL ({', '.join(self._params)})")
-            setattr(self, name, value)
-        return self
-
     def fit(self, mdp, trajectories):
         """Learn reward weights from true trajectories, a list of (T, 2) integer arrays of
-        (state, action). Releases the GIL while it computes. Returns self."""
-        from . import _hbirl
-
+        (state, action). Returns self."""
         result = _hbirl._fit_maxcausalent(mdp, list(trajectories), self.optimizer, float(self.l2), int(self.restarts),
                                           int(self.seed), int(self.max_iterations), float(self.tolerance), int(self.threads))
         self.theta_ = result["theta"]
@@ -66,5 +263,131 @@ class MaxCausalEntIRL:
         self.policy_ = mdp.soft_policy(self.theta_)
         return self
 
-    def __repr__(self):
-        return "MaxCausalEntIRL(" + ", ".join(f"{k}={v!r}" for k, v in self.get_params().items()) + ")"
+
+class HierarchicalIRL(_Estimator):
+    """The hierarchical Bayesian model of IRL in partially-controlled environments (Bogert &
+    Doshi, IROS 2021): HiddenDataEM over the expert's unseen trajectories with the source of
+    every observation summed out, the observation model (and eta) learned, MaxCausalEnt
+    in the M-step -- as `hbirl learn --problem` runs it: the same C++ code and defaults, so
+    the same theta bit for bit.
+
+    Parameters:
+      engine: "exact" (forward-backward, the default) or "mcmc" (the paper's sampler;
+        mcmc_samples, mcmc_burn_in, mcmc_chains).
+      learn_observation_model: refine O inside the E-step (None: as the prior says, True
+        unless it was made with learn=False).
+      alpha_update: "posterior" or "paper" (None: the prior's); see docs/MODEL.md.
+      eta: "learned" (per context) or "stated" (as given); None: the prior's (learned with
+        the posterior update).
+      optimizer, l2, restarts, seed, max_iterations, tolerance: as MaxCausalEntIRL.
+      max_em_iterations: EM's budget of E-step + M-step evaluations.
+      alpha_tolerance, max_alpha_iterations: when O has converged; refinements per E-step.
+      threads: 0 for one per core; the result does not depend on it.
+
+    Fitted attributes: theta_ (K,), policy_ (S, A), log_likelihood_, n_iter_ (EM iterates),
+    converged_, history_ (dict of per-iterate arrays: "log_likelihood", "objective",
+    "theta" (n_iter_, K)), observation_model_ (dict: "subject" (S, A, W), "confounders"
+    (E', W), the Dirichlet mean of the learned parameters; E' counts the unlisted
+    catch-all when the prior asks for one), prior_ (the learned Dirichlet parameters, an
+    ObservationPrior), learned_eta_ (None, or dict: per context "stated" (C, J'),
+    "learned" (C, J'), "observations" (C,)), mcmc_diagnostics_ (MCMC only: worst R-hat and
+    bulk ESS over the pair marginals).
+    """
+
+    def __init__(self, engine="exact", learn_observation_model=None, alpha_update=None, eta=None, optimizer="lbfgs",
+                 l2=0.0, restarts=1, seed=1, max_iterations=1000, tolerance=1e-9, max_em_iterations=300,
+                 alpha_tolerance=1e-4, max_alpha_iterations=10, mcmc_samples=1000, mcmc_burn_in=200, mcmc_chains=4,
+                 threads=0):
+        self.engine = engine
+        self.learn_observation_model = learn_observation_model
+        self.alpha_update = alpha_update
+        self.eta = eta
+        self.optimizer = optimizer
+        self.l2 = l2
+        self.restarts = restarts
+        self.seed = seed
+        self.max_iterations = max_iterations
+        self.tolerance = tolerance
+        self.max_em_iterations = max_em_iterations
+        self.alpha_tolerance = alpha_tolerance
+        self.max_alpha_iterations = max_alpha_iterations
+        self.mcmc_samples = mcmc_samples
+        self.mcmc_burn_in = mcmc_burn_in
+        self.mcmc_chains = mcmc_chains
+        self.threads = threads
+
+    def _settings(self):
+        s = _hbirl._HierarchicalSettings()
+        s.engine = self.engine
+        s.learn_observation_model = None if self.learn_observation_model is None else bool(self.learn_observation_model)
+        s.alpha_update = self.alpha_update or ""
+        s.eta = self.eta or ""
+        s.optimizer = self.optimizer
+        s.l2 = float(self.l2)
+        s.restarts = int(self.restarts)
+        s.seed = int(self.seed)
+        s.max_iterations = int(self.max_iterations)
+        s.tolerance = float(self.tolerance)
+        s.max_em_iterations = int(self.max_em_iterations)
+        s.alpha_tolerance = float(self.alpha_tolerance)
+        s.max_alpha_iterations = int(self.max_alpha_iterations)
+        s.mcmc_samples = int(self.mcmc_samples)
+        s.mcmc_burn_in = int(self.mcmc_burn_in)
+        s.mcmc_chains = int(self.mcmc_chains)
+        s.threads = int(self.threads)
+        return s
+
+    def fit(self, mdp, observations, prior):
+        """Learn the expert's reward from observations (a list of trajectories of steps of
+        (symbols, eta[, contexts]), or Observations) and the observation model's prior (an
+        ObservationPrior; Problem.observation_prior for a problem file). Returns self."""
+        if not isinstance(prior, ObservationPrior):
+            raise ValueError("prior: must be an hbirl.ObservationPrior")
+        fit = _hbirl._fit_hierarchical(mdp, _as_observations(observations)._tuple(), prior, self._settings())
+        self._fit = fit
+        self.mdp_ = mdp
+        self.theta_ = fit.theta
+        self.policy_ = mdp.soft_policy(fit.theta)
+        self.log_likelihood_ = fit.log_likelihood
+        self.n_iter_ = fit.em_iterations
+        self.converged_ = fit.converged
+        self.history_ = {
+            "log_likelihood": np.asarray(fit.history_log_likelihood),
+            "objective": np.asarray(fit.history_objective),
+            "theta": fit.history_theta,
+        }
+        subject = fit.subject
+        self.observation_model_ = {
+            "subject": subject.reshape(mdp.num_states, mdp.num_actions, subject.shape[1]),
+            "confounders": fit.confounders,
+        }
+        self.prior_ = fit.refined
+        self.learned_eta_ = fit.learned_eta
+        self.mcmc_diagnostics_ = fit.mcmc_diagnostics
+        return self
+
+    def score(self, observations):
+        """log Pr(observations | theta_, O), exact, summed over trajectories (with learned
+        eta, each observation's context's learned eta; contexts not seen in fit keep their
+        stated eta). -inf when some trajectory is impossible under the model."""
+        self._check_fitted()
+        return float(np.sum(_hbirl._log_likelihoods(self.mdp_, self._fit, _as_observations(observations)._tuple())))
+
+    def posterior(self, observations):
+        """The posterior of each trajectory under theta_ and the learned model, by the
+        fitted engine: (marginals, sources) with marginals a list of (T, S, A) arrays
+        Pr(s_t = s, a_t = a | observations) and sources an (N, J') array, per observation
+        in the flat order, Pr(source | observations), the subject first."""
+        self._check_fitted()
+        marginals, sources, _ = _hbirl._posterior(self.mdp_, self._fit, _as_observations(observations)._tuple())
+        return marginals, sources
+
+    def predict(self, observations):
+        """The most likely (state, action) at every step (the argmax of each step's
+        posterior marginal), a list of (T, 2) integer arrays."""
+        marginals, _ = self.posterior(observations)
+        out = []
+        for m in marginals:
+            flat = m.reshape(m.shape[0], -1).argmax(axis=1)
+            out.append(np.stack([flat // m.shape[2], flat % m.shape[2]], axis=1).astype(np.int64))
+        return out

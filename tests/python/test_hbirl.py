@@ -4,13 +4,12 @@ the argument."""
 import json
 import os
 import subprocess
-import threading
-import time
 
 import numpy as np
 import pytest
 
 import hbirl
+from conftest import assert_releases_the_gil
 
 REPO = os.environ.get("HBIRL_REPO", os.path.join(os.path.dirname(__file__), "..", ".."))
 CORRIDOR = os.path.join(REPO, "examples", "corridor.json")
@@ -162,26 +161,4 @@ def test_fit_releases_the_gil():
     T /= T.sum(axis=2, keepdims=True)
     mdp = hbirl.Mdp(T, rng.random((S, A, K)), discount=0.95)
     trajectories = [np.column_stack([rng.integers(0, S, 40), rng.integers(0, A, 40)]) for _ in range(50)]
-    ticks = []
-    done = threading.Event()
-
-    def count():
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.001)
-
-    t = threading.Thread(target=count)
-    t.start()
-    time.sleep(0.01)
-    start = time.perf_counter()
-    hbirl.MaxCausalEntIRL(threads=1).fit(mdp, trajectories)
-    elapsed = time.perf_counter() - start
-    done.set()
-    t.join()
-    during = [x for x in ticks if start <= x <= start + elapsed]
-    if elapsed < 0.05:
-        pytest.skip(f"the fit took {elapsed:.3f} s: too short to tell")
-    # Holding the GIL, the C++ code would stop the counter for the whole fit (it ticks only
-    # in the Python around it); free, it ticks about once a millisecond -- asked here for
-    # one per 5 ms, room for a loaded machine.
-    assert len(during) >= max(5, elapsed / 0.005), f"{len(during)} ticks in {elapsed:.2f} s"
+    assert_releases_the_gil(lambda: hbirl.MaxCausalEntIRL(threads=1).fit(mdp, trajectories))

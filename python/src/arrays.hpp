@@ -1,0 +1,54 @@
+#pragma once
+// numpy <-> hbirl conversions of the Python package (README.md "Python"): shapes are checked
+// before anything is allocated, and bad input is an InputError (a ValueError in Python)
+// naming the argument as the Python caller wrote it.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "learner/mdp.hpp"
+#include "learner/observations.hpp"
+#include "learner/trajectory.hpp"
+
+namespace hbirl::python {
+
+namespace py = pybind11;
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using IntArray = py::array_t<long long, py::array::c_style | py::array::forcecast>;
+
+// Observations in the flat form (hmmlearn's `lengths`): observation n has symbol
+// symbols[n], source distribution eta[n] (1 + |E| entries, summing to 1) and optional
+// context contexts[n]; it was made at step step_index[n] (nondecreasing, counting the
+// steps of every trajectory in turn); trajectory i has lengths[i] steps, the last one
+// leading into a terminal state when ends_in_terminal[i].
+struct FlatObservations {
+  IntArray symbols;
+  Array eta;
+  IntArray step_index;
+  IntArray lengths;
+  std::optional<IntArray> contexts;
+  std::optional<std::vector<bool>> ends_in_terminal;
+};
+
+// The trajectories of `flat`, checked against `prior` (symbols, sources) with eta rows
+// normalised as a problem file's are (within 1e-6 of summing to 1).
+std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior);
+// And back: (symbols, eta, step_index, lengths, contexts or None, ends_in_terminal).
+py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories);
+
+// Per-pair vectors / matrices as (S, A) / (S, A, W) arrays (pair = s * A + a) and back.
+py::array_t<double> per_state_action(const Mdp& mdp, const Eigen::VectorXd& pairs);
+py::array_t<double> per_state_action_symbol(const Mdp& mdp, const Eigen::MatrixXd& rows);
+Eigen::MatrixXd pair_rows(const Mdp& mdp, const Array& sa_w, const std::string& name);
+
+// Trajectories as (T, 2) integer arrays of (state, action), and back.
+std::vector<Trajectory> trajectories_of(const Mdp& mdp, const std::vector<IntArray>& arrays, const std::string& name);
+py::list trajectories_to_arrays(const std::vector<Trajectory>& trajectories);
+
+// theta with the MDP's K finite weights.
+Eigen::VectorXd theta_of(const Mdp& mdp, const Eigen::VectorXd& theta, const std::string& name);
+
+}  // namespace hbirl::python

@@ -1,0 +1,326 @@
+"""HierarchicalIRL, observations and the problem helpers against independent truth: the
+command line (the same C++ code must give the same bits), brute-force enumeration of
+every trajectory of a tiny random MDP, and bad input refused naming the argument."""
+import itertools
+import json
+import os
+import subprocess
+import numpy as np
+import pytest
+
+import hbirl
+from conftest import assert_releases_the_gil
+
+CLI = os.environ.get("HBIRL_CLI")
+
+
+def cli(*args):
+    if not CLI:
+        pytest.skip("HBIRL_CLI (the hbirl command) not set: run through ctest")
+    return subprocess.run([CLI, *args], check=True, capture_output=True, text=True).stdout
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    """A small confounded Gridworld (3 confounders, a labeller's contexts, a controlled
+    run) as a problem file."""
+    problem = hbirl.gridworld(size=4, trajectories=8, length=8, confounders=3, per_step=10, controlled=10, seed=5)
+    path = str(tmp_path_factory.mktemp("grid") / "grid.json")
+    problem.save(path)
+    return problem, path
+
+
+def test_gridworld_is_hbirl_generate_gridworld(tmp_path):
+    problem = hbirl.gridworld(size=4, trajectories=8, length=8, confounders=3, per_step=10, controlled=10, seed=5)
+    mine = tmp_path / "mine.json"
+    problem.save(str(mine))
+    theirs = json.loads(cli("generate", "gridworld", "--size", "4", "--trajectories", "8", "--length", "8", "--confounders", "3",
+                            "--per-step", "10", "--controlled", "10", "--seed", "5"))
+    theirs.pop("comment")
+    assert json.loads(mine.read_text()) == theirs
+
+
+@pytest.mark.parametrize("flags, params", [
+    ([], {}),
+    (["--eta", "stated"], {"eta": "stated"}),
+    (["--alpha-update", "paper", "--restarts", "2"], {"alpha_update": "paper", "restarts": 2}),
+    (["--engine", "mcmc", "--mcmc-samples", "40", "--mcmc-burn-in", "10", "--max-em-iterations", "4"],
+     {"engine": "mcmc", "mcmc_samples": 40, "mcmc_burn_in": 10, "max_em_iterations": 4}),
+])
+def test_fit_gives_hbirl_learns_theta_bit_for_bit(grid, flags, params):
+    problem, path = grid
+    out = json.loads(cli("learn", "--problem", path, *flags))
+    model = hbirl.HierarchicalIRL(**params).fit(problem.mdp, problem.observations(), problem.observation_prior)
+    assert model.theta_.tolist() == out["weights"]  # the same doubles, not close ones
+    assert model.log_likelihood_ == out["log_likelihood"]
+    assert model.n_iter_ == out["em_iterations"]
+    if "learned_eta" in out["observation_model"]:
+        learned = np.array([c["learned"] for c in out["observation_model"]["learned_eta"]])
+        assert np.array_equal(model.learned_eta_["learned"], learned)
+    else:
+        assert model.learned_eta_ is None
+    subject = model.observation_model_["subject"]
+    for s, a, row in out["observation_model"]["subject"]:
+        assert subject[s, a].tolist() == row
+
+
+def test_fitted_attributes_shapes_and_dtypes(grid):
+    problem, _ = grid
+    mdp, obs = problem.mdp, problem.observations()
+    model = hbirl.HierarchicalIRL().fit(mdp, obs, problem.observation_prior)
+    S, A, K = mdp.num_states, mdp.num_actions, mdp.num_features
+    assert model.theta_.shape == (K,) and model.theta_.dtype == np.float64
+    assert model.policy_.shape == (S, A)
+    n = model.n_iter_
+    assert n >= 2 and model.converged_
+    assert model.history_["log_likelihood"].shape == (n,) and model.history_["theta"].shape == (n, K)
+    np.testing.assert_array_equal(model.history_["theta"][-1], model.theta_)
+    assert model.observation_model_["subject"].shape == (S, A, 4)
+    assert model.observation_model_["confounders"].shape == (3, 4)
+    np.testing.assert_allclose(model.observation_model_["subject"].sum(axis=2), 1.0)
+    eta = model.learned_eta_
+    assert eta["stated"].shape == eta["learned"].shape == (4, 4)  # the labeller's four picks
+    assert eta["observations"].sum() == obs.symbols.size
+    assert model.score(obs) == pytest.approx(model.log_likelihood_, rel=1e-12)
+    marginals, sources = model.posterior(obs)
+    assert len(marginals) == len(obs) and all(m.shape == (8, S, A) for m in marginals)
+    np.testing.assert_allclose([m.sum(axis=(1, 2)) for m in marginals], 1.0)
+    assert sources.shape == (obs.symbols.size, 4)
+    np.testing.assert_allclose(sources.sum(axis=1), 1.0)
+    predicted = model.predict(obs)
+    assert [p.shape for p in predicted] == [(8, 2)] * len(obs) and predicted[0].dtype == np.int64
+    # The learned expert's states are the truth's more often than chance (1 in 16 cells).
+    truth = problem.truth_trajectories()
+    states_right = np.mean(np.concatenate([p[:, 0] == t[:, 0] for p, t in zip(predicted, truth)]))
+    assert states_right > 0.5
+
+
+def test_the_list_and_flat_forms_are_the_same_data(grid):
+    problem, _ = grid
+    flat = problem.observations()
+    as_list = flat.to_list()
+    again = hbirl.Observations.from_list(as_list)
+    for name in ("symbols", "eta", "step_index", "lengths", "contexts"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(flat, name))
+    prior = problem.observation_prior
+    a = hbirl.HierarchicalIRL().fit(problem.mdp, as_list, prior).theta_
+    b = hbirl.HierarchicalIRL().fit(problem.mdp, (flat.symbols, flat.eta, flat.step_index, flat.lengths, flat.contexts), prior).theta_
+    assert a.tolist() == b.tolist()
+
+
+def random_task(rng, S=3, A=2, W=3, E=1):
+    T = rng.random((S, A, S)) + 0.05
+    T /= T.sum(axis=2, keepdims=True)
+    mdp = hbirl.Mdp(T, rng.normal(size=(S, A, 2)), discount=0.9)
+    subject = rng.random((S, A, W)) + 0.1
+    subject /= subject.sum(axis=2, keepdims=True)
+    elements = rng.random((E, W)) + 0.1
+    elements /= elements.sum(axis=1, keepdims=True)
+    return T, mdp, subject, elements
+
+
+def test_posterior_and_score_match_brute_force_enumeration():
+    # A random 3-state MDP and sensor (not one of ours); the model is fixed to the prior's
+    # mean (learn_observation_model=False, eta as stated), so for the fitted theta the
+    # posterior is checked against summing over all 6^3 (s, a) paths by hand.
+    rng = np.random.default_rng(11)
+    S, A, W = 3, 2, 3
+    T, mdp, subject, elements = random_task(rng, S, A, W)
+    scale = 1e6  # alpha proportional to O with a huge total: the mean is O to 1e-6 relative
+    prior = hbirl.ObservationPrior(mdp, W, 1, subject_alpha=subject * scale, confounder_alpha=elements * scale, learn=False,
+                                   learn_eta=False)
+    steps = []
+    for t in range(3):
+        n = int(rng.integers(0, 3))  # steps without observations (occlusion) too
+        e = rng.random((n, 2))
+        steps.append((rng.integers(0, W, n), e / e.sum(axis=1, keepdims=True)))
+    obs = [steps]
+    model = hbirl.HierarchicalIRL(max_em_iterations=3).fit(mdp, obs, prior)
+    pi = mdp.soft_policy(model.theta_)
+    O_s = model.observation_model_["subject"]
+    O_e = model.observation_model_["confounders"]
+    total = 0.0
+    marg = np.zeros((3, S, A))
+    src = [np.zeros((len(w), 2)) for w, _ in steps]
+    for path in itertools.product(range(S * A), repeat=3):
+        p = 1.0
+        prev = None
+        for t, r in enumerate(path):
+            s, a = divmod(r, A)
+            p *= (mdp.start[s] if prev is None else T[prev[0], prev[1], s]) * pi[s, a]
+            w, e = steps[t]
+            for k in range(len(w)):
+                p *= e[k, 0] * O_s[s, a, w[k]] + e[k, 1] * O_e[0, w[k]]
+            prev = (s, a)
+        total += p
+        for t, r in enumerate(path):
+            s, a = divmod(r, A)
+            marg[t, s, a] += p
+            w, e = steps[t]
+            for k in range(len(w)):
+                mix = np.array([e[k, 0] * O_s[s, a, w[k]], e[k, 1] * O_e[0, w[k]]])
+                src[t][k] += p * mix / mix.sum()
+    marginals, sources = model.posterior(obs)
+    np.testing.assert_allclose(marginals[0], marg / total, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sources, np.concatenate(src) / total, rtol=0, atol=1e-12)
+    assert model.score(obs) == pytest.approx(np.log(total), rel=1e-12)
+
+
+def test_mdp_from_rows_and_sparse_is_the_dense_mdp():
+    rng = np.random.default_rng(2)
+    T, mdp, _, _ = random_task(rng, S=5, A=3)
+    rows = mdp.transition_rows()
+    assert rows.shape == (5 * 3 * 5, 4)
+    F = np.zeros((5, 3, 2))
+    theta = np.array([0.3, -1.0])
+    dense = hbirl.Mdp(T, rng.normal(size=(5, 3, 2)), discount=0.9)
+    F = np.array([[s, a, k, dense.reward(np.eye(2)[k])[s, a]] for s in range(5) for a in range(3) for k in range(2)])
+    from_rows = hbirl.Mdp(rows, F, discount=0.9)
+    np.testing.assert_array_equal(from_rows.soft_policy(theta), dense.soft_policy(theta))
+    scipy_sparse = pytest.importorskip("scipy.sparse")
+    sparse = scipy_sparse.csr_matrix(T.reshape(15, 5))
+    from_sparse = hbirl.Mdp(sparse, F, discount=0.9)
+    np.testing.assert_array_equal(from_sparse.soft_policy(theta), dense.soft_policy(theta))
+
+
+def test_optimal_policy_satisfies_the_bellman_optimality_equation():
+    rng = np.random.default_rng(4)
+    T, mdp, _, _ = random_task(rng, S=6, A=3)
+    R = rng.normal(size=(6, 3))
+    actions, V = mdp.optimal_policy(R)
+    Q = R + 0.9 * T @ V
+    np.testing.assert_allclose(V, Q.max(axis=1), atol=1e-8)
+    assert all(Q[s, actions[s]] == pytest.approx(Q[s].max(), abs=1e-8) for s in range(6))
+
+
+def test_controlled_run_prior_is_the_problems_subject_prior(tmp_path):
+    problem = hbirl.gridworld(size=3, trajectories=2, length=5, confounders=1, per_step=5, controlled=4, seed=2)
+    path = tmp_path / "g.json"
+    problem.save(str(path))
+    doc = json.loads(path.read_text())
+    controlled = [d for d in doc["demonstration"] if d.get("controlled")]
+    truth = [np.array(d["truth"]) for d in controlled]
+    observations = [[(np.array([o[0] for o in step["observations"]], dtype=np.int64),
+                      np.array([o[1][:1] for o in step["observations"]])) for step in d["steps"]] for d in controlled]
+    alpha = hbirl.controlled_run_prior(problem.mdp, truth, observations, 4)
+    np.testing.assert_array_equal(alpha, problem.observation_prior.subject_alpha(problem.mdp))
+
+
+def test_save_and_load_round_trip(tmp_path):
+    problem = hbirl.gridworld(size=3, trajectories=3, length=4, confounders=2, per_step=3, controlled=2, seed=9)
+    path = str(tmp_path / "p.json")
+    problem.save(path)
+    again = hbirl.load_problem(path)
+    for name in ("symbols", "eta", "step_index", "lengths", "contexts"):
+        np.testing.assert_array_equal(getattr(again.observations(), name), getattr(problem.observations(), name))
+    assert again.feature_names == problem.feature_names and again.true_weights.tolist() == problem.true_weights.tolist()
+
+
+def test_onion():
+    onion = hbirl.onion()
+    assert (onion.mdp.num_states, onion.mdp.num_actions) == (len(onion.state_names), len(onion.action_names))
+    assert onion.true_weights.shape == (onion.mdp.num_features,) == (len(onion.feature_names),)
+
+
+def tiny(rng=None):
+    rng = rng or np.random.default_rng(0)
+    T, mdp, subject, elements = random_task(rng)
+    prior = hbirl.ObservationPrior(mdp, 3, 1)
+    e = np.array([[0.7, 0.3]] * 2)
+    obs = [[(np.array([0, 2]), e), (np.array([1, 1]), e)]] * 3
+    return mdp, prior, obs
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([0]), np.array([[0.5, 0.6]]))]], p), "observations[0][0]: eta"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([0]), np.array([[np.nan, 1.0]]))]], p), "observations[0][0]: eta"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([7]), np.array([[0.5, 0.5]]))]], p), "observations[0][0]: symbol 7"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([0]), np.array([[1.0]]))]], p), "observations.eta"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([0, 1]), np.array([[1.0, 0.0]]))]], p), "observations[0][0]: eta"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[(np.array([0.5]), np.array([[1.0, 0.0]]))]], p), "observations[0][0]: symbols"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [[]], p), "observations[0]"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, [], p), "observations"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, (np.array([0, 1]), np.array([[1.0, 0], [1, 0]]), np.array([1, 0]), np.array([2])), p),
+     "observations.step_index"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, (np.array([0]), np.array([[1.0, 0]]), np.array([5]), np.array([2])), p),
+     "observations.step_index"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, (np.array([0]), np.array([[1.0, 0]]), np.array([0]), np.array([0])), p),
+     "observations.lengths"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, (np.array([0]), np.array([[1.0, 0]]), np.array([0]), np.array([1 << 40])), p),
+     "observations.lengths"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, o, "prior"), "prior"),
+    (lambda m, p, o: hbirl.HierarchicalIRL(engine="gibbs").fit(m, o, p), "engine"),
+    (lambda m, p, o: hbirl.HierarchicalIRL(eta="guessed").fit(m, o, p), "eta"),
+    (lambda m, p, o: hbirl.HierarchicalIRL(mcmc_chains=0).fit(m, o, p), "mcmc_chains"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().score(o), "HierarchicalIRL: not fitted"),
+    (lambda m, p, o: hbirl.ObservationPrior(m, 3, 1, subject_alpha=np.ones((2, 2, 3))), "subject_alpha"),
+    (lambda m, p, o: hbirl.ObservationPrior(m, 3, 1, confounder_alpha=np.ones((2, 3))), "confounder_alpha"),
+    (lambda m, p, o: hbirl.ObservationPrior(m, 3, 1, update="adam"), "update"),
+    (lambda m, p, o: hbirl.ObservationPrior(m, 0, 1), "num_symbols"),
+    (lambda m, p, o: hbirl.ObservationPrior(m, 3, 1, unlisted_eta=1.0), "unlisted_eta"),
+    (lambda m, p, o: hbirl.Mdp(np.array([[0, 0, 1e9, 1.0]]), np.zeros((1, 1, 1))), "transitions"),
+    (lambda m, p, o: hbirl.Mdp(np.array([[0, 0, 0, 1.0], [5, 0, 0, 1.0]]), np.array([[0, 0, 0, 1.0]])), "num_states"),
+    (lambda m, p, o: hbirl.Mdp(np.array([[0, 0.5, 0, 1.0]]), np.array([[0, 0, 0, 1.0]])), "transitions"),
+    (lambda m, p, o: hbirl.gridworld(size=1), "size"),
+    (lambda m, p, o: hbirl.gridworld(labeller_accuracy=2), "labeller_accuracy"),
+])
+def test_bad_input_names_the_argument(make, field):
+    mdp, prior, obs = tiny()
+    with pytest.raises(ValueError) as e:
+        make(mdp, prior, obs)
+    assert str(e.value).startswith(field), str(e.value)
+    assert "\n" not in str(e.value)
+
+
+def test_an_impossible_observation_is_named():
+    rng = np.random.default_rng(0)
+    _, mdp, _, _ = random_task(rng)
+    subject = np.ones((3, 2, 3))
+    subject[:, :, 2] = 0.0  # the subject never shows symbol 2, and eta says only it is seen
+    prior = hbirl.ObservationPrior(mdp, 3, 1, subject_alpha=subject)
+    with pytest.raises(ValueError, match=r"^observations\[0\]\[1\]: observation 0: impossible"):
+        hbirl.HierarchicalIRL().fit(mdp, [[(np.array([0]), np.array([[1.0, 0.0]])), (np.array([2]), np.array([[1.0, 0.0]]))]], prior)
+
+
+def test_fit_releases_the_gil(grid):
+    problem, _ = grid
+    mdp, obs, prior = problem.mdp, problem.observations(), problem.observation_prior
+    assert_releases_the_gil(lambda: hbirl.HierarchicalIRL(threads=1, restarts=3).fit(mdp, obs, prior))
+
+
+def resident_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_no_leak_over_a_thousand_fits():
+    # Each fit allocates the E-step, the model and the results; a leak of even a few hundred
+    # bytes per fit would show as growth over 1,000 fits after a warm-up.
+    mdp, prior, obs = tiny()
+    trajectories = [np.array([[0, 1], [1, 0], [2, 1]])] * 4
+    for _ in range(100):
+        hbirl.MaxCausalEntIRL().fit(mdp, trajectories)
+        hbirl.HierarchicalIRL(max_em_iterations=5).fit(mdp, obs, prior).posterior(obs)
+    before = resident_bytes()
+    for _ in range(1000):
+        hbirl.MaxCausalEntIRL().fit(mdp, trajectories)
+        hbirl.HierarchicalIRL(max_em_iterations=5).fit(mdp, obs, prior).posterior(obs)
+    grown = resident_bytes() - before
+    assert grown < 2 << 20, f"resident memory grew by {grown} bytes over 1,000 fits"
+
+
+def test_a_fixed_observation_model_is_the_prior_learned_from(grid, tmp_path):
+    # With O fixed (the file's "learn": false) and a controlled run, the model reported is
+    # the controlled run's prior's mean -- what both the CLI and Python learned with.
+    problem, path = grid
+    doc = json.load(open(path))
+    doc["observation_model"]["learn"] = False
+    fixed = tmp_path / "fixed.json"
+    fixed.write_text(json.dumps(doc))
+    out = json.loads(cli("learn", "--problem", str(fixed)))
+    model = hbirl.HierarchicalIRL(learn_observation_model=False).fit(problem.mdp, problem.observations(), problem.observation_prior)
+    assert model.theta_.tolist() == out["weights"]
+    alpha = problem.observation_prior.subject_alpha(problem.mdp)
+    np.testing.assert_allclose(model.observation_model_["subject"], alpha / alpha.sum(axis=2, keepdims=True), rtol=1e-15)
+    for s, a, row in out["observation_model"]["subject"]:
+        assert model.observation_model_["subject"][s, a].tolist() == row
