@@ -19,15 +19,19 @@ Bad input raises ValueError with the command line's one-line message, naming the
 argument (README.md "Python"). Every long call releases the GIL.
 """
 import inspect
+import os
+import shutil
+import subprocess
+import tempfile
 
 import numpy as np
 
 from . import _hbirl
-from ._hbirl import Mdp, ObservationPrior, Problem, __version__, ile, load_problem
+from ._hbirl import Mdp, ObservationPrior, Problem, __version__, causal_log_likelihood, ile, load_problem
 
 __all__ = [
     "Mdp", "ObservationPrior", "Observations", "Problem", "MaxCausalEntIRL", "HierarchicalIRL",
-    "controlled_run_prior", "gridworld", "ile", "load_problem", "onion", "__version__",
+    "causal_log_likelihood", "controlled_run_prior", "gridworld", "ile", "load_problem", "onion", "read_log", "__version__",
 ]
 
 
@@ -197,6 +201,40 @@ def onion():
     return _hbirl.onion()
 
 
+def _hbirl_command(command):
+    """The hbirl command: as given, else $HBIRL_CLI, else the build tree's (this package in
+    BUILD/python/hbirl, the command BUILD/hbirl), else hbirl on the PATH."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    for candidate in (command, os.environ.get("HBIRL_CLI"), os.path.join(here, "..", "..", "hbirl"), shutil.which("hbirl")):
+        if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+            return candidate
+    raise ValueError("hbirl_command: the hbirl command was not found (give its path, set HBIRL_CLI or put it on the PATH)")
+
+
+def read_log(path, key=None, domain=None, allow_incomplete=False, eta=None, hbirl_command=None):
+    """A recorded run of the service set (lcm-logger, services/launch.sh --record) as a
+    Problem: the domain's MDP and names, the demonstrations as the optimiser received them
+    and the observation prior it learned from -- the data set `hbirl learn --log` uses, by
+    `hbirl export` (so HierarchicalIRL().fit(p.mdp, p.observations(), p.observation_prior)
+    gives the live run's theta). key: the run's key file for a signed run; domain: the
+    domain file of a run on one; allow_incomplete: a run cut short, from its finished
+    episodes; eta: "stated" or "learned", as the run's hbirl-optimiser --eta when given.
+    A log that cannot be read raises ValueError with hbirl's one-line message."""
+    args = [_hbirl_command(hbirl_command), "export", "--log", str(path)]
+    for flag, value in (("--key", key), ("--domain", domain), ("--eta", eta)):
+        if value is not None:
+            args += [flag, str(value)]
+    if allow_incomplete:
+        args.append("--allow-incomplete")
+    with tempfile.TemporaryDirectory() as directory:
+        out = os.path.join(directory, "run.json")
+        run = subprocess.run(args + ["--out", out], capture_output=True, text=True)
+        if run.returncode != 0:
+            lines = [line for line in run.stderr.splitlines() if line.strip()]
+            raise ValueError(f"{path}: " + (lines[-1] if lines else f"hbirl export failed (exit {run.returncode})"))
+        return _hbirl.load_problem(out)
+
+
 class _Estimator:
     """scikit-learn conventions: hyper-parameters in the constructor, get_params/set_params,
     fit returns self, fitted attributes end in "_"."""
@@ -285,8 +323,11 @@ class HierarchicalIRL(_Estimator):
       threads: 0 for one per core; the result does not depend on it.
 
     Fitted attributes: theta_ (K,), policy_ (S, A), log_likelihood_, n_iter_ (EM iterates),
-    converged_, history_ (dict of per-iterate arrays: "log_likelihood", "objective",
-    "theta" (n_iter_, K)), observation_model_ (dict: "subject" (S, A, W), "confounders"
+    converged_, history_ (dict of per-iterate arrays: "log_likelihood", "objective" (EM's:
+    the log-likelihood plus the priors' terms; it never decreases while the subject prior's
+    strength stands), "prior_strength" (that strength, chosen from the data between EM
+    runs, docs/MODEL.md; NaN unless O is learned by the posterior update), "theta"
+    (n_iter_, K)), observation_model_ (dict: "subject" (S, A, W), "confounders"
     (E', W), the Dirichlet mean of the learned parameters; E' counts the unlisted
     catch-all when the prior asks for one), prior_ (the learned Dirichlet parameters, an
     ObservationPrior), learned_eta_ (None, or dict: per context "stated" (C, J'),
@@ -354,6 +395,7 @@ class HierarchicalIRL(_Estimator):
         self.history_ = {
             "log_likelihood": np.asarray(fit.history_log_likelihood),
             "objective": np.asarray(fit.history_objective),
+            "prior_strength": np.asarray(fit.history_prior_strength),
             "theta": fit.history_theta,
         }
         subject = fit.subject

@@ -2,6 +2,7 @@
 // option for option; tests/python checks the two give the same theta bit for bit.
 #include "hierarchical.hpp"
 
+#include <cmath>
 #include <map>
 
 #include "learner/hidden_data_em.hpp"
@@ -90,14 +91,16 @@ FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajecto
 
   LearnOptions options = learn_options(settings);
   struct Iterate {
-    double log_likelihood, objective;
+    double log_likelihood, objective, strength;
     Eigen::VectorXd theta;
   };
   // One list per restart: restarts run on their own threads, each writes only its own.
   std::vector<std::vector<Iterate>> history(static_cast<size_t>(settings.restarts));
   options.on_iteration = [&history](int restart, int, double objective, const Eigen::VectorXd& theta, const EStepResult& e,
-                                    const ObservationPrior*) {
-    history[static_cast<size_t>(restart)].push_back({e.log_likelihood, objective, theta});
+                                    const ObservationPrior* alpha) {
+    // The subject prior's strength (the posterior update's s) only means something while O is learned that way.
+    const double strength = alpha && alpha->learn && alpha->update == AlphaUpdate::kPosterior ? alpha->strength : std::nan("");
+    history[static_cast<size_t>(restart)].push_back({e.log_likelihood, objective, strength, theta});
   };
   const LearnResult learned = learn_reward(mdp, estep, options);
   const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
@@ -109,6 +112,7 @@ FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajecto
   for (const Iterate& i : history[static_cast<size_t>(learned.selected_restart)]) {
     fit.history_log_likelihood.push_back(i.log_likelihood);
     fit.history_objective.push_back(i.objective);
+    fit.history_prior_strength.push_back(i.strength);
     fit.history_theta.push_back(i.theta);
   }
   fit.refined = best.alpha ? *best.alpha : estep.prior();

@@ -45,7 +45,8 @@ struct FittedHierarchical {
   int em_iterations = 0;
   bool converged = false;
   std::string status;
-  std::vector<double> history_log_likelihood, history_objective;  // per EM iterate of the selected restart
+  // Per EM iterate of the selected restart; the prior strength is NaN unless O is learned by the posterior update.
+  std::vector<double> history_log_likelihood, history_objective, history_prior_strength;
   std::vector<Eigen::VectorXd> history_theta;
   ObservationPrior given;    // the prior learned from, with the settings applied, before the unlisted catch-all
   ObservationPrior refined;  // the learned Dirichlet parameters (the catch-all included)

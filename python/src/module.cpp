@@ -19,6 +19,7 @@
 #include "learner/estep.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
+#include "learner/maxcausalent.hpp"
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "learner/value_iteration.hpp"
@@ -513,6 +514,26 @@ PYBIND11_MODULE(_hbirl, m) {
     return p;
   });
 
+  m.def(
+      "causal_log_likelihood",
+      [](const Mdp& mdp, const std::vector<IntArray>& trajectories, const Eigen::VectorXd& theta) {
+        const Eigen::VectorXd w = theta_of(mdp, theta, "theta");
+        const std::vector<Trajectory> steps = trajectories_of(mdp, trajectories, "trajectories");
+        double value = 0.0;
+        Eigen::VectorXd gradient(mdp.num_features());
+        {
+          py::gil_scoped_release released;
+          CausalLikelihood objective(mdp, visit_counts(mdp, steps));
+          objective.evaluate(w, &gradient);
+          value = objective.log_likelihood();
+          gradient *= objective.total_count();  // evaluate() gives d(L / M); L's own gradient
+        }
+        return py::make_tuple(value, gradient);
+      },
+      py::arg("mdp"), py::arg("trajectories"), py::arg("theta"),
+      "The causal log-likelihood L(theta) of true trajectories (list of (T, 2) arrays) under the soft policy of\n"
+      "theta, and its exact gradient (K,): what MaxCausalEntIRL maximises, for an optimiser of your own\n"
+      "(docs/MODEL.md).");
   m.def("_fit_maxcausalent", &fit_maxcausalent, py::arg("mdp"), py::arg("trajectories"), py::arg("optimizer"), py::arg("l2"),
         py::arg("restarts"), py::arg("seed"), py::arg("max_iterations"), py::arg("tolerance"), py::arg("threads"));
 
@@ -546,6 +567,7 @@ PYBIND11_MODULE(_hbirl, m) {
       .def_readonly("status", &FittedHierarchical::status)
       .def_readonly("history_log_likelihood", &FittedHierarchical::history_log_likelihood)
       .def_readonly("history_objective", &FittedHierarchical::history_objective)
+      .def_readonly("history_prior_strength", &FittedHierarchical::history_prior_strength)
       .def_property_readonly("history_theta", [](const FittedHierarchical& f) {
         Eigen::MatrixXd out(static_cast<Eigen::Index>(f.history_theta.size()), f.theta.size());
         for (size_t i = 0; i < f.history_theta.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = f.history_theta[i].transpose();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <numeric>
 
 #include "learner/input_error.hpp"
 
@@ -89,6 +90,27 @@ TEST(ProblemFile, RoundTripsThroughJson) {
   EXPECT_EQ(p.demonstration[0].steps->eta, q.demonstration[0].steps->eta);
   EXPECT_EQ(p.demonstration[0].steps->step_begin, q.demonstration[0].steps->step_begin);
   EXPECT_EQ(*p.demonstration[0].truth, *q.demonstration[0].truth);
+}
+
+// An MDP written and read back is the same MDP to the bit, even where its start
+// distribution sums to 1 only up to rounding (25 x 0.04 in doubles: reading it used to
+// renormalise every probability by an ulp, so a recorded run's exported problem learned
+// another theta in the 8th digit).
+TEST(ProblemFile, AStartDistributionThatSumsToOneUpToRoundingReadsBackBitForBit) {
+  Problem p;
+  std::vector<TransitionEntry> transitions;
+  for (int s = 0; s < 25; ++s) transitions.push_back({s, 0, (s + 1) % 25, 1.0});
+  p.mdp = make_mdp(25, 1, 1, transitions, {{0, 0, 0, 1.0}}, Eigen::VectorXd::Constant(25, 1.0 / 25.0), {}, 0.9);
+  ASSERT_NE(std::accumulate(p.mdp.start.begin(), p.mdp.start.end(), 0.0), 1.0);  // the case in point (summed in order)
+  DemonstratedTrajectory walk;
+  walk.truth = Trajectory{{0, 0}, {1, 0}};
+  p.demonstration.push_back(walk);
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  EXPECT_EQ(q.mdp.start, p.mdp.start);
+  // A sum off by more than rounding (within the file tolerance) is still renormalised.
+  nlohmann::json doc = problem_to_json(p);
+  doc["mdp"]["start"][0][1] = 0.04 + 1e-9;
+  EXPECT_NEAR(parse_problem(doc.dump()).mdp.start.sum(), 1.0, 1e-15);
 }
 
 // The observation model's learning options: defaults, every key, the round trip, and one

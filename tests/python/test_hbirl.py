@@ -162,3 +162,21 @@ def test_fit_releases_the_gil():
     mdp = hbirl.Mdp(T, rng.random((S, A, K)), discount=0.95)
     trajectories = [np.column_stack([rng.integers(0, S, 40), rng.integers(0, A, 40)]) for _ in range(50)]
     assert_releases_the_gil(lambda: hbirl.MaxCausalEntIRL(threads=1).fit(mdp, trajectories))
+
+
+def test_causal_log_likelihood_gradient_matches_finite_differences():
+    # Independent truth: central differences of L itself; and L is the log-probability of
+    # the demonstrated actions under the soft policy, summed (computed here in numpy).
+    mdp = chain(6)
+    rng = np.random.default_rng(5)
+    trajectories = [np.column_stack([rng.integers(0, 5, 7), rng.integers(0, 2, 7)]) for _ in range(4)]
+    theta = np.array([0.4, -0.3])
+    value, gradient = hbirl.causal_log_likelihood(mdp, trajectories, theta)
+    pi = mdp.soft_policy(theta)
+    assert value == pytest.approx(sum(np.log(pi[t[:, 0], t[:, 1]]).sum() for t in trajectories), rel=1e-10)
+    h = 1e-6
+    for k in range(2):
+        e = np.eye(2)[k] * h
+        numeric = (hbirl.causal_log_likelihood(mdp, trajectories, theta + e)[0] -
+                   hbirl.causal_log_likelihood(mdp, trajectories, theta - e)[0]) / (2 * h)
+        assert gradient[k] == pytest.approx(numeric, rel=1e-5, abs=1e-7)

@@ -75,6 +75,11 @@ def test_fitted_attributes_shapes_and_dtypes(grid):
     assert n >= 2 and model.converged_
     assert model.history_["log_likelihood"].shape == (n,) and model.history_["theta"].shape == (n, K)
     np.testing.assert_array_equal(model.history_["theta"][-1], model.theta_)
+    # EM's objective never decreases while the subject prior's strength stands.
+    objective, strength = model.history_["objective"], model.history_["prior_strength"]
+    same = strength[1:] == strength[:-1]
+    assert same.any()
+    assert np.all(np.diff(objective)[same] >= -1e-9 * np.abs(objective[1:][same]))
     assert model.observation_model_["subject"].shape == (S, A, 4)
     assert model.observation_model_["confounders"].shape == (3, 4)
     np.testing.assert_allclose(model.observation_model_["subject"].sum(axis=2), 1.0)

@@ -108,6 +108,22 @@ PY
     "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" --allow-incomplete --out "$tmp/cut.json" 2>/dev/null
     grep -q '"incomplete": "the recording has no END_RUN' "$tmp/cut.json" || fail "--allow-incomplete did not say what is missing"
     echo "cut recording: $(cat "$tmp/cut.err")"
+    # In a notebook: hbirl.read_log and HierarchicalIRL give the live theta (when the Python package is built).
+    if [ -d "$build/python/hbirl" ]; then
+      PYTHONPATH="$build/python" HBIRL_CLI="$build/hbirl" /usr/bin/python3 - "$tmp/gw/run.lcmlog" "$tmp/gw/run.key" "$tmp/gw/result.json" <<'PY' ||
+import json, sys, hbirl
+run = hbirl.read_log(sys.argv[1], key=sys.argv[2])
+model = hbirl.HierarchicalIRL().fit(run.mdp, run.observations(), run.observation_prior)
+live = json.load(open(sys.argv[3]))["theta"]
+assert model.theta_.tolist() == live, (model.theta_.tolist(), live)
+try:
+    hbirl.read_log(sys.argv[1])  # a signed run without its key
+    sys.exit("read_log accepted a signed run without its key")
+except ValueError as e:
+    assert str(e).startswith(sys.argv[1] + ": ") and "\n" not in str(e), e
+PY
+        fail "hbirl.read_log + HierarchicalIRL did not give the live theta"
+    fi
     echo "gridworld over LCM: theta $(theta "$tmp/gw/result.json"); ILE $(ile "$tmp/gw/result.json")"
     ;;
   third_domain)
