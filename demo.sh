@@ -9,7 +9,10 @@ set -euo pipefail
 cd "$(dirname "$0")"
 scripts/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build --target hbirl hbirl-services hbirl-dashboard -j"$(nproc)" >/dev/null
+targets=(hbirl hbirl-services hbirl-dashboard)
+# The Python package too, when it is configured (pybind11 and numpy there): README.md "Python".
+[ -d build/python/hbirl ] && targets+=(hbirl_python)
+cmake --build build --target "${targets[@]}" -j"$(nproc)" >/dev/null
 keep=()
 [ -t 0 ] && [ -t 1 ] && keep=(--keep-dashboard)
 exec services/launch.sh --record "${keep[@]}" "$@"
