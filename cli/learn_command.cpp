@@ -51,6 +51,9 @@ std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.da
 
 // The observation-based E-step for the problem (every trajectory needs steps).
 std::unique_ptr<ObservationEStep> observation_estep(const Problem& problem, const LearnArgs& args) {
+  if (!problem.observation_model) {
+    throw in_file(args.problem, InputError("observation_model", "missing; learning from observations needs it (or use --from truth)"));
+  }
   ProblemObservations in;
   try {
     in = problem_observations(problem);
@@ -184,7 +187,9 @@ int run_learn(const LearnArgs& args) {
   std::optional<McmcDiagnostics> mcmc;  // of this last E-step pass, at the returned point
   if (observed != nullptr) {
     model = dirichlet_mean(best.alpha ? *best.alpha : observed->prior());  // the prior learned from (controlled run, catch-all)
-    const EStepStatistics stats = observed->statistics(policy, *model, args.seed);
+    const ObservationPrior& learned_from = best.alpha ? *best.alpha : observed->prior();
+    const std::optional<RowMatrix> eta = observed->learned_eta(learned_from);  // the model's eta, when learned
+    const EStepStatistics stats = observed->statistics(policy, *model, args.seed, eta ? &*eta : nullptr);
     counts = stats.counts;
     if (args.engine.name == "mcmc") mcmc = stats.mcmc;
   } else {

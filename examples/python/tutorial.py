@@ -123,7 +123,8 @@ def watch(truth, alone=False):
             if alone:
                 eta, pick = np.ones((per_step, 1)), np.zeros(per_step, dtype=int)  # the controlled run: only the expert
             else:
-                pick = np.where(rng.random(per_step) < 0.8, z, rng.integers(0, E + 1, per_step))
+                other = (z + rng.integers(1, E + 1, per_step)) % (E + 1)  # one of the other sources
+                pick = np.where(rng.random(per_step) < 0.8, z, other)
                 eta = np.full((per_step, E + 1), 0.2 / E)
                 eta[np.arange(per_step), pick] = 0.8
             trajectory.append((w, eta, pick))  # the pick is the labeller's rule: η's context

@@ -8,31 +8,39 @@
 
 namespace hbirl {
 
-ProblemObservations problem_observations(const Problem& problem) {
+ObservationPrior problem_prior(const Problem& problem) {
   if (!problem.observation_model) {
-    throw InputError("observation_model", "missing; learning from observations needs it (or use --from truth)");
+    throw InputError("observation_model", "missing; learning from observations needs it");
   }
-  ProblemObservations out;
   std::vector<ObservedTrajectory> controlled_observed;
   std::vector<Trajectory> controlled_truth;
+  for (const DemonstratedTrajectory& item : problem.demonstration) {
+    if (!item.controlled) continue;
+    controlled_observed.push_back(*item.steps);
+    controlled_truth.push_back(*item.truth);
+  }
+  ObservationPrior prior = *problem.observation_model;
+  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/domain.hpp).
+  if (!controlled_observed.empty()) {
+    prior.subject_alpha = controlled_run_prior(problem.mdp, controlled_truth, controlled_observed, prior.num_symbols);
+  }
+  return prior;
+}
+
+ProblemObservations problem_observations(const Problem& problem) {
+  ProblemObservations out;
+  out.prior = problem_prior(problem);
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     const DemonstratedTrajectory& item = problem.demonstration[i];
-    if (item.controlled) {  // the subject prior's, below
-      controlled_observed.push_back(*item.steps);
-      controlled_truth.push_back(*item.truth);
-      continue;
-    }
+    if (item.controlled) continue;  // in the prior
     if (!item.steps) {
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "missing; learning from observations needs it for every trajectory");
     }
     out.trajectories.push_back(*item.steps);
     out.demonstration_index.push_back(i);
   }
-  if (out.trajectories.empty()) throw InputError("demonstration", "has only controlled-run trajectories");
-  out.prior = *problem.observation_model;
-  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/domain.hpp).
-  if (!controlled_observed.empty()) {
-    out.prior.subject_alpha = controlled_run_prior(problem.mdp, controlled_truth, controlled_observed, out.prior.num_symbols);
+  if (out.trajectories.empty()) {
+    throw InputError("demonstration", problem.demonstration.empty() ? "has no trajectories" : "has only controlled-run trajectories");
   }
   return out;
 }

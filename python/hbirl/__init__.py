@@ -27,12 +27,47 @@ import tempfile
 import numpy as np
 
 from . import _hbirl
-from ._hbirl import Mdp, ObservationPrior, Problem, __version__, causal_log_likelihood, ile, load_problem
+from ._hbirl import Mdp, ObservationPrior, Problem, __version__, ile, load_domain, load_problem
 
 __all__ = [
     "Mdp", "ObservationPrior", "Observations", "Problem", "MaxCausalEntIRL", "HierarchicalIRL",
-    "causal_log_likelihood", "controlled_run_prior", "gridworld", "ile", "load_problem", "onion", "read_log", "__version__",
+    "causal_log_likelihood", "controlled_run_prior", "gridworld", "ile", "load_domain", "load_problem", "onion", "read_log", "__version__",
 ]
+
+
+def _int_array(values, name):
+    """An int64 array of whole numbers: floats such as 0.5 are refused, not truncated."""
+    a = np.asarray(values)
+    if a.dtype == object or not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating) or a.dtype == bool):
+        raise ValueError(f"{name}: must be an array of integers")
+    if np.issubdtype(a.dtype, np.floating):
+        if a.size and not (np.all(np.isfinite(a)) and np.all(a == np.floor(a)) and np.all(np.abs(a) < 2.0 ** 62)):
+            raise ValueError(f"{name}: must be whole numbers (got a fraction, inf or NaN)")
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _int(value, name, low=-(2 ** 31), high=2 ** 31 - 1):
+    """A whole number in [low, high], or ValueError naming it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer, float, np.floating)) or value != int(value):
+        raise ValueError(f"{name}: must be a whole number, got {value!r}")
+    if not low <= int(value) <= high:
+        raise ValueError(f"{name}: must be in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
+def _float(value, name):
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a number, got {value!r}") from None
+
+
+def causal_log_likelihood(mdp, trajectories, theta):
+    """The causal log-likelihood L(theta) of true trajectories (a list of (T, 2) integer
+    arrays of (state, action)) under the soft policy of theta, and its exact gradient
+    (K,): what MaxCausalEntIRL maximises, for an optimiser of your own (docs/MODEL.md)."""
+    return _hbirl.causal_log_likelihood(mdp, [_int_array(t, f"trajectories[{i}]") for i, t in enumerate(trajectories)],
+                                        np.asarray(theta, dtype=np.float64))
 
 
 class Observations:
@@ -46,22 +81,28 @@ class Observations:
     lengths (trajectories,) int: steps per trajectory.
     contexts (N,) int, optional: which rule of the labeller gave each eta (learned eta
         shares one source distribution per context; without them each distinct eta is one).
+        -1 in every observation of a trajectory: that trajectory has none.
     ends_in_terminal (trajectories,) bool, optional: the trajectory's last action led into a
-        terminal state (rather than being cut off).
+        terminal state (rather than being cut off). Default as in a problem file: true when
+        the MDP has terminal states.
     """
 
     def __init__(self, symbols, eta, step_index, lengths, contexts=None, ends_in_terminal=None):
-        self.symbols = np.ascontiguousarray(symbols, dtype=np.int64)
-        self.eta = np.ascontiguousarray(eta, dtype=np.float64)
-        self.step_index = np.ascontiguousarray(step_index, dtype=np.int64)
-        self.lengths = np.ascontiguousarray(lengths, dtype=np.int64)
-        self.contexts = None if contexts is None else np.ascontiguousarray(contexts, dtype=np.int64)
+        self.symbols = _int_array(symbols, "observations.symbols")
+        try:
+            self.eta = np.ascontiguousarray(eta, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError("observations.eta: must be an (N, J) array of numbers") from None
+        self.step_index = _int_array(step_index, "observations.step_index")
+        self.lengths = _int_array(lengths, "observations.lengths")
+        self.contexts = None if contexts is None else _int_array(contexts, "observations.contexts")
         self.ends_in_terminal = None if ends_in_terminal is None else [bool(x) for x in ends_in_terminal]
 
     @classmethod
-    def from_list(cls, trajectories):
+    def from_list(cls, trajectories, ends_in_terminal=None):
         """From a list of trajectories, each a list of steps, each (symbols, eta) or
-        (symbols, eta, contexts): symbols (n,), eta (n, J), contexts (n,); n may be 0."""
+        (symbols, eta, contexts): symbols (n,), eta (n, J), contexts (n,); n may be 0.
+        ends_in_terminal: as in Observations (the list form cannot carry it)."""
         if isinstance(trajectories, Observations):
             return trajectories
         symbols, eta, steps, contexts, lengths = [], [], [], [], []
@@ -81,7 +122,10 @@ class Observations:
                     raise ValueError(f"{where}: symbols must be a 1-D array")
                 if w.size and not np.issubdtype(w.dtype, np.integer):
                     raise ValueError(f"{where}: symbols must be integers")
-                e = np.asarray(item[1], dtype=np.float64)
+                try:
+                    e = np.asarray(item[1], dtype=np.float64)
+                except (TypeError, ValueError):
+                    raise ValueError(f"{where}: eta must be an (n, J) array of numbers") from None
                 if w.size == 0:
                     e = e.reshape(0, sources or 1) if e.size == 0 else e
                 if e.ndim != 2 or e.shape[0] != w.size:
@@ -97,10 +141,10 @@ class Observations:
                     elif has != with_contexts:
                         raise ValueError(f"{where}: contexts are given for all observations or for none")
                     if has:
-                        c = np.asarray(item[2])
+                        c = _int_array(item[2], f"{where}: contexts")
                         if c.shape != w.shape:
                             raise ValueError(f"{where}: contexts must have one entry per symbol")
-                        contexts.append(c.astype(np.int64))
+                        contexts.append(c)
                     symbols.append(w.astype(np.int64))
                     eta.append(e)
                     steps.append(np.full(w.size, step, dtype=np.int64))
@@ -115,10 +159,12 @@ class Observations:
             cat(steps, np.int64),
             np.asarray(lengths, dtype=np.int64),
             cat(contexts, np.int64) if with_contexts else None,
+            ends_in_terminal,
         )
 
     def to_list(self):
-        """The list form: trajectories of steps of (symbols, eta[, contexts])."""
+        """The list form: trajectories of steps of (symbols, eta[, contexts]); it cannot
+        carry ends_in_terminal (keep this object, or pass it to from_list)."""
         out = []
         first = 0
         for length in self.lengths:
@@ -170,8 +216,9 @@ def controlled_run_prior(mdp, truth, observations, num_symbols):
     counts per (s, a) plus one, from the run's true steps (a list of (T, 2) arrays) and its
     observations (the subject alone: eta (n, 1) of ones). Returns an (S, A, W) array for
     ObservationPrior(subject_alpha=...)."""
-    return _hbirl.controlled_run_prior(mdp, [np.asarray(t) for t in truth], _as_observations(observations)._tuple(),
-                                       int(num_symbols))
+    alpha = _hbirl.controlled_run_prior(mdp, [_int_array(t, f"truth[{i}]") for i, t in enumerate(truth)],
+                                        _as_observations(observations)._tuple(), _int(num_symbols, "num_symbols"))
+    return alpha.reshape(mdp.num_states, mdp.num_actions, alpha.shape[1])
 
 
 def gridworld(size=5, trajectories=20, length=10, goal=None, goal_weight=1.0, intended=0.9, discount=0.95, seed=1,
@@ -294,8 +341,10 @@ class MaxCausalEntIRL(_Estimator):
     def fit(self, mdp, trajectories):
         """Learn reward weights from true trajectories, a list of (T, 2) integer arrays of
         (state, action). Returns self."""
-        result = _hbirl._fit_maxcausalent(mdp, list(trajectories), self.optimizer, float(self.l2), int(self.restarts),
-                                          int(self.seed), int(self.max_iterations), float(self.tolerance), int(self.threads))
+        result = _hbirl._fit_maxcausalent(mdp, [_int_array(t, f"trajectories[{i}]") for i, t in enumerate(trajectories)],
+                                          self.optimizer, _float(self.l2, "l2"), _int(self.restarts, "restarts", 1, 100000),
+                                          _int(self.seed, "seed", 0, 2 ** 64 - 1), _int(self.max_iterations, "max_iterations", 1),
+                                          _float(self.tolerance, "tolerance"), _int(self.threads, "threads", 0, 4096))
         self.theta_ = result["theta"]
         self.log_likelihood_ = result["log_likelihood"]
         self.policy_ = mdp.soft_policy(self.theta_)
@@ -359,23 +408,23 @@ class HierarchicalIRL(_Estimator):
 
     def _settings(self):
         s = _hbirl._HierarchicalSettings()
-        s.engine = self.engine
+        s.engine = str(self.engine)
         s.learn_observation_model = None if self.learn_observation_model is None else bool(self.learn_observation_model)
-        s.alpha_update = self.alpha_update or ""
-        s.eta = self.eta or ""
-        s.optimizer = self.optimizer
-        s.l2 = float(self.l2)
-        s.restarts = int(self.restarts)
-        s.seed = int(self.seed)
-        s.max_iterations = int(self.max_iterations)
-        s.tolerance = float(self.tolerance)
-        s.max_em_iterations = int(self.max_em_iterations)
-        s.alpha_tolerance = float(self.alpha_tolerance)
-        s.max_alpha_iterations = int(self.max_alpha_iterations)
-        s.mcmc_samples = int(self.mcmc_samples)
-        s.mcmc_burn_in = int(self.mcmc_burn_in)
-        s.mcmc_chains = int(self.mcmc_chains)
-        s.threads = int(self.threads)
+        s.alpha_update = str(self.alpha_update or "")
+        s.eta = str(self.eta or "")
+        s.optimizer = str(self.optimizer)
+        s.l2 = _float(self.l2, "l2")
+        s.restarts = _int(self.restarts, "restarts")
+        s.seed = _int(self.seed, "seed", 0, 2 ** 64 - 1)
+        s.max_iterations = _int(self.max_iterations, "max_iterations")
+        s.tolerance = _float(self.tolerance, "tolerance")
+        s.max_em_iterations = _int(self.max_em_iterations, "max_em_iterations")
+        s.alpha_tolerance = _float(self.alpha_tolerance, "alpha_tolerance")
+        s.max_alpha_iterations = _int(self.max_alpha_iterations, "max_alpha_iterations")
+        s.mcmc_samples = _int(self.mcmc_samples, "mcmc_samples")
+        s.mcmc_burn_in = _int(self.mcmc_burn_in, "mcmc_burn_in")
+        s.mcmc_chains = _int(self.mcmc_chains, "mcmc_chains")
+        s.threads = _int(self.threads, "threads")
         return s
 
     def fit(self, mdp, observations, prior):

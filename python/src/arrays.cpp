@@ -3,6 +3,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "learner/input_error.hpp"
@@ -26,15 +27,15 @@ long long checked_lengths(const IntArray& lengths) {
   long long total = 0;
   for (py::ssize_t i = 0; i < lengths.shape(0); ++i) {
     if (l(i) < 1) throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " + std::to_string(l(i)) + " steps; at least 1");
+    if (l(i) > kMaxSteps - total) throw InputError("observations.lengths", "more than " + std::to_string(kMaxSteps) + " steps in all");  // before adding: no overflow
     total += l(i);
-    if (total > kMaxSteps) throw InputError("observations.lengths", "more than " + std::to_string(kMaxSteps) + " steps in all");
   }
   return total;
 }
 
 }  // namespace
 
-std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior) {
+std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior, const Mdp& mdp) {
   const int sources = 1 + prior.num_confounders;
   if (flat.symbols.ndim() != 1) throw InputError("observations.symbols", "must be a 1-D array, one symbol per observation");
   const py::ssize_t n = flat.symbols.shape(0);
@@ -52,16 +53,26 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   if (flat.ends_in_terminal && flat.ends_in_terminal->size() != static_cast<size_t>(trajectories)) {
     throw InputError("observations.ends_in_terminal", "must have one entry per trajectory");
   }
+  // As in a problem file: by default a trajectory ran until it entered a terminal state
+  // when the MDP has them.
+  const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
+  if (flat.ends_in_terminal && !has_terminal) {
+    for (size_t i = 0; i < flat.ends_in_terminal->size(); ++i) {
+      if ((*flat.ends_in_terminal)[i]) throw InputError("observations.ends_in_terminal", "trajectory " + std::to_string(i) + ": true, but the MDP has no terminal states");
+    }
+  }
   const auto symbols = flat.symbols.unchecked<1>();
   const auto eta = flat.eta.unchecked<2>();
   const auto steps = flat.step_index.unchecked<1>();
+  const IntArray no_contexts(0);
+  const auto contexts = (flat.contexts ? *flat.contexts : no_contexts).unchecked<1>();
   std::vector<ObservedTrajectory> out(static_cast<size_t>(trajectories));
   py::ssize_t k = 0;  // the next observation
   long long first_step = 0;
   for (int i = 0; i < trajectories; ++i) {
     ObservedTrajectory& t = out[static_cast<size_t>(i)];
     t.step_begin.assign(1, 0);
-    if (flat.ends_in_terminal) t.ends_in_terminal = (*flat.ends_in_terminal)[static_cast<size_t>(i)];
+    t.ends_in_terminal = flat.ends_in_terminal ? static_cast<bool>((*flat.ends_in_terminal)[static_cast<size_t>(i)]) : has_terminal;
     const long long end_step = first_step + lengths(i);
     py::ssize_t begin = k;
     while (k < n && steps(k) < end_step) ++k;
@@ -89,9 +100,13 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
       const std::string wrong = normalise_eta(t.eta.row(row).data(), sources);
       if (!wrong.empty()) throw InputError(where, "eta " + wrong);
       if (flat.contexts) {
-        const long long c = flat.contexts->at(m);
-        if (c < 0 || c >= kMaxContexts) throw InputError(where, "context " + std::to_string(c) + " is not in [0, " + std::to_string(kMaxContexts - 1) + "]");
-        t.contexts.push_back(static_cast<int>(c));
+        // -1: none (a trajectory gives contexts to all its observations or none, as in a problem file).
+        const long long c = contexts(m);
+        if (c < -1 || c >= kMaxContexts) throw InputError(where, "context " + std::to_string(c) + " is not in [0, " + std::to_string(kMaxContexts - 1) + "] (or -1: none)");
+        if ((c == -1) != (m == begin ? c == -1 : t.contexts.empty())) {
+          throw InputError(where, "some observations of the trajectory have a context and others not (-1)");
+        }
+        if (c >= 0) t.contexts.push_back(static_cast<int>(c));
       }
     }
     for (; step < end_step; ++step) t.step_begin.push_back(static_cast<int>(k - begin));

@@ -23,7 +23,8 @@ void check(const HierarchicalSettings& s) {
   }
   if (!s.eta.empty() && s.eta != "stated" && s.eta != "learned") throw InputError("eta", "'" + s.eta + "' is not stated or learned");
   if (!(s.l2 >= 0.0) || !std::isfinite(s.l2)) throw InputError("l2", "must be finite and >= 0");
-  if (s.restarts < 1) throw InputError("restarts", "must be at least 1");
+  // The command line's ranges (hbirl learn --help): a number alone must not claim gigabytes.
+  if (s.restarts < 1 || s.restarts > 100000) throw InputError("restarts", "must be in [1, 100000]");
   if (s.max_iterations < 1) throw InputError("max_iterations", "must be at least 1");
   if (!(s.tolerance > 0.0)) throw InputError("tolerance", "must be > 0");
   if (!(s.eg_radius > 0.0)) throw InputError("eg_radius", "must be > 0");
@@ -31,10 +32,10 @@ void check(const HierarchicalSettings& s) {
   if (s.max_em_iterations < 1) throw InputError("max_em_iterations", "must be at least 1");
   if (!(s.alpha_tolerance > 0.0)) throw InputError("alpha_tolerance", "must be > 0");
   if (s.max_alpha_iterations < 1) throw InputError("max_alpha_iterations", "must be at least 1");
-  if (s.threads < 0) throw InputError("threads", "must be >= 0 (0: one per core)");
-  if (s.mcmc.samples < 1) throw InputError("mcmc_samples", "must be at least 1");
-  if (s.mcmc.burn_in < 0) throw InputError("mcmc_burn_in", "must be >= 0");
-  if (s.mcmc.chains < 1) throw InputError("mcmc_chains", "must be at least 1");
+  if (s.threads < 0 || s.threads > 4096) throw InputError("threads", "must be in [0, 4096] (0: one per core)");
+  if (s.mcmc.samples < 1 || s.mcmc.samples > 100000000) throw InputError("mcmc_samples", "must be in [1, 100000000]");
+  if (s.mcmc.burn_in < 0 || s.mcmc.burn_in > 100000000) throw InputError("mcmc_burn_in", "must be in [0, 100000000]");
+  if (s.mcmc.chains < 1 || s.mcmc.chains > 100000) throw InputError("mcmc_chains", "must be in [1, 100000]");
 }
 
 EngineFactory engine_of(const std::string& engine, const McmcOptions& mcmc) {
@@ -60,9 +61,18 @@ LearnOptions learn_options(const HierarchicalSettings& s) {
 
 }  // namespace
 
+void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior) {
+  if (prior.subject_alpha.rows() != mdp.num_pairs() || prior.subject_alpha.cols() != prior.num_symbols ||
+      prior.confounder_alpha.rows() != prior.num_confounders || prior.confounder_alpha.cols() != prior.num_symbols) {
+    throw InputError("prior", "was made for another MDP (" + std::to_string(prior.subject_alpha.rows()) + " state-action pairs, this one " +
+                                  std::to_string(mdp.num_pairs()) + ")");
+  }
+}
+
 FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajectory> observations, ObservationPrior prior,
                                     const HierarchicalSettings& settings) {
   check(settings);
+  check_prior_fits(mdp, prior);
   if (observations.empty()) throw InputError("observations", "none given");
   if (settings.learn_observation_model) prior.learn = *settings.learn_observation_model;
   AlphaUpdate update;
@@ -148,7 +158,8 @@ std::vector<ObservedTrajectory> FittedHierarchical::believed(std::vector<Observe
         const auto it = context_of.find(std::vector<double>(t.eta.row(n).data(), t.eta.row(n).data() + t.eta.cols()));
         if (it != context_of.end()) c = it->second;
       }
-      if (c >= 0 && c < learned.rows()) t.eta.row(n) = learned.row(c);
+      // Only contexts fit saw: an id it never met has a learned eta of no data (uniform).
+      if (c >= 0 && c < learned.rows() && learned_eta->observations[c] > 0.0) t.eta.row(n) = learned.row(c);
     }
   }
   return trajectories;

@@ -60,10 +60,13 @@ struct FittedHierarchical {
 
   // The observations as this model sees them: the unlisted catch-all added as when fitting,
   // and with learned eta each observation's eta replaced by its context's learned one
-  // (contexts by id when the observations carry them, else by the stated eta; an unseen
-  // context keeps its stated eta).
+  // (contexts by id when the observations carry them, else by the stated eta; a context
+  // fit never saw keeps its stated eta).
   std::vector<ObservedTrajectory> believed(std::vector<ObservedTrajectory> trajectories) const;
 };
+
+// InputError("prior") unless the prior's shapes are the MDP's.
+void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior);
 
 // Throws InputError naming the argument or the observation when it cannot be learned from.
 FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajectory> observations, ObservationPrior prior,

@@ -23,6 +23,7 @@
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "learner/value_iteration.hpp"
+#include "problem/domain_file.hpp"
 #include "problem/json_format.hpp"
 #include "problem/problem_file.hpp"
 #include "problem/problem_observations.hpp"
@@ -70,11 +71,14 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
   Array transitions;
   if (py::hasattr(transitions_in, "tocoo")) {
     const py::object coo = transitions_in.attr("tocoo")();
-    const auto shape = coo.attr("shape").cast<std::pair<long long, long long>>();
-    if (shape.second < 1 || shape.first % shape.second != 0) throw InputError("transitions", "a sparse matrix must be (S * A, S)");
-    const long long sparse_actions = shape.first / shape.second;
-    if (num_states && *num_states != shape.second) throw InputError("transitions", "has " + std::to_string(shape.second) + " states, expected " + std::to_string(*num_states));
-    num_states = static_cast<int>(shape.second);
+    const py::tuple shape = coo.attr("shape");
+    if (shape.size() != 2) throw InputError("transitions", "a sparse matrix must be (S * A, S)");
+    const auto rows = shape[0].cast<long long>(), cols = shape[1].cast<long long>();
+    if (cols < 1 || rows < cols || rows % cols != 0 || rows > (1LL << 28)) throw InputError("transitions", "a sparse matrix must be (S * A, S) with S * A <= 2^28");
+    const long long sparse_actions = rows / cols;
+    if (num_states && *num_states != cols) throw InputError("transitions", "has " + std::to_string(cols) + " states, num_states " + std::to_string(*num_states));
+    if (num_actions && *num_actions != sparse_actions) throw InputError("transitions", "has " + std::to_string(sparse_actions) + " actions, num_actions " + std::to_string(*num_actions));
+    num_states = static_cast<int>(cols);
     num_actions = static_cast<int>(sparse_actions);
     const IntArray row = coo.attr("row").cast<IntArray>(), col = coo.attr("col").cast<IntArray>();
     const Array data = coo.attr("data").cast<Array>();
@@ -126,7 +130,10 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     throw InputError("num_states", std::to_string(S) + " states, but only " + std::to_string(t_rows->index.size()) + " transitions and " +
                                        std::to_string(terminal.size()) + " terminal states (each state is terminal or has transitions)");
   }
-  if (S * A > (1LL << 28) || S * A * std::max(K, 1LL) > (1LL << 28)) throw InputError("features", "num_states * num_actions * num_features is too large");
+  if (t_rows && S * A > static_cast<long long>(t_rows->index.size() + impossible.size() + terminal.size() * static_cast<size_t>(A))) {
+    throw InputError("num_actions", std::to_string(S * A) + " state-action pairs, more than the transitions, impossible actions and terminal states cover");
+  }
+  if (S * A > (1LL << 28) || S * A * std::max(K, 1LL) > (1LL << 28)) throw InputError("num_features", "num_states * num_actions * num_features is more than 2^28");
   if (start && start->size() != S) throw InputError("start", "must have one probability per state (" + std::to_string(S) + ")");
   std::vector<char> is_terminal(static_cast<size_t>(S), 0);
   for (int s : terminal) {
@@ -140,6 +147,7 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     }
     is_impossible[static_cast<size_t>(s * A + a)] = 1;
   }
+  py::gil_scoped_release released;  // the arrays are alive (the caller holds them); no Python below
   const auto keep = [&](long long s, long long a) { return !is_terminal[static_cast<size_t>(s)] && !is_impossible[static_cast<size_t>(s * A + a)]; };
   std::vector<TransitionEntry> entries;
   if (dense_t) {
@@ -195,32 +203,61 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
 // An observation prior from arrays (README.md "Python"): the subject's alpha as a number
 // (every (s, a) and symbol) or an (S, A, W) array, the confounders' as a number or an
 // (E, W) array; checked as a problem file's observation_model is.
+// A number (Python's or numpy's scalar, or a 0-d array), else nothing.
+std::optional<double> number_of(const py::object& value, const std::string& name) {
+  if (py::isinstance<py::bool_>(value) || py::isinstance<py::str>(value) || value.is_none()) {
+    throw InputError(name, "must be a number or an array");
+  }
+  if (py::module_::import("numpy").attr("ndim")(value).cast<int>() != 0) return std::nullopt;
+  try {
+    return py::float_(value).cast<double>();
+  } catch (const py::error_already_set&) {
+    throw InputError(name, "must be a number or an array");
+  }
+}
+
+Array array_of(const py::object& value, const std::string& name) {
+  try {
+    return value.cast<Array>();
+  } catch (const py::cast_error&) {
+    throw InputError(name, "must be a number or an array of numbers");
+  }
+}
+
 ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders, const py::object& subject_alpha,
-                            const py::object& confounder_alpha, const std::string& update, double c, const py::object& prior_strength,
-                            std::optional<bool> learn, std::optional<bool> learn_eta, double eta_strength, double unlisted_eta) {
+                            const py::object& confounder_alpha, std::optional<double> subject_alpha_default, const std::string& update,
+                            double c, const py::object& prior_strength, std::optional<bool> learn, std::optional<bool> learn_eta,
+                            double eta_strength, double unlisted_eta) {
   if (num_symbols < 1) throw InputError("num_symbols", "must be at least 1");
   if (num_confounders < 0) throw InputError("num_confounders", "must be >= 0");
   if ((static_cast<long long>(mdp.num_pairs()) + num_confounders) * num_symbols > (1LL << 28)) {
-    throw InputError("num_symbols", "(num_states * num_actions + num_confounders) * num_symbols is more than an observation model may take (2^28)");
+    throw InputError(num_confounders > mdp.num_pairs() ? "num_confounders" : "num_symbols",
+                     "(num_states * num_actions + num_confounders) * num_symbols is more than an observation model may take (2^28)");
   }
   ObservationPrior prior;
   prior.num_symbols = num_symbols;
   prior.num_confounders = num_confounders;
-  if (py::isinstance<py::float_>(subject_alpha) || py::isinstance<py::int_>(subject_alpha)) {
-    const double a = subject_alpha.cast<double>();
-    if (!(a > 0.0) || !std::isfinite(a)) throw InputError("subject_alpha", "must be > 0 and finite");
-    prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), num_symbols, a);
-    prior.subject_alpha_base = a;
+  // subject_alpha_default is the base of the posterior update's power prior (a problem
+  // file's subject_alpha_default, observations.hpp): counts above it are what the prior
+  // strength weighs. A number given for subject_alpha is its own base, as in a file that
+  // gives only subject_alpha_default.
+  if (const std::optional<double> a = number_of(subject_alpha, "subject_alpha")) {
+    if (!(*a > 0.0) || !std::isfinite(*a)) throw InputError("subject_alpha", "must be > 0 and finite");
+    prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), num_symbols, *a);
+    prior.subject_alpha_base = *a;
   } else {
-    prior.subject_alpha = pair_rows(mdp, subject_alpha.cast<Array>(), "subject_alpha");
+    prior.subject_alpha = pair_rows(mdp, array_of(subject_alpha, "subject_alpha"), "subject_alpha");
     if (prior.subject_alpha.cols() != num_symbols) throw InputError("subject_alpha", "must have num_symbols = " + std::to_string(num_symbols) + " columns");
   }
-  if (py::isinstance<py::float_>(confounder_alpha) || py::isinstance<py::int_>(confounder_alpha)) {
-    const double a = confounder_alpha.cast<double>();
-    if (!(a > 0.0) || !std::isfinite(a)) throw InputError("confounder_alpha", "must be > 0 and finite");
-    prior.confounder_alpha = Eigen::MatrixXd::Constant(num_confounders, num_symbols, a);
+  if (subject_alpha_default) {
+    if (!(*subject_alpha_default >= 0.0) || !std::isfinite(*subject_alpha_default)) throw InputError("subject_alpha_default", "must be >= 0 and finite");
+    prior.subject_alpha_base = *subject_alpha_default;
+  }
+  if (const std::optional<double> a = number_of(confounder_alpha, "confounder_alpha")) {
+    if (!(*a > 0.0) || !std::isfinite(*a)) throw InputError("confounder_alpha", "must be > 0 and finite");
+    prior.confounder_alpha = Eigen::MatrixXd::Constant(num_confounders, num_symbols, *a);
   } else {
-    const Array m = confounder_alpha.cast<Array>();
+    const Array m = array_of(confounder_alpha, "confounder_alpha");
     if (m.ndim() != 2 || m.shape(0) != num_confounders || m.shape(1) != num_symbols) {
       throw InputError("confounder_alpha", "must be an (E, W) array with E = num_confounders and W = num_symbols");
     }
@@ -247,7 +284,9 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
   if (py::isinstance<py::str>(prior_strength)) {
     if (prior_strength.cast<std::string>() != "auto") throw InputError("prior_strength", "must be \"auto\" or a number");
   } else {
-    const double s = prior_strength.cast<double>();
+    const std::optional<double> given = number_of(prior_strength, "prior_strength");
+    if (!given) throw InputError("prior_strength", "must be \"auto\" or a number");
+    const double s = *given;
     if (!(s >= ObservationPrior::kMinStrength && s <= ObservationPrior::kMaxStrength)) {
       throw InputError("prior_strength", "must be in [" + std::to_string(ObservationPrior::kMinStrength) + ", " + std::to_string(ObservationPrior::kMaxStrength) + "]");
     }
@@ -261,6 +300,22 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
   if (!(unlisted_eta >= 0.0 && unlisted_eta < 1.0)) throw InputError("unlisted_eta", "must be in [0, 1) (0: no catch-all source)");
   prior.unlisted_eta = unlisted_eta;
   return prior;
+}
+
+// read() with an InputError named after the file too ("path: field: what").
+template <typename Read>
+auto read_in_file(const std::string& path, Read&& read) {
+  try {
+    return read();
+  } catch (const InputError& e) {
+    throw InputError(path + (e.field().empty() ? "" : ": " + e.field()), e.message());
+  }
+}
+
+void warn_each(const std::string& path, const std::vector<std::string>& warnings) {
+  if (warnings.empty()) return;
+  py::module_ w = py::module_::import("warnings");
+  for (const auto& line : warnings) w.attr("warn")(path + ": " + line);
 }
 
 FlatObservations flat_of(const py::tuple& t) {
@@ -412,7 +467,7 @@ PYBIND11_MODULE(_hbirl, m) {
                                "Dirichlet priors of the observation model (paper §II): the subject's per (s, a), each confounding\n"
                                "element's, and how they and eta are learned.")
       .def(py::init(&make_prior), py::arg("mdp"), py::arg("num_symbols"), py::arg("num_confounders"), py::arg("subject_alpha") = 1.0,
-           py::arg("confounder_alpha") = 1.0, py::arg("update") = "posterior", py::arg("c") = 0.1, py::arg("prior_strength") = "auto",
+           py::arg("confounder_alpha") = 1.0, py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1, py::arg("prior_strength") = "auto",
            py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(), py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0)
       .def_property_readonly("num_symbols", [](const ObservationPrior& p) { return p.num_symbols; })
       .def_property_readonly("num_confounders", [](const ObservationPrior& p) { return p.num_confounders; })
@@ -433,11 +488,21 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "controlled_run_prior",
       [](const Mdp& mdp, const std::vector<IntArray>& truth, const py::tuple& observations, int num_symbols) {
+        if (num_symbols < 1 || static_cast<long long>(mdp.num_pairs()) * num_symbols > (1LL << 28)) {
+          throw InputError("num_symbols", "must be at least 1, and num_states * num_actions * num_symbols at most 2^28");
+        }
         ObservationPrior none;
         none.num_symbols = num_symbols;
         const std::vector<Trajectory> steps = trajectories_of(mdp, truth, "truth");
-        std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), none);
-        return per_state_action_symbol(mdp, controlled_run_prior(mdp, steps, seen, num_symbols));
+        std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), none, mdp);
+        py::gil_scoped_release released;
+        try {
+          return controlled_run_prior(mdp, steps, seen, num_symbols);
+        } catch (const InputError& e) {  // named as the arguments are
+          std::string field = e.field().rfind("ground_truth", 0) == 0 ? "truth" + e.field().substr(12) : e.field();
+          if (field == "observations.num_symbols") field = "num_symbols";
+          throw InputError(field, e.message());
+        }
       },
       py::arg("mdp"), py::arg("truth"), py::arg("observations"), py::arg("num_symbols"));
 
@@ -450,14 +515,27 @@ PYBIND11_MODULE(_hbirl, m) {
       .def(
           "truth_trajectories", [](const Problem& p) { return trajectories_to_arrays(p.truth_trajectories()); },
           "The demonstrations' true steps (the controlled run's left out), each a (T, 2) array of (state, action).")
-      .def("_observations", [](const Problem& p) { return flat_observations(problem_observations(p).trajectories); })
+      .def("_observations",
+           [](const Problem& p) {
+             std::vector<ObservedTrajectory> seen;
+             {
+               py::gil_scoped_release released;
+               seen = problem_observations(p).trajectories;
+             }
+             return flat_observations(seen);
+           })
       .def_property_readonly(
-          "observation_prior", [](const Problem& p) { return problem_observations(p).prior; },
+          "observation_prior",
+          [](const Problem& p) {
+            py::gil_scoped_release released;
+            return problem_prior(p);
+          },
           "The prior hbirl learn starts from: the file's observation_model, with the controlled run's counts as the\n"
           "subject's prior when the file has one.")
       .def(
           "save",
           [](const Problem& p, const std::string& path) {
+            py::gil_scoped_release released;
             std::ofstream out(path);
             out << format_json(problem_to_json(p));
             if (!out.flush()) throw InputError(path, "could not be written");
@@ -468,18 +546,35 @@ PYBIND11_MODULE(_hbirl, m) {
       [](const std::string& path) {
         std::vector<std::string> warnings;
         Problem p;
-        try {
-          p = read_problem_file(path, &warnings);
-        } catch (const InputError& e) {
-          throw InputError(path + (e.field().empty() ? "" : ": " + e.field()), e.message());
+        {
+          py::gil_scoped_release released;  // a large file takes seconds
+          p = read_in_file(path, [&] { return read_problem_file(path, &warnings); });
         }
-        if (!warnings.empty()) {
-          py::module_ w = py::module_::import("warnings");
-          for (const auto& line : warnings) w.attr("warn")(path + ": " + line);
-        }
+        warn_each(path, warnings);
         return p;
       },
       py::arg("path"), "Read and check a problem file; a bad file raises ValueError naming the file, the field and the reason.");
+  m.def(
+      "load_domain",
+      [](const std::string& path) {
+        std::vector<std::string> warnings;
+        Problem p;
+        {
+          py::gil_scoped_release released;
+          const DomainSpec d = read_in_file(path, [&] { return read_domain_file(path, &warnings); });
+          p.mdp = d.mdp;
+          p.state_names = d.state_names;
+          p.action_names = d.action_names;
+          p.feature_names = d.feature_names;
+          p.observation_model = d.observation_model;
+          p.true_weights = d.true_weights;
+        }
+        warn_each(path, warnings);
+        return p;
+      },
+      py::arg("path"),
+      "Read and check a domain file of the service set (README.md \"Your own task\") as a Problem without\n"
+      "demonstrations: its MDP, names, stated observation prior and true weights.");
   m.def(
       "gridworld",
       [](const GridworldProblemOptions& o) {
@@ -600,7 +695,8 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "_fit_hierarchical",
       [](const Mdp& mdp, const py::tuple& observations, const ObservationPrior& prior, const HierarchicalSettings& settings) {
-        std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), prior);
+        check_prior_fits(mdp, prior);
+        std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), prior, mdp);
         py::gil_scoped_release released;
         return fit_hierarchical(mdp, std::move(seen), prior, settings);
       },
@@ -608,7 +704,7 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "_posterior",
       [](const Mdp& mdp, const FittedHierarchical& fit, const py::tuple& observations) {
-        const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given);
+        const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given, mdp);
         Posteriors post;
         {
           py::gil_scoped_release released;
@@ -639,7 +735,7 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "_log_likelihoods",
       [](const Mdp& mdp, const FittedHierarchical& fit, const py::tuple& observations) {
-        const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given);
+        const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given, mdp);
         py::gil_scoped_release released;
         return log_likelihoods(mdp, fit, seen);
       },

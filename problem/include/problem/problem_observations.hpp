@@ -21,5 +21,7 @@ struct ProblemObservations {
 // Throws InputError naming the field ("observation_model", "demonstration[i].steps", or
 // the controlled run's) when the file cannot be learned from its observations.
 ProblemObservations problem_observations(const Problem& problem);
+// The prior alone (a file without demonstrations, e.g. a domain file, has one too).
+ObservationPrior problem_prior(const Problem& problem);
 
 }  // namespace hbirl
