@@ -19,6 +19,7 @@ Bad input raises ValueError with the command line's one-line message, naming the
 argument (README.md "Python"). Every long call releases the GIL.
 """
 import inspect
+import math
 import os
 import shutil
 import subprocess
@@ -37,10 +38,15 @@ __all__ = [
 
 def _int_array(values, name):
     """An int64 array of whole numbers: floats such as 0.5 are refused, not truncated."""
-    a = np.asarray(values)
-    if a.dtype == object or not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating) or a.dtype == bool):
+    try:
+        a = np.asarray(values)
+    except ValueError:  # ragged
+        raise ValueError(f"{name}: must be an array of integers") from None
+    if a.dtype.kind not in "iuf":  # not bool, complex, dates or objects
         raise ValueError(f"{name}: must be an array of integers")
-    if np.issubdtype(a.dtype, np.floating):
+    if a.dtype.kind == "u" and a.size and a.max() >= 2 ** 63:
+        raise ValueError(f"{name}: has values of 2^63 or more")
+    if a.dtype.kind == "f":
         if a.size and not (np.all(np.isfinite(a)) and np.all(a == np.floor(a)) and np.all(np.abs(a) < 2.0 ** 62)):
             raise ValueError(f"{name}: must be whole numbers (got a fraction, inf or NaN)")
     return np.ascontiguousarray(a, dtype=np.int64)
@@ -48,7 +54,8 @@ def _int_array(values, name):
 
 def _int(value, name, low=-(2 ** 31), high=2 ** 31 - 1):
     """A whole number in [low, high], or ValueError naming it."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer, float, np.floating)) or value != int(value):
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer, float, np.floating))
+            or (isinstance(value, (float, np.floating)) and not math.isfinite(value)) or value != int(value)):
         raise ValueError(f"{name}: must be a whole number, got {value!r}")
     if not low <= int(value) <= high:
         raise ValueError(f"{name}: must be in [{low}, {high}], got {value!r}")
@@ -58,7 +65,7 @@ def _int(value, name, low=-(2 ** 31), high=2 ** 31 - 1):
 def _float(value, name):
     try:
         return float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name}: must be a number, got {value!r}") from None
 
 
@@ -81,7 +88,8 @@ class Observations:
     lengths (trajectories,) int: steps per trajectory.
     contexts (N,) int, optional: which rule of the labeller gave each eta (learned eta
         shares one source distribution per context; without them each distinct eta is one).
-        -1 in every observation of a trajectory: that trajectory has none.
+        -1 in every observation of a trajectory: that trajectory has none (with eta learned,
+        every trajectory needs contexts or none does, as in a problem file).
     ends_in_terminal (trajectories,) bool, optional: the trajectory's last action led into a
         terminal state (rather than being cut off). Default as in a problem file: true when
         the MDP has terminal states.
@@ -106,7 +114,7 @@ class Observations:
         if isinstance(trajectories, Observations):
             return trajectories
         symbols, eta, steps, contexts, lengths = [], [], [], [], []
-        sources = None
+        sources = None  # columns of eta: from the first observation, else from an empty step's (0, J) eta
         with_contexts = None
         step = 0
         for i, trajectory in enumerate(trajectories):
@@ -126,8 +134,10 @@ class Observations:
                     e = np.asarray(item[1], dtype=np.float64)
                 except (TypeError, ValueError):
                     raise ValueError(f"{where}: eta must be an (n, J) array of numbers") from None
-                if w.size == 0:
-                    e = e.reshape(0, sources or 1) if e.size == 0 else e
+                if w.size == 0 and e.size == 0:
+                    width = e.shape[1] if e.ndim == 2 else None
+                    sources = sources or width
+                    e = e.reshape(0, sources or 1)
                 if e.ndim != 2 or e.shape[0] != w.size:
                     raise ValueError(f"{where}: eta must be an (n, J) array, one row per symbol")
                 if w.size:
@@ -186,7 +196,11 @@ class Observations:
         return f"Observations({len(self)} trajectories, {int(self.lengths.sum())} steps, {self.symbols.size} observations)"
 
     def _tuple(self):
-        return (self.symbols, self.eta, self.step_index, self.lengths, self.contexts, self.ends_in_terminal)
+        # Checked again here: the attributes are public, and may have been changed since.
+        return (_int_array(self.symbols, "observations.symbols"), np.ascontiguousarray(self.eta, dtype=np.float64),
+                _int_array(self.step_index, "observations.step_index"), _int_array(self.lengths, "observations.lengths"),
+                None if self.contexts is None else _int_array(self.contexts, "observations.contexts"),
+                None if self.ends_in_terminal is None else [bool(x) for x in self.ends_in_terminal])
 
     @classmethod
     def _of(cls, parts):
@@ -233,12 +247,13 @@ def gridworld(size=5, trajectories=20, length=10, goal=None, goal_weight=1.0, in
     pick is each observation's context), and a controlled run of `controlled` trajectories
     for the subject prior (Problem.observation_prior)."""
     o = _hbirl._GridworldOptions()
-    o.size, o.trajectories, o.length = int(size), int(trajectories), int(length)
-    o.goal = -1 if goal is None else int(goal)
-    o.goal_weight, o.intended, o.discount, o.seed = float(goal_weight), float(intended), float(discount), int(seed)
-    o.confounders = -1 if confounders is None else int(confounders)
-    o.per_step, o.controlled = int(per_step), int(controlled)
-    o.labeller_mass, o.labeller_accuracy = float(labeller_mass), float(labeller_accuracy)
+    o.size, o.trajectories, o.length = _int(size, "size"), _int(trajectories, "trajectories"), _int(length, "length")
+    o.goal = -1 if goal is None else _int(goal, "goal")
+    o.goal_weight, o.intended = _float(goal_weight, "goal_weight"), _float(intended, "intended")
+    o.discount, o.seed = _float(discount, "discount"), _int(seed, "seed", 0, 2 ** 64 - 1)
+    o.confounders = -1 if confounders is None else _int(confounders, "confounders")
+    o.per_step, o.controlled = _int(per_step, "per_step"), _int(controlled, "controlled")
+    o.labeller_mass, o.labeller_accuracy = _float(labeller_mass, "labeller_mass"), _float(labeller_accuracy, "labeller_accuracy")
     return _hbirl.gridworld(o)
 
 

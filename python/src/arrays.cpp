@@ -49,6 +49,15 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   }
   const long long total_steps = checked_lengths(flat.lengths);
   const auto lengths = flat.lengths.unchecked<1>();
+  // The forward-backward pass (and a posterior's marginals) hold T x (S * A) doubles per
+  // trajectory: bounded here, before anything is computed.
+  for (py::ssize_t i = 0; i < flat.lengths.shape(0); ++i) {
+    if (lengths(i) * static_cast<long long>(mdp.num_pairs()) > (1LL << 28)) {
+      throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " + std::to_string(lengths(i)) +
+                                                   " steps: with the MDP's " + std::to_string(mdp.num_pairs()) +
+                                                   " state-action pairs more than the 2^28 cells a pass may hold");
+    }
+  }
   const auto trajectories = static_cast<int>(flat.lengths.shape(0));
   if (flat.ends_in_terminal && flat.ends_in_terminal->size() != static_cast<size_t>(trajectories)) {
     throw InputError("observations.ends_in_terminal", "must have one entry per trajectory");

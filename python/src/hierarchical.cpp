@@ -33,9 +33,10 @@ void check(const HierarchicalSettings& s) {
   if (!(s.alpha_tolerance > 0.0)) throw InputError("alpha_tolerance", "must be > 0");
   if (s.max_alpha_iterations < 1) throw InputError("max_alpha_iterations", "must be at least 1");
   if (s.threads < 0 || s.threads > 4096) throw InputError("threads", "must be in [0, 4096] (0: one per core)");
-  if (s.mcmc.samples < 1 || s.mcmc.samples > 100000000) throw InputError("mcmc_samples", "must be in [1, 100000000]");
-  if (s.mcmc.burn_in < 0 || s.mcmc.burn_in > 100000000) throw InputError("mcmc_burn_in", "must be in [0, 100000000]");
-  if (s.mcmc.chains < 1 || s.mcmc.chains > 100000) throw InputError("mcmc_chains", "must be in [1, 100000]");
+  // The sampler keeps every kept sweep of every chain (4 bytes a step): a million is ~40 MB per chain of 10 steps.
+  if (s.mcmc.samples < 1 || s.mcmc.samples > 1000000) throw InputError("mcmc_samples", "must be in [1, 1000000]");
+  if (s.mcmc.burn_in < 0 || s.mcmc.burn_in > 1000000) throw InputError("mcmc_burn_in", "must be in [0, 1000000]");
+  if (s.mcmc.chains < 1 || s.mcmc.chains > 1000) throw InputError("mcmc_chains", "must be in [1, 1000]");
 }
 
 EngineFactory engine_of(const std::string& engine, const McmcOptions& mcmc) {
@@ -134,6 +135,12 @@ FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajecto
     fit.mcmc = estep.statistics(policy, fit.model, settings.seed, eta ? &*eta : nullptr).mcmc;
   }
   return fit;
+}
+
+void check_fitted_on(const Mdp& mdp, const FittedHierarchical& fit) {
+  if (fit.model.subject.rows() != mdp.num_pairs() || fit.theta.size() != mdp.num_features()) {
+    throw InputError("mdp", "is not the MDP this model was fitted on");
+  }
 }
 
 std::vector<ObservedTrajectory> FittedHierarchical::believed(std::vector<ObservedTrajectory> trajectories) const {

@@ -76,6 +76,8 @@ struct Posteriors {
   std::vector<TrajectoryPosterior> trajectories;
   McmcDiagnostics mcmc;  // worst over the trajectories (neutral for the exact engine)
 };
+// InputError("mdp") unless `fit` was fitted on an MDP of this one's shape.
+void check_fitted_on(const Mdp& mdp, const FittedHierarchical& fit);
 // Each trajectory's posterior under the fitted theta and model, by the fit's engine (MCMC:
 // trajectory i from stream i of the fit's seed, as hbirl posterior).
 Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit, const std::vector<ObservedTrajectory>& observations);

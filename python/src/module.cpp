@@ -97,6 +97,9 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
   std::optional<Rows> t_rows, f_rows;
   if (!dense_t) t_rows = rows_of(transitions, "transitions", "[s, a, s', probability]");
   if (!dense_f) f_rows = rows_of(features, "features", "[s, a, k, value]");
+  for (const auto& [name, n] : {std::pair{"num_states", num_states}, {"num_actions", num_actions}, {"num_features", num_features}}) {
+    if (n && *n < (std::string(name) == "num_features" ? 0 : 1)) throw InputError(name, "must be positive");
+  }
   long long S = num_states.value_or(-1), A = num_actions.value_or(-1), K = num_features.value_or(-1);
   const auto agree = [](long long& size, long long value, const char* name, const char* what) {
     if (size >= 0 && size != value) throw InputError(name, std::string("has ") + std::to_string(value) + " " + what + ", expected " + std::to_string(size));
@@ -130,8 +133,10 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     throw InputError("num_states", std::to_string(S) + " states, but only " + std::to_string(t_rows->index.size()) + " transitions and " +
                                        std::to_string(terminal.size()) + " terminal states (each state is terminal or has transitions)");
   }
-  if (t_rows && S * A > static_cast<long long>(t_rows->index.size() + impossible.size() + terminal.size() * static_cast<size_t>(A))) {
-    throw InputError("num_actions", std::to_string(S * A) + " state-action pairs, more than the transitions, impossible actions and terminal states cover");
+  // With rows, a pair without any is an impossible action (as a dense row of zeros); but an
+  // action no row uses at all cannot be asked for (a number alone must not claim gigabytes).
+  if (t_rows && A > max_a + 1) {
+    throw InputError("num_actions", std::to_string(A) + ", but no transition uses an action above " + std::to_string(max_a));
   }
   if (S * A > (1LL << 28) || S * A * std::max(K, 1LL) > (1LL << 28)) throw InputError("num_features", "num_states * num_actions * num_features is more than 2^28");
   if (start && start->size() != S) throw InputError("start", "must have one probability per state (" + std::to_string(S) + ")");
@@ -704,6 +709,7 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "_posterior",
       [](const Mdp& mdp, const FittedHierarchical& fit, const py::tuple& observations) {
+        check_fitted_on(mdp, fit);
         const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given, mdp);
         Posteriors post;
         {
@@ -735,6 +741,7 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "_log_likelihoods",
       [](const Mdp& mdp, const FittedHierarchical& fit, const py::tuple& observations) {
+        check_fitted_on(mdp, fit);
         const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), fit.given, mdp);
         py::gil_scoped_release released;
         return log_likelihoods(mdp, fit, seen);

@@ -29,6 +29,8 @@ void check(const GridworldProblemOptions& o) {
   check_range("labeller_mass", o.labeller.mass, 0.0, 1.0);
   check_range("labeller_accuracy", o.labeller.accuracy, 0.0, 1.0);
   check_range("controlled", o.controlled, 1, 100000);
+  // The demonstrations are held in memory: 10^8 steps is already ~2 GB of steps and their observations.
+  if (static_cast<double>(o.trajectories) * o.length > 1e8) throw InputError("trajectories", "trajectories * length is more than 10^8 steps");
 }
 
 // The demonstrations watched by the paper's Gridworld sensor with |E| elements, eta from

@@ -330,6 +330,15 @@ def tiny(rng=None):
     (lambda m, p, o: hbirl.Mdp(np.array([[0, 0, 0, 1.0]]), np.array([[0, 0, 0, 1.0]]), num_features=2 ** 29), "num_features"),
     (lambda m, p, o: hbirl.controlled_run_prior(m, [np.array([[0, 0]])], [[(np.array([0]), np.array([[1.0]]))]], 1 << 30), "num_symbols"),
     (lambda m, p, o: hbirl.controlled_run_prior(m, [np.array([[0, 0], [1, 0]])], [[(np.array([0]), np.array([[1.0]]))]], 3), "truth"),
+    (lambda m, p, o: hbirl.HierarchicalIRL(max_em_iterations=float("inf")).fit(m, o, p), "max_em_iterations"),
+    (lambda m, p, o: hbirl.HierarchicalIRL(mcmc_samples=10 ** 8).fit(m, o, p), "mcmc_samples"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, hbirl.Observations([0], [[1.0, 0]], [0], [1], contexts=np.array([2 ** 64 - 1], dtype=np.uint64)), p),
+     "observations.contexts"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, hbirl.Observations([True], [[1.0, 0]], [0], [1]), p), "observations.symbols"),
+    (lambda m, p, o: hbirl.HierarchicalIRL().fit(m, hbirl.Observations([0], [[1.0, 0]], [0], [2 ** 26]), p), "observations.lengths"),
+    (lambda m, p, o: hbirl.Mdp(np.ones((1, 1, 1)), np.zeros((1, 1, 1)), num_states=-1), "num_states"),
+    (lambda m, p, o: hbirl.gridworld(trajectories=10 ** 7, length=10 ** 6), "trajectories"),
+    (lambda m, p, o: hbirl.gridworld(size=4.5), "size"),
 ])
 def test_bad_input_names_the_argument(make, field):
     mdp, prior, obs = tiny()
@@ -447,3 +456,29 @@ def test_load_domain_reads_a_service_set_domain_file(tmp_path):
     bad.write_text(json.dumps(doc))
     with pytest.raises(ValueError, match=r"bad_domain\.json: sensor\.occlusion"):
         hbirl.load_domain(str(bad))
+
+
+def test_a_model_refuses_another_mdp_and_empty_steps_keep_their_width():
+    mdp, prior, obs = tiny()
+    model = hbirl.HierarchicalIRL(max_em_iterations=2).fit(mdp, obs, prior)
+    other = hbirl.Mdp(np.full((4, 2, 4), 0.25), np.zeros((4, 2, 2)))
+    model.mdp_ = other
+    with pytest.raises(ValueError, match="^mdp: is not the MDP"):
+        model.score(obs)
+    model.mdp_ = mdp
+    occluded = [[(np.zeros(0, int), np.zeros((0, 2)))] * 3]  # a trajectory seen at no step
+    assert np.isfinite(model.score(occluded))
+    marginals, sources = model.posterior(occluded)
+    assert marginals[0].shape == (3, 3, 2) and sources.shape == (0, 2)
+
+
+def test_a_pair_without_transitions_is_impossible_in_every_form():
+    scipy_sparse = pytest.importorskip("scipy.sparse")
+    T = np.zeros((2, 2, 2))
+    T[0, 0, 1] = T[0, 1, 0] = T[1, 0, 0] = 1.0  # (1, 1) has none: impossible
+    F = np.zeros((2, 2, 1))
+    F[1, :, 0] = 1.0
+    dense = hbirl.Mdp(T, F)
+    for other in (hbirl.Mdp(scipy_sparse.csr_matrix(T.reshape(4, 2)), F), hbirl.Mdp(dense.transition_rows(), F)):
+        np.testing.assert_array_equal(other.soft_policy([0.5]), dense.soft_policy([0.5]))
+    assert dense.soft_policy([0.5])[1, 1] == 0.0
