@@ -1,11 +1,11 @@
 // hbirl render: frames of the simulated onion-sorting camera, with what perception saw.
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "commands.hpp"
 #include "learner/input_error.hpp"
 #include "perception/blobs.hpp"
+#include "perception/image_codec.hpp"
 #include "perception/labeller.hpp"
 #include "perception/overlay.hpp"
 #include "problem/json_format.hpp"
@@ -66,7 +66,7 @@ int run_render(const RenderArgs& args) {
         char name[64];
         std::snprintf(name, sizeof name, "sort%02d_step%d_frame%02d.png", i, t, k);
         const std::string path = (std::filesystem::path(args.out) / name).string();
-        if (!cv::imwrite(path, frame)) throw InputError("--out", "could not write " + path);
+        if (!perception::write_png(path, frame)) throw InputError("--out", "could not write " + path);
         nlohmann::json symbols = nlohmann::json::array();
         for (const auto& o : observations) symbols.push_back(o.symbol);
         files.push_back({{"file", path},

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libeigen3-dev nlohmann-json3-dev libcli11-dev liblbfgs-dev
   libboost-dev gnuplot-nox
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libopencv-core-dev libopencv-imgproc-dev libspng-dev libturbojpeg0-dev
   liblcm-dev liblcm-bin iproute2 util-linux
   libcpp-httplib-dev libjs-chart.js ca-certificates libsodium-dev
   chromium chromium-driver fonts-dejavu-core python3

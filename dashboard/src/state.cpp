@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "learner/input_error.hpp"
 #include "learner/observations.hpp"
+#include "perception/image_codec.hpp"
 #include "services/channels.hpp"
 #include "services/frame_header.hpp"
 
@@ -314,8 +314,7 @@ std::vector<unsigned char> DashboardState::frame_png() const {
   if (!frame_) return {};
   const std::int64_t v = frame_serial_;
   if (v == png_version_) return png_;
-  cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(frame_->image.size()), CV_8UC1, const_cast<unsigned char*>(frame_->image.data())),
-                               cv::IMREAD_COLOR);
+  cv::Mat image = perception::decode_image(frame_->image.data(), frame_->image.size());
   if (image.empty()) return {};
   const auto& d = frame_->detections;
   const auto& o = frame_->observations;
@@ -329,8 +328,7 @@ std::vector<unsigned char> DashboardState::frame_png() const {
     const std::string label = std::to_string(static_cast<int>(std::lround(100 * o.eta[k][static_cast<size_t>(source)]))) + "%";
     cv::putText(image, label, cv::Point(box.x, std::max(10, box.y - 3)), cv::FONT_HERSHEY_PLAIN, 0.75, colour, 1, cv::LINE_AA);
   }
-  png_.clear();
-  cv::imencode(".png", image, png_);
+  png_ = perception::encode_png(image);
   png_version_ = v;
   return png_;
 }

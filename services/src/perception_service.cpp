@@ -1,9 +1,8 @@
 // The perception service (perception_service.hpp).
 #include "services/perception_service.hpp"
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "learner/input_error.hpp"
+#include "perception/image_codec.hpp"
 #include "services/frame_header.hpp"
 
 namespace hbirl::services {
@@ -29,7 +28,7 @@ void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
                                                std::to_string(stated->second) + ", the message says " + std::to_string(m.width) +
                                                "x" + std::to_string(m.height));
   }
-  const cv::Mat frame = cv::imdecode(cv::Mat(1, m.size, CV_8UC1, const_cast<std::uint8_t*>(m.data.data())), cv::IMREAD_COLOR);
+  const cv::Mat frame = perception::decode_image(m.data.data(), m.data.size(), 4096, 4096);
   if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);
   if (frame.cols != m.width || frame.rows != m.height) {
     throw InputError("camera_frame.width", "the image is " + std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +

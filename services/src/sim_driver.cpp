@@ -3,12 +3,12 @@
 // published again, identical, whenever it is asked for.
 #include <chrono>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <thread>
 
 #include "learner/input_error.hpp"
 #include "services/sim_driver.hpp"
+#include "perception/image_codec.hpp"
 
 #include "services/lcm_arrays.hpp"
 
@@ -76,7 +76,7 @@ void SimDriver::publish_frame(int id, int t, int k) {
     return;
   }
   const double time = run_->render(id, t, k, frame_);
-  cv::imencode(options_.encoding == "png" ? ".png" : ".jpg", frame_, bytes_);
+  bytes_ = options_.encoding == "png" ? perception::encode_png(frame_) : perception::encode_jpeg(frame_);
   hbirl::camera_frame_t f{};
   f.utime = micros(time);
   f.seq = ++frame_seq_;

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include <opencv2/imgcodecs.hpp>
+#include "perception/image_codec.hpp"
 #include <opencv2/imgproc.hpp>
 
 #include "expect_refused.hpp"
@@ -34,7 +34,7 @@ TEST(DashboardState, FrameWithDetectionsColouredByMostLikelySource) {
   DashboardState state;
   cv::Mat image(240, 320, CV_8UC3, cv::Scalar(200, 200, 200));
   std::vector<unsigned char> png;
-  cv::imencode(".png", image, png);
+  png = hbirl::perception::encode_png(image);
   hbirl::camera_frame_t f{};
   f.episode = 3;
   f.step = 2;
@@ -87,7 +87,7 @@ TEST(DashboardState, FrameWithDetectionsColouredByMostLikelySource) {
   EXPECT_EQ(j["observations"]["by_source_symbol"][3][21], 1);
   // The drawn frame: the second box's left edge has the foreground person's colour.
   const std::vector<unsigned char> out = state.frame_png();
-  const cv::Mat drawn = cv::imdecode(out, cv::IMREAD_COLOR);
+  const cv::Mat drawn = hbirl::perception::decode_image(out);
   ASSERT_EQ(drawn.cols, 320);
   const std::string hex = j["source_colours"][3];
   const cv::Vec3b px = drawn.at<cv::Vec3b>(150, 190);
@@ -279,7 +279,7 @@ TEST(DashboardState, HostileInputCannotBreakThePage) {
   EXPECT_THROW(state.on_model(m), InputError);
   cv::Mat image(240, 320, CV_8UC3, cv::Scalar(10, 20, 30));
   std::vector<unsigned char> png;
-  cv::imencode(".png", image, png);
+  png = hbirl::perception::encode_png(image);
   const auto frame = [&](int episode, int step) {
     hbirl::camera_frame_t f{};
     f.episode = episode;

@@ -19,7 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
+#include "perception/image_codec.hpp"
 #include <string>
 #include <thread>
 
@@ -68,7 +68,7 @@ struct Served {
     state.on_marker(marker);
     cv::Mat image(24, 32, CV_8UC3, cv::Scalar(40, 120, 200));
     std::vector<unsigned char> png;
-    cv::imencode(".png", image, png);
+    png = hbirl::perception::encode_png(image);
     hbirl::camera_frame_t frame{};
     frame.width = 32, frame.height = 24, frame.encoding = "png", frame.size = static_cast<std::int32_t>(png.size());
     frame.data = png;

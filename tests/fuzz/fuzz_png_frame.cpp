@@ -1,5 +1,5 @@
 // libFuzzer target: the camera frame decoders -- a CAMERA message whose data is the input,
-// through PerceptionService (OpenCV's imdecode, then the blob detector), the labeller and
+// through PerceptionService (perception/image_codec.hpp's decoder, then the blob detector), the labeller and
 // the dashboard (which decodes the frame again to annotate it, frame_png()). The message's
 // width and height are the image header's when it states a size in range (so well-formed
 // frames get past the size checks to the detector), else 1x1: a hostile header must be

@@ -14,7 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <opencv2/imgcodecs.hpp>
+#include "perception/image_codec.hpp"
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
@@ -162,7 +162,7 @@ std::vector<std::uint8_t> onion_frame(int episode, int step, int frame) {
   cv::Mat image;
   run->render(episode, step, frame, image);
   std::vector<std::uint8_t> png;
-  cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 9});
+  png = hbirl::perception::encode_png(image, 9);
   return png;
 }
 
@@ -174,7 +174,7 @@ std::vector<std::uint8_t> onion_chain(const std::vector<std::uint8_t>& png) {
   Counters c = quiet("chain");
   PerceptionService perception(bus, c);
   LabellerService labeller(bus, c);
-  const cv::Mat image = cv::imdecode(png, cv::IMREAD_COLOR);
+  const cv::Mat image = hbirl::perception::decode_image(png);
   hbirl::episode_marker_t marker{};
   marker.domain = "onion", marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE, marker.num_steps = 1, marker.frames_per_step = 1;
   publish(bus, channels::kEpisode, marker, c);
@@ -205,17 +205,17 @@ int main(int argc, char** argv) {
   const std::vector<std::uint8_t> png = onion_frame(0, 0, 0);
   write(dir / "fuzz_service_handlers" / "onion_frame_chain.bin", onion_chain(png));
   write(dir / "fuzz_png_frame" / "onion_frame.png", png);
-  cv::Mat image = cv::imdecode(png, cv::IMREAD_COLOR);
+  cv::Mat image = hbirl::perception::decode_image(png);
   std::vector<std::uint8_t> jpeg;
-  cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 60});
+  jpeg = hbirl::perception::encode_jpeg(image, 60);
   write(dir / "fuzz_png_frame" / "onion_frame.jpg", jpeg);
   cv::Mat small;
   cv::resize(image, small, cv::Size(image.cols / 4, image.rows / 4), 0, 0, cv::INTER_AREA);
   std::vector<std::uint8_t> small_png;
-  cv::imencode(".png", small, small_png, {cv::IMWRITE_PNG_COMPRESSION, 9});
+  small_png = hbirl::perception::encode_png(small, 9);
   write(dir / "fuzz_png_frame" / "onion_frame_quarter.png", small_png);
   std::vector<std::uint8_t> tiny;
-  cv::imencode(".png", cv::Mat(1, 1, CV_8UC3, cv::Scalar(0, 0, 255)), tiny);
+  tiny = hbirl::perception::encode_png(cv::Mat(1, 1, CV_8UC3, cv::Scalar(0, 0, 255)));
   write(dir / "fuzz_png_frame" / "one_pixel.png", tiny);
   std::cout << "seeds written to " << dir << "\n";
   return 0;

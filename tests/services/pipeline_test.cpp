@@ -13,7 +13,7 @@
 #include <future>
 #include <limits>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
+#include "perception/image_codec.hpp"
 #include <thread>
 
 #include "experiments/onion_data.hpp"
@@ -630,7 +630,7 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   // Then a good frame still goes through both.
   cv::Mat frame(240, 320, CV_8UC3, cv::Scalar(200, 200, 196));
   std::vector<unsigned char> png;
-  cv::imencode(".png", frame, png);
+  png = hbirl::perception::encode_png(frame);
   f.encoding = "png";
   f.data.assign(png.begin(), png.end());
   f.size = static_cast<std::int32_t>(png.size());
