@@ -3,6 +3,7 @@
 
 #include "learner/hidden_data_em.hpp"
 #include "learner/maxcausalent.hpp"
+#include "learner/metrics.hpp"
 #include "sim_driver/gridworld.hpp"
 
 namespace hbirl {
@@ -51,8 +52,8 @@ void BM_Gradient(benchmark::State& state) {
   }
   state.counters["states"] = t.mdp.num_states;
 }
-BENCHMARK(BM_Gradient)->Args({5, 10})->Args({5, 30})->Args({10, 30})->Args({20, 30})->Args({45, 30})
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Gradient)->Args({5, 10})->Args({5, 30})->Args({10, 30})->Args({20, 30})->Args({45, 30})->Args({100, 30})
+    ->Args({200, 30})->Unit(benchmark::kMicrosecond);
 
 // A full MaxCausalEnt solve on the 5x5 gridworld with 20 trajectories of 10 steps: the
 // whole of `hbirl learn --from truth` but for reading the file (one thread).
@@ -74,6 +75,20 @@ void BM_MaxCausalEntSolve(benchmark::State& state) {
   state.SetLabel(to_string(options.optimizer.kind));
 }
 BENCHMARK(BM_MaxCausalEntSolve)->Args({1, 0})->Args({4, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
+
+// The metrics of a learned reward on a large MDP (issue 17 "Large MDPs"): the ILE (value
+// iteration for both rewards' optimal policies, then exact policy evaluation) as
+// `hbirl learn` prints it, and the policy agreement.
+void BM_Metrics(benchmark::State& state) {
+  const GridworldTask t = task(static_cast<int>(state.range(0)), 1, 1);
+  const Eigen::VectorXd learned = probe_weights();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(inverse_learning_error(t.mdp, t.true_weights, learned).ile);
+    benchmark::DoNotOptimize(policy_agreement(t.mdp, t.true_weights, learned));
+  }
+  state.counters["states"] = t.mdp.num_states;
+}
+BENCHMARK(BM_Metrics)->Arg(45)->Arg(100)->Arg(200)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace hbirl
