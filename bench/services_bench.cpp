@@ -84,7 +84,7 @@ void BM_EStepPassOverBus(benchmark::State& state) {
   std::unique_ptr<Bus> bus = endpoint(c);
   BusExecutorOptions executor_options;
   executor_options.spot_check = mode >= 1;
-  auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", d.observed, c, executor_options);
+  auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", c, executor_options);
   if (executor->wait_for_workers(n, 10000) != n) state.SkipWithError("workers did not come up");
   ObservationEStepOptions options;
   options.executor = executor;

@@ -38,9 +38,9 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
   if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();
-  if (options_.max_kinds > 0) {
+  if (options_.max_kinds > 0 && options_.kind_table.value_or(true)) {
     kinds_ = observation_kinds(trajectories_, options_.max_kinds);
-    if (kinds_ && 4LL * kinds_->num_kinds() > rows) kinds_.reset();
+    if (kinds_ && !options_.kind_table && 4LL * kinds_->num_kinds() > rows) kinds_.reset();
   }
 }
 

@@ -59,11 +59,13 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
     if (trajectory.symbols[static_cast<size_t>(x)] != trajectory.symbols[static_cast<size_t>(y)]) {
       return trajectory.symbols[static_cast<size_t>(x)] < trajectory.symbols[static_cast<size_t>(y)];
     }
-    if (trajectory.context(x) != trajectory.context(y)) return trajectory.context(x) < trajectory.context(y);
     for (Eigen::Index z = 0; z < sources; ++z) {
       if (trajectory.eta(x, z) != trajectory.eta(y, z)) return trajectory.eta(x, z) < trajectory.eta(y, z);
     }
-    return false;
+    // Context last: contexts given later as a function of eta (learned eta numbers each
+    // distinct eta) keep the order, so merging again is the identity -- what a worker
+    // holding a share of the merged data relies on.
+    return trajectory.context(x) < trajectory.context(y);
   };
   for (int t = 0; t < trajectory.length(); ++t) {
     std::vector<int> step(static_cast<size_t>(trajectory.observations_at(t)));

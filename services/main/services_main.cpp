@@ -186,16 +186,16 @@ int labeller(int argc, char** argv) {
 }
 
 int sampler(int argc, char** argv) {
-  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and trajectories\n"
-               "(TRAJECTORY) and answers ESTEP_REQUEST for the blocks assigned to it (ESTEP_RESULT). It needs\n"
-               "no domain: one worker serves any run. Run any number, on any number of machines (same LCM\n"
-               "URL with ttl=1).");
+  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and, on a channel of its\n"
+               "own (TRAJECTORY_<tag of its --id>), the trajectories of the blocks it is assigned -- its share\n"
+               "only, once -- and answers ESTEP_REQUEST for those blocks (ESTEP_RESULT). It needs no domain:\n"
+               "one worker serves any run. Run any number, on any number of machines (same LCM URL with ttl=1).");
   Common c;
   add_common(app, c);
   std::int64_t die_after = -1;
   std::int64_t max_dataset_mb = SamplerWorker::kDefaultMaxDatasetBytes >> 20;
   app.add_option("--max-dataset-mb", max_dataset_mb,
-                 "The most memory the data set (TRAJECTORY) may take on this worker, in MB; a data set that would\n"
+                 "The most memory the blocks of trajectories this worker holds may take, in MB; a block that would\n"
                  "take more is refused (counted as bad) and its partial copy dropped, whatever a sender declares")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 20));

@@ -61,12 +61,15 @@ std::uint64_t numerics_fingerprint() {
   return fingerprint;
 }
 
-hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest) {
+hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
+                               const std::string& worker) {
   hbirl::trajectory_t m{};
   m.utime = 0;  // a data set, not a moment of the demonstration
-  m.dataset_digest = static_cast<std::int64_t>(digest);
+  m.block_digest = static_cast<std::int64_t>(block_digest);
   m.index = index;
   m.num_trajectories = count;
+  m.block_size = ObservationEStep::kBlockSize;
+  m.worker = worker;
   m.episode = index;
   m.ends_in_terminal = t.ends_in_terminal;
   m.num_steps = t.length();
@@ -118,22 +121,23 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
   return t;
 }
 
-BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, std::vector<ObservedTrajectory> dataset,
-                                   Counters& counters, BusExecutorOptions options)
+std::vector<ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b) {
+  const auto begin = static_cast<size_t>(b) * ObservationEStep::kBlockSize;
+  const size_t end = std::min(trajectories.size(), begin + ObservationEStep::kBlockSize);
+  return {trajectories.begin() + static_cast<std::ptrdiff_t>(begin), trajectories.begin() + static_cast<std::ptrdiff_t>(end)};
+}
+
+BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters,
+                                   BusExecutorOptions options)
     : bus_(bus),
       mdp_messages_(to_messages(mdp, domain)),
       mdp_digest_(dynamics_digest(mdp)),
-      dataset_(std::move(dataset)),
-      digest_(dataset_digest(dataset_)),
       counters_(counters),
       options_(options),
       request_id_(0) {
   // Request ids: random, so that two optimisers on one bus never take each other's answers.
   std::random_device entropy;
   request_id_ = static_cast<std::int64_t>((static_cast<std::uint64_t>(entropy()) << 32 | entropy()) >> 1);
-  std::vector<ObservedTrajectory> merged;
-  for (const auto& t : dataset_) merged.push_back(merge_identical_observations(t));
-  merged_digest_ = dataset_digest(merged);
   numerics_ = numerics_fingerprint();
   subs_.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
                                                      [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000));
@@ -142,11 +146,58 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& 
                                                    [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000));
 }
 
-void BusBlockExecutor::publish_dataset() const {
-  last_dataset_sent_ = Clock::now();
+void BusBlockExecutor::publish_mdp() const {
+  last_mdp_sent_ = Clock::now();
   for (const auto& m : mdp_messages_) publish(bus_, channels::kMdp, m, counters_);
-  const int n = static_cast<int>(dataset_.size());
-  for (int i = 0; i < n; ++i) publish(bus_, channels::kTrajectory, to_message(dataset_[static_cast<size_t>(i)], i, n, digest_), counters_);
+}
+
+std::uint64_t BusBlockExecutor::digest() const {
+  const std::lock_guard<std::recursive_mutex> lock(mutex_);
+  return data_digest_;
+}
+
+// The blocks of the E-step's trajectories as the workers are sent them, and their
+// digests; computed again only when the E-step is another (or holds other data).
+void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) const {
+  if (prepared_ == &estep && prepared_input_ == estep.input_digest() && prepared_contexts_ == estep.num_contexts() &&
+      prepared_kinds_ == estep.uses_kind_table()) {
+    return;
+  }
+  prepared_ = &estep;
+  prepared_input_ = estep.input_digest();
+  prepared_contexts_ = estep.num_contexts();
+  prepared_kinds_ = estep.uses_kind_table();
+  block_digests_.clear();
+  for (int b = 0; b < estep.num_blocks(); ++b) block_digests_.push_back(dataset_digest(block_of(estep.trajectories(), b)));
+  data_digest_ = dataset_digest(estep.trajectories());
+  if (owner_.size() != block_digests_.size()) owner_.assign(block_digests_.size(), std::string());
+}
+
+// Each block of `todo` to the worker `assigned` to it, unless that worker holds it (its
+// heartbeat says so) or was sent it less than a timeout ago.
+void BusBlockExecutor::send_blocks(const ObservationEStep& estep, const std::vector<int>& todo,
+                                   const std::vector<std::string>& assigned) const {
+  const auto now = Clock::now();
+  const auto resend_after = std::chrono::milliseconds(options_.timeout_ms);
+  const int n = static_cast<int>(estep.trajectories().size());
+  for (int b : todo) {
+    const std::string& id = assigned[static_cast<size_t>(b)];
+    if (id.empty()) continue;
+    Worker& w = workers_[id];
+    const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
+    if (w.held.count(digest)) continue;
+    const auto sent = w.sent.find(digest);
+    if (sent != w.sent.end() && now - sent->second < resend_after) continue;
+    const std::string channel = channels::trajectory_channel(id);
+    const int end = std::min(n, (b + 1) * ObservationEStep::kBlockSize);
+    for (int i = b * ObservationEStep::kBlockSize; i < end; ++i) {
+      const hbirl::trajectory_t m = to_message(estep.trajectories()[static_cast<size_t>(i)], i, n, digest, id);
+      publish(bus_, channel, m, counters_);
+      ++stats_.trajectories_sent;
+      stats_.bytes_sent += m.getEncodedSize();
+    }
+    w.sent[digest] = now;
+  }
 }
 
 namespace {
@@ -182,9 +233,12 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
     workers_.erase(oldest);
   }
   Worker& w = workers_[m.id];
-  w.digest = static_cast<std::uint64_t>(m.dataset_digest);
   w.mdp_digest = static_cast<std::uint64_t>(m.mdp_digest);
-  w.trajectories = m.trajectories;
+  w.held.clear();
+  for (const std::int64_t d : m.held_block) {
+    w.held.insert(static_cast<std::uint64_t>(d));
+    w.sent.erase(static_cast<std::uint64_t>(d));
+  }
   w.last_seen = Clock::now();
   const auto numerics = static_cast<std::uint64_t>(m.numerics);
   if (numerics != numerics_ && other_numerics_.insert(m.id).second) {
@@ -194,8 +248,9 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
                    (options_.same_numerics_only ? ": it gets no work" : ": theta may differ from a one-process run in the last bits"));
   }
   w.numerics = numerics;
-  // A worker without our MDP or data set: send them (not more than twice a second).
-  if ((w.digest != digest_ || w.mdp_digest != mdp_digest_) && Clock::now() - last_dataset_sent_ > std::chrono::milliseconds(500)) publish_dataset();
+  // A worker without our MDP: send it (not more than twice a second). Its blocks are sent
+  // with the pass that gives them to it.
+  if (w.mdp_digest != mdp_digest_ && Clock::now() - last_mdp_sent_ > std::chrono::milliseconds(500)) publish_mdp();
 }
 
 void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
@@ -203,11 +258,11 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     ++stats_.stale;
     return;
   }
-  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_) {
+  if (m.block < 0 || m.block >= blocks_) throw InputError("estep_result.block", std::to_string(m.block) + " is not a block");
+  if (static_cast<std::uint64_t>(m.block_digest) != block_digests_[static_cast<size_t>(m.block)]) {  // computed on other trajectories
     ++stats_.foreign;
     return;
   }
-  if (m.block < 0 || m.block >= blocks_) throw InputError("estep_result.block", std::to_string(m.block) + " is not a block");
   if (m.num_pairs != pairs_ || m.num_symbols != symbols_ || m.num_confounders != confounders_) {
     throw InputError("estep_result.num_pairs", "the statistics have the wrong shape");
   }
@@ -292,7 +347,7 @@ std::vector<std::string> BusBlockExecutor::live_workers() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
   for (const auto& [id, w] : workers_) {
-    if (w.digest == digest_ && w.mdp_digest == mdp_digest_ && !w.suspect && !w.distrusted && (!options_.same_numerics_only || w.numerics == numerics_) &&
+    if (w.mdp_digest == mdp_digest_ && !w.suspect && !w.distrusted && (!options_.same_numerics_only || w.numerics == numerics_) &&
         std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
       out.push_back(id);
     }
@@ -302,7 +357,7 @@ std::vector<std::string> BusBlockExecutor::live_workers() const {
 
 int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
   const std::lock_guard<std::recursive_mutex> lock(mutex_);
-  publish_dataset();
+  publish_mdp();
   const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
   while (static_cast<int>(live_workers().size()) < count && Clock::now() < deadline) {
     if (options_.stop && options_.stop()) break;
@@ -311,23 +366,60 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
   return static_cast<int>(live_workers().size());
 }
 
-// Blocks to workers, round robin -- except that while some workers have proven themselves
-// (answered before), each one that has not gets at most one block, and no more of them
-// than there are proven ones: heartbeats from processes that never answer (a crashed
-// build, a forger) cost a pass one timeout, not the whole pass.
+// Blocks to workers, stably: a block stays with the worker it was given to while that
+// worker gets work, so each worker is sent its share of the trajectories once; the blocks
+// of workers that left, and those over a worker's even share when others join, go to the
+// workers under theirs (even shares: sizes differ by at most one block). Except that while
+// some workers have proven themselves (answered before), each one that has not gets one
+// block, and no more of them than there are proven ones: heartbeats from processes that
+// never answer (a crashed build, a forger) cost a pass one timeout, not the whole pass.
 std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& todo, std::vector<std::string> workers) const {
   std::vector<std::string> proven, unproven;
   for (const auto& w : workers) (workers_.at(w).answers > 0 ? proven : unproven).push_back(w);
+  std::vector<std::string> out(static_cast<size_t>(blocks_));
+  std::vector<int> rest = todo;
   if (!proven.empty()) {
     unproven.resize(std::min(unproven.size(), proven.size()));
+    for (const auto& w : unproven) {  // the block it has, else one from the end
+      if (rest.empty()) break;
+      auto pick = std::find_if(rest.begin(), rest.end(), [&](int b) { return owner_[static_cast<size_t>(b)] == w; });
+      if (pick == rest.end()) pick = rest.end() - 1;
+      out[static_cast<size_t>(*pick)] = w;
+      rest.erase(pick);
+    }
     workers = proven;
   }
-  std::vector<std::string> out(static_cast<size_t>(blocks_));
-  size_t k = 0;
-  if (!proven.empty()) {
-    for (; k < todo.size() && k < unproven.size(); ++k) out[static_cast<size_t>(todo[k])] = unproven[k];
+  const size_t n = workers.size();
+  std::map<std::string, size_t> share, given;  // even shares, the first ones one larger
+  for (size_t k = 0; k < n; ++k) share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);
+  std::vector<int> loose;
+  for (int b : rest) {
+    const std::string& owner = owner_[static_cast<size_t>(b)];
+    const auto it = share.find(owner);
+    if (it != share.end() && given[owner] < it->second) {
+      out[static_cast<size_t>(b)] = owner;
+      ++given[owner];
+    } else {
+      loose.push_back(b);
+    }
   }
-  for (size_t r = 0; k < todo.size(); ++k, ++r) out[static_cast<size_t>(todo[k])] = workers[r % workers.size()];
+  size_t k = 0;
+  for (int b : loose) {
+    while (given[workers[k]] >= share[workers[k]]) ++k;
+    out[static_cast<size_t>(b)] = workers[k];
+    ++given[workers[k]];
+  }
+  for (int b : todo) {  // a block moved: its old worker drops it (sampler_worker.hpp)
+    std::string& owner = owner_[static_cast<size_t>(b)];
+    const std::string& now = out[static_cast<size_t>(b)];
+    if (owner == now) continue;
+    const auto old = workers_.find(owner);
+    if (old != workers_.end()) {
+      old->second.held.erase(block_digests_[static_cast<size_t>(b)]);
+      old->second.sent.erase(block_digests_[static_cast<size_t>(b)]);
+    }
+    owner = now;
+  }
   return out;
 }
 
@@ -398,10 +490,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   // live is decided from them). Bounded, so a flood cannot hold the pass up.
   for (int k = 0; k < 100000 && bus_.handle(0) > 0; ++k) {
   }
-  // The workers compute with the exact engine on this executor's data set: the pass must too.
-  if (estep.input_digest() != merged_digest_) {
-    throw std::logic_error("BusBlockExecutor: the E-step's trajectories are not the data set the workers have");
-  }
+  // The workers compute with the exact engine on this executor's MDP: the pass must too.
   if (dynamics_digest(estep.mdp()) != mdp_digest_) throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
   if (!estep.options().engine(estep.mdp())->exact()) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
   ++request_id_;
@@ -428,6 +517,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     stats_.local_blocks += blocks_;
     return estep.block_statistics(policy, model, seed, all, options_.local_threads, eta);
   }
+  prepare_blocks(estep);
   received_.assign(static_cast<size_t>(blocks_), std::nullopt);
   answered_.clear();
   assigned_.assign(static_cast<size_t>(blocks_), {});
@@ -440,11 +530,13 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   hbirl::estep_request_t request{};
   request.utime = 0;
   request.request_id = request_id_;
-  request.dataset_digest = static_cast<std::int64_t>(digest_);
+  request.dataset_digest = static_cast<std::int64_t>(data_digest_);
   request.mdp_digest = static_cast<std::int64_t>(mdp_digest_);
-  request.num_trajectories = static_cast<std::int32_t>(dataset_.size());
+  request.num_trajectories = static_cast<std::int32_t>(estep.trajectories().size());
   request.block_size = ObservationEStep::kBlockSize;
   request.num_blocks = blocks_;
+  for (const std::uint64_t d : block_digests_) request.block_digest.push_back(static_cast<std::int64_t>(d));
+  request.kind_table = estep.uses_kind_table();
   request.seed = static_cast<std::int64_t>(seed);
   request.engine = "exact";
   request.max_kinds = estep.options().max_kinds;
@@ -489,6 +581,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     request.attempt = attempt;
     request.assigned_worker = assignment(todo, workers);
     for (int b : todo) assigned_[static_cast<size_t>(b)].insert(request.assigned_worker[static_cast<size_t>(b)]);
+    send_blocks(estep, todo, request.assigned_worker);
     publish(bus_, channels::kEStepRequest, request, counters_);
     if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
       spots = spot_blocks(todo, request.assigned_worker);

@@ -130,9 +130,9 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const Mdp& mdp = domain->mdp();
   BusExecutorOptions executor_options = options.executor;
   if (!executor_options.stop) executor_options.stop = stop;
-  // The workers get the demonstrations as learned from (with an unlisted catch-all's share of eta, if any).
-  auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), learning_input(*domain, result.data, options.learning).observed,
-                                                     counters, executor_options);
+  // The workers are sent the demonstrations as the E-step holds them (with an unlisted
+  // catch-all's share of eta, if any), each only its blocks'.
+  auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), counters, executor_options);
   if (!result.data.contexts_note.empty()) say(result.data.contexts_note);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
       std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");

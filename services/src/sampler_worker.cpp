@@ -20,15 +20,22 @@ std::int64_t held_bytes(const hbirl::trajectory_t& m) {
          4 * static_cast<std::int64_t>(m.context.size());
 }
 
+// Blocks being received at once: a sender making up digests cannot make the list grow.
+constexpr size_t kMaxIncomingBlocks = 4096;
+// A pending request's blocks that are here are computed once no trajectory has come for
+// this long (the rest may have been lost: the optimiser re-asks them elsewhere).
+constexpr auto kQuietBeforeServing = std::chrono::milliseconds(200);
+
 }  // namespace
 
 SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
     : bus_(bus), id_(std::move(id)), counters_(counters), max_dataset_bytes_(max_dataset_bytes) {
   subs_.add(bus_, subscribe<hbirl::mdp_t>(bus_, channels::kMdp, counters_,
                                           [this](const hbirl::mdp_t& m, const Message&) { on_mdp(m); }, 10000));
-  // A whole data set may arrive between two handle() calls; only the newest requests matter.
-  subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::kTrajectory, counters_,
-                                                 [this](const hbirl::trajectory_t& m, const Message&) { on_trajectory(m); }, 100000));
+  // A whole share may arrive between two handle() calls; only the newest requests matter.
+  subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::trajectory_channel(id_), counters_,
+                                                 [this](const hbirl::trajectory_t& m, const Message& raw) { on_trajectory(m, raw.size); },
+                                                 100000));
   subs_.add(bus_, subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
                                                     [this](const hbirl::estep_request_t& m, const Message&) { on_request(m); }, 8));
 }
@@ -38,7 +45,16 @@ int SamplerWorker::handle(int timeout_ms) {
     publish_status();
     next_status_ = Clock::now() + std::chrono::seconds(1);
   }
-  return bus_.handle(timeout_ms);
+  const int handled = bus_.handle(timeout_ms);
+  if (!pending_.empty() && Clock::now() - last_trajectory_ > kQuietBeforeServing) {
+    try {
+      serve(false);
+    } catch (const InputError& e) {  // a request that does not fit what arrived: counted, dropped
+      counters_.bad(channels::kEStepRequest, e.what());
+      pending_.clear();
+    }
+  }
+  return handled;
 }
 
 void SamplerWorker::publish_status(const std::string& state) {
@@ -47,15 +63,17 @@ void SamplerWorker::publish_status(const std::string& state) {
   s.service = "sampler";
   s.id = id_;
   s.seq = ++status_seq_;
-  s.state = !state.empty() ? state : trajectories_.empty() ? "starting" : "running";
+  s.state = !state.empty() ? state : mdp_ ? "running" : "starting";
   s.messages_in = counters_.messages_in;
   s.messages_out = counters_.messages_out;
   s.bad_messages = counters_.bad_messages;
   s.gaps = counters_.gaps;
-  s.trajectories = static_cast<std::int32_t>(trajectories_.size());
-  s.dataset_digest = static_cast<std::int64_t>(digest_);
+  s.trajectories = trajectories_held_;
+  s.dataset_digest = static_cast<std::int64_t>(last_dataset_digest_);
   s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
   s.mdp_digest = static_cast<std::int64_t>(mdp_digest_.load());
+  for (const auto& [digest, block] : held_) s.held_block.push_back(static_cast<std::int64_t>(digest));
+  s.num_held_blocks = static_cast<std::int32_t>(s.held_block.size());
   s.detail = counters_.last_problem;
   s.authenticated = counters_.authenticated;
   s.restarts = counters_.restarts;
@@ -67,98 +85,204 @@ void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
   std::optional<Mdp> mdp = incoming_mdp_.add(m);
   if (!mdp) return;
   estep_.reset();  // it computes on the old MDP
+  estep_blocks_.clear();
   mdp_ = std::move(mdp);
   mdp_digest_ = static_cast<std::uint64_t>(m.mdp_digest);
   publish_status();  // tell the optimiser at once
 }
 
-void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m) {
+void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
+  trajectory_bytes_ += bytes;
+  last_trajectory_ = Clock::now();
+  if (m.worker != id_) return;  // another worker's whose id has the same channel tag
+  if (m.block_size != ObservationEStep::kBlockSize) {
+    throw InputError("trajectory.block_size", std::to_string(m.block_size) + ", this worker's blocks have " +
+                                                  std::to_string(ObservationEStep::kBlockSize));
+  }
   if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
     throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
   }
-  const auto d = static_cast<std::uint64_t>(m.dataset_digest);
-  if (d == digest_ && !trajectories_.empty()) return;  // have it already
-  if (d != incoming_digest_ || incoming_size_ != m.num_trajectories) {
-    std::map<int, ObservedTrajectory>().swap(incoming_);
-    incoming_digest_ = d;
-    incoming_size_ = m.num_trajectories;
-    incoming_bytes_ = 0;
+  const auto digest = static_cast<std::uint64_t>(m.block_digest);
+  if (held_.count(digest)) return;  // have it already
+  const int block = m.index / m.block_size;
+  const int size = std::min(m.block_size, m.num_trajectories - block * m.block_size);
+  if (!incoming_.count(digest) && incoming_.size() >= kMaxIncomingBlocks) {  // made-up digests: forget the oldest
+    release(incoming_.begin()->first);
+    incoming_.erase(incoming_.begin());
   }
-  if (incoming_.count(m.index)) return;  // a repeat
-  const std::int64_t bytes = held_bytes(m);
-  if (incoming_bytes_ + bytes > max_dataset_bytes_) {
-    std::map<int, ObservedTrajectory>().swap(incoming_);
-    incoming_digest_ = 0;
-    throw InputError("trajectory", "the data set would take more than --max-dataset-mb " +
-                                       std::to_string(max_dataset_bytes_ >> 20) + " MB: dropped");
+  Incoming& in = incoming_[digest];
+  if (in.size == 0) in.size = size;
+  if (in.size != size) throw InputError("trajectory.num_trajectories", "puts its block at another size than the block's other trajectories");
+  const int position = m.index - block * m.block_size;
+  if (in.trajectories.count(position)) return;  // a repeat
+  const std::int64_t need = held_bytes(m);
+  if (bytes_ + need > max_dataset_bytes_) drop_unassigned(false);
+  if (bytes_ + need > max_dataset_bytes_) {
+    release(digest);
+    incoming_.erase(digest);
+    throw InputError("trajectory", "the blocks would take more than --max-dataset-mb " + std::to_string(max_dataset_bytes_ >> 20) +
+                                       " MB: this block is dropped");
   }
-  incoming_.emplace(m.index, from_message(m));
-  incoming_bytes_ += bytes;
-  if (static_cast<int>(incoming_.size()) < incoming_size_) return;
+  in.trajectories.emplace(position, from_message(m));
+  bytes_ += need;
+  block_bytes_[digest] += need;
+  if (static_cast<int>(in.trajectories.size()) < in.size) return;
   std::vector<ObservedTrajectory> all;
-  all.reserve(incoming_.size());
-  for (auto& [index, t] : incoming_) all.push_back(std::move(t));
-  std::map<int, ObservedTrajectory>().swap(incoming_);
-  incoming_digest_ = 0;
-  if (dataset_digest(all) != d) throw InputError("trajectory.dataset_digest", "does not match the trajectories received");
-  trajectories_ = std::move(all);
-  max_symbol_ = -1;
-  for (const auto& t : trajectories_) {
-    for (int w : t.symbols) max_symbol_ = std::max(max_symbol_, w);
+  all.reserve(in.trajectories.size());
+  for (auto& [index, t] : in.trajectories) all.push_back(std::move(t));
+  incoming_.erase(digest);
+  if (dataset_digest(all) != digest) {
+    release(digest);
+    throw InputError("trajectory.block_digest", "does not match the block's trajectories received");
   }
-  digest_ = d;
-  estep_.reset();
-  publish_status();  // tell the optimiser at once
+  held_.emplace(digest, std::move(all));
+  held_changed();
+  serve(true);
+  if (incoming_.empty()) publish_status();  // tell the optimiser at once what it holds
+}
+
+void SamplerWorker::held_changed() {
+  int n = 0;
+  for (const auto& [digest, block] : held_) n += static_cast<int>(block.size());
+  trajectories_held_ = n;
+}
+
+// The blocks no longer assigned to it (they went to other workers) are dropped: those held
+// and, with `incoming_too`, those partly received (not when memory runs short: a block is
+// sent before the request that assigns it, and made-up blocks must not push it out).
+void SamplerWorker::drop_unassigned(bool incoming_too) {
+  std::set<std::uint64_t> keep;
+  for (const auto& [block, digest] : assigned_) keep.insert(digest);
+  const auto drop_from = [&](auto& blocks) {
+    bool dropped = false;
+    for (auto it = blocks.begin(); it != blocks.end();) {
+      if (keep.count(it->first)) {
+        ++it;
+        continue;
+      }
+      release(it->first);
+      it = blocks.erase(it);
+      dropped = true;
+    }
+    return dropped;
+  };
+  if (incoming_too) drop_from(incoming_);
+  if (drop_from(held_)) {
+    held_changed();
+    estep_.reset();  // it may hold copies of what was dropped
+    estep_blocks_.clear();
+  }
+}
+
+// The memory a block took is free again.
+void SamplerWorker::release(std::uint64_t digest) {
+  const auto it = block_bytes_.find(digest);
+  if (it == block_bytes_.end()) return;
+  bytes_ -= it->second;
+  block_bytes_.erase(it);
+}
+
+void SamplerWorker::check_request(const hbirl::estep_request_t& m) const {
+  const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
+  if (m.engine != "exact") throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
+  if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not the MDP's |S||A| = " + std::to_string(P));
+  if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
+  if (m.num_trajectories < 1 || m.num_blocks != (m.num_trajectories + m.block_size - 1) / m.block_size) {
+    throw InputError("estep_request.num_blocks", "is not the number of blocks of num_trajectories");
+  }
+  if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
+  if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
+  if (m.num_contexts < 0) throw InputError("estep_request.num_contexts", "is negative");
+  if (m.num_contexts > 0 && (E < 1 || m.num_sources != 1 + E)) {
+    throw InputError("estep_request.num_sources", "learned eta needs 1 + num_confounders sources and a confounder");
+  }
 }
 
 void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   if (!answered_.insert({m.request_id, m.attempt}).second) return;  // a repeat: answered already
   while (answered_.size() > 256) answered_.erase(answered_.begin());
-  if (static_cast<std::uint64_t>(m.dataset_digest) != digest_ || trajectories_.empty() ||
-      static_cast<std::uint64_t>(m.mdp_digest) != mdp_digest_ || !mdp_) {
-    publish_status();  // the optimiser sees our digests and sends its MDP and data set
+  if (static_cast<std::uint64_t>(m.mdp_digest) != mdp_digest_ || !mdp_) {
+    publish_status();  // the optimiser sees our digest and sends its MDP
     return;
   }
   std::vector<int> mine;
   for (int b = 0; b < m.num_blocks; ++b) {
     if (m.assigned_worker[static_cast<size_t>(b)] == id_) mine.push_back(b);
   }
+  if (m.attempt == 0) {  // its share of this pass: what it holds beyond that went to other workers
+    if (!mine.empty()) check_request(m);
+    assigned_.clear();
+    for (int b : mine) assigned_[b] = static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]);
+    drop_unassigned(true);
+  }
   if (mine.empty()) return;
+  check_request(m);
+  for (int b : mine) assigned_[b] = static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]);
+  if (!request_ || request_->request_id != m.request_id) pending_.clear();
+  last_dataset_digest_ = static_cast<std::uint64_t>(m.dataset_digest);
+  request_ = m;
+  pending_.insert(mine.begin(), mine.end());
+  serve(true);
+}
+
+void SamplerWorker::serve(bool all_here_only) {
+  if (!request_ || pending_.empty()) return;
+  const hbirl::estep_request_t& m = *request_;
+  std::vector<int> ready;
+  for (int b : pending_) {
+    if (held_.count(static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]))) ready.push_back(b);
+  }
+  if (ready.empty() || (all_here_only && ready.size() < pending_.size())) return;
   const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
-  if (m.engine != "exact") throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
-  if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not the MDP's |S||A| = " + std::to_string(P));
-  if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
-  if (m.num_trajectories != static_cast<int>(trajectories_.size())) throw InputError("estep_request.num_trajectories", "differs");
-  if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
-  if (max_symbol_ >= W) throw InputError("estep_request.num_symbols", "is smaller than the data set's alphabet");
-  for (const auto& t : trajectories_) {
-    if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the data set's eta");
-  }
-  if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
-  // (Each distinct eta may be a context: their number is checked against the data set's below.)
-  if (m.num_contexts < 0) throw InputError("estep_request.num_contexts", "is negative");
   const bool learned_eta = m.num_contexts > 0;
-  if (learned_eta && (E < 1 || m.num_sources != 1 + E)) {
-    throw InputError("estep_request.num_sources", "learned eta needs 1 + num_confounders sources and a confounder");
+  // The E-step over the held blocks it is assigned, in block order: local block k is the
+  // k-th of them, so every local block but the last must be a whole one.
+  std::vector<std::pair<int, std::uint64_t>> blocks;
+  int watch = -1;
+  size_t trajectories = 0;
+  for (const auto& [b, digest] : assigned_) {
+    const auto it = held_.find(digest);
+    if (it == held_.end()) continue;
+    if (!blocks.empty() && static_cast<int>(held_.at(blocks.back().second).size()) != ObservationEStep::kBlockSize) {
+      throw InputError("estep_request.block_digest", "puts a short block before others");
+    }
+    if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b && m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
+      watch = static_cast<int>(trajectories) + m.watch % ObservationEStep::kBlockSize;
+    }
+    blocks.emplace_back(b, digest);
+    trajectories += it->second.size();
   }
-  if (!estep_ || estep_symbols_ != W || estep_confounders_ != E || estep_->options().max_kinds != m.max_kinds ||
-      estep_->options().watch != m.watch || estep_->prior().learn_eta != learned_eta) {
-    // The worker never refines alpha or eta: only the prior's shape matters here, and with
-    // learned eta that it numbers the data's contexts as the optimiser's E-step does.
-    ObservationPrior shape;
-    shape.learn_eta = learned_eta;
-    shape.num_symbols = W;
-    shape.num_confounders = E;
-    shape.subject_alpha = Eigen::MatrixXd::Ones(P, W);
-    shape.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
+  const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), watch, learned_eta);
+  if (!estep_ || blocks != estep_blocks_ || shape != estep_shape_) {
+    std::vector<ObservedTrajectory> data;
+    data.reserve(trajectories);
+    for (const auto& [b, digest] : blocks) {
+      for (const auto& t : held_.at(digest)) {
+        for (int w : t.symbols) {
+          if (w >= W) throw InputError("estep_request.num_symbols", "is smaller than the blocks' alphabet");
+        }
+        if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
+        data.push_back(t);
+      }
+    }
+    // The worker never refines alpha or eta: only the prior's shape matters here. With
+    // learned eta the trajectories carry the optimiser's contexts.
+    ObservationPrior prior;
+    prior.learn_eta = learned_eta;
+    prior.num_symbols = W;
+    prior.num_confounders = E;
+    prior.subject_alpha = Eigen::MatrixXd::Ones(P, W);
+    prior.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
     ObservationEStepOptions options;
     options.max_kinds = m.max_kinds;
-    options.watch = m.watch;
-    estep_.emplace(*mdp_, trajectories_, shape, options);
-    estep_symbols_ = W;
-    estep_confounders_ = E;
+    options.kind_table = static_cast<bool>(m.kind_table);
+    options.watch = watch;
+    estep_.reset();
+    estep_blocks_.clear();
+    estep_.emplace(*mdp_, std::move(data), prior, options);
+    estep_blocks_ = blocks;
+    estep_shape_ = shape;
   }
-  if (m.num_blocks != estep_->num_blocks()) throw InputError("estep_request.num_blocks", "differs from this worker's");
   SoftSolution policy;
   policy.log_policy = eigen_vector(m.log_policy);
   policy.policy = eigen_vector(m.policy);
@@ -171,23 +295,26 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   }
   std::optional<RowMatrix> eta;
   if (learned_eta) {
-    if (m.num_contexts != estep_->num_contexts()) {
-      throw InputError("estep_request.num_contexts", std::to_string(m.num_contexts) + ", the data set has " +
+    if (m.num_contexts < estep_->num_contexts()) {
+      throw InputError("estep_request.num_contexts", std::to_string(m.num_contexts) + ", the blocks have " +
                                                          std::to_string(estep_->num_contexts()) + " contexts");
     }
     eta = eigen_rows<RowMatrix>(m.context_eta, m.num_sources);
     if (!eta->allFinite() || (eta->array() < 0).any()) throw InputError("estep_request.context_eta", "must be finite and >= 0");
   }
   // One block at a time, each answer sent as soon as it is ready.
-  for (const int block : mine) {
+  for (const int block : ready) {
+    pending_.erase(block);
+    const auto local = std::find_if(blocks.begin(), blocks.end(), [block](const auto& x) { return x.first == block; });
     const auto start = Clock::now();
-    const EStepStatistics s =
-        estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed), {block}, 1, eta ? &*eta : nullptr).front();
+    const EStepStatistics s = estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed),
+                                                       {static_cast<int>(local - blocks.begin())}, 1, eta ? &*eta : nullptr)
+                                  .front();
     hbirl::estep_result_t r{};
     r.utime = m.utime;
     r.request_id = m.request_id;
     r.worker = id_;
-    r.dataset_digest = static_cast<std::int64_t>(digest_);
+    r.block_digest = static_cast<std::int64_t>(local->second);
     r.block = block;
     r.num_pairs = P;
     r.counts = lcm_vector(s.counts);

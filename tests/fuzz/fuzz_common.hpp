@@ -36,10 +36,15 @@ using Types = std::tuple<hbirl::camera_frame_t, hbirl::detections_t, hbirl::obse
                          hbirl::reward_t, hbirl::frame_request_t, hbirl::service_status_t>;
 constexpr int kNumChannels = static_cast<int>(std::tuple_size_v<Types>);
 
+// The id of the sampler worker the service-handler fuzzer runs (and the seeds address).
+inline const std::string kFuzzSampler = "sampler-fuzz";
+
 inline const std::string& channel(int k) {
   namespace ch = services::channels;
+  // Trajectories go to one sampler's own channel: the fuzzed one's (fuzz_service_handlers).
+  static const std::string trajectories = ch::trajectory_channel(kFuzzSampler);
   static const std::string* const names[] = {&ch::kCamera,     &ch::kDetections,   &ch::kObservations, &ch::kEpisode,
-                                             &ch::kGroundTruth, &ch::kMdp,         &ch::kTrajectory,   &ch::kEStepRequest,
+                                             &ch::kGroundTruth, &ch::kMdp,         &trajectories,      &ch::kEStepRequest,
                                              &ch::kEStepResult, &ch::kEmProgress,  &ch::kObservationModel,
                                              &ch::kPosterior,   &ch::kReward,      &ch::kFrameRequest, &ch::kStatus};
   static_assert(sizeof(names) / sizeof(names[0]) == kNumChannels);

@@ -2,7 +2,7 @@
 // input is a sequence of bus messages (fuzz_common.hpp's framing: a channel byte, a
 // 2-byte size, the bytes), published on an in-process bus that every service listens
 // on, built fresh for each input so a finding replays from its input alone:
-//   SamplerWorker      MDP, TRAJECTORY, ESTEP_REQUEST (and the MdpAssembler behind MDP)
+//   SamplerWorker      MDP, TRAJECTORY_<tag>, ESTEP_REQUEST (and the MdpAssembler behind MDP)
 //   DatasetBuilder     EPISODE, OBSERVATIONS, GROUND_TRUTH (twice: any domain, and
 //                      expecting the simulated one's shape, as the optimiser does)
 //   PerceptionService  CAMERA (PNG and JPEG frames; fuzz_png_frame.cpp goes deeper)
@@ -103,7 +103,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   counters.service = "fuzz";
   counters.quiet = true;
   // The most a sampler may hold while a data set arrives: far below -malloc_limit_mb.
-  SamplerWorker worker(bus, "sampler-fuzz", counters, std::int64_t{64} << 20);
+  SamplerWorker worker(bus, fuzz::kFuzzSampler, counters, std::int64_t{64} << 20);
   DatasetBuilder any_domain;
   any_domain.subscribe(bus, counters);
   DatasetBuilder expecting;

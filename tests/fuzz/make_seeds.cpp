@@ -128,7 +128,7 @@ std::vector<std::uint8_t> estep_pass() {
 
   MemoryBus worker_bus(hub);
   Counters wc = quiet("sampler");
-  SamplerWorker worker(worker_bus, "sampler-1", wc);
+  SamplerWorker worker(worker_bus, fuzz::kFuzzSampler, wc);
   std::atomic<bool> stop{false};
   std::thread t([&] {
     while (!stop) worker.handle(5);
@@ -137,8 +137,7 @@ std::vector<std::uint8_t> estep_pass() {
   Counters c = quiet("optimiser");
   BusExecutorOptions eo;
   eo.spot_check = false;
-  auto executor = std::make_shared<BusBlockExecutor>(bus, task.mdp, "gridworld", observed, c, eo);
-  executor->publish_dataset();
+  auto executor = std::make_shared<BusBlockExecutor>(bus, task.mdp, "gridworld", c, eo);
   executor->wait_for_workers(1, 5000);
   ObservationEStepOptions options;
   options.executor = executor;

@@ -5,6 +5,8 @@
 #include "brute_force_posterior.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
+#include "learner/soft_value_iteration.hpp"
+#include "random_mdp.hpp"
 #include "tiny_observed_problem.hpp"
 #include "sim_driver/gridworld_observations.hpp"
 
@@ -205,6 +207,114 @@ TEST(ObservationEStep, KindTableAgreesOnTinyProblems) {
                            "trial " + std::to_string(trial));
   }
   EXPECT_GT(used, 20);
+}
+
+// Random observed data on a random MDP: `n` trajectories of up to 8 steps under a soft
+// policy, 0-3 observations per step of 3 symbols, each with one of `etas` source
+// distributions over 1 + 2 sources (few kinds: the kind table is used) or, with etas = 0,
+// a fresh one per observation (too many kinds for it).
+std::vector<ObservedTrajectory> random_observed(const Mdp& mdp, const SoftSolution& policy, int n, int etas, Rng& rng) {
+  std::vector<Eigen::RowVector3d> table;
+  for (int k = 0; k < etas; ++k) {
+    const Eigen::RowVector3d e(0.1 + rng.uniform(), 0.1 + rng.uniform(), 0.1 + rng.uniform());
+    table.push_back(e / e.sum());
+  }
+  std::vector<ObservedTrajectory> out;
+  for (int i = 0; i < n; ++i) {
+    bool terminal = false;
+    const Trajectory steps = sample_trajectory(mdp, policy.policy, 1 + rng.uniform_int(8), rng, &terminal);
+    ObservedTrajectory t;
+    std::vector<Eigen::RowVector3d> rows;
+    for (size_t step = 0; step < steps.size(); ++step) {
+      for (int k = rng.uniform_int(4); k > 0; --k) {
+        t.symbols.push_back(rng.uniform_int(3));
+        Eigen::RowVector3d e(0.1 + rng.uniform(), 0.1 + rng.uniform(), 0.1 + rng.uniform());
+        rows.push_back(etas > 0 ? table[static_cast<size_t>(rng.uniform_int(etas))] : Eigen::RowVector3d(e / e.sum()));
+      }
+      t.step_begin.push_back(static_cast<int>(t.symbols.size()));
+    }
+    t.eta.resize(static_cast<Eigen::Index>(rows.size()), 3);
+    for (size_t r = 0; r < rows.size(); ++r) t.eta.row(static_cast<Eigen::Index>(r)) = rows[r];
+    t.ends_in_terminal = terminal;
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// A sampler worker holds only its share of the blocks (services/sampler_worker.hpp): an
+// E-step over the trajectories of some blocks, as the whole data set's E-step holds them
+// (merged, with its contexts), told whether that E-step uses the kind table, gives each of
+// those blocks' statistics bit for bit -- on random MDPs of odd and even sizes (the kind
+// table's rows then start at other alignments), with the kind table and without, stated
+// and learned eta, and the watched trajectory inside the share.
+TEST(ObservationEStep, AShareOfTheBlocksGivesTheirStatisticsBitForBit) {
+  Rng rng(2024);
+  int tables = 0, plain = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    testing::RandomMdpOptions o;
+    o.states = 5 + trial;
+    o.actions = 2 + trial % 3;
+    o.terminal = trial % 2;
+    o.impossible = trial % 3 == 1;
+    const Mdp mdp = testing::random_mdp(o, rng);
+    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Random(o.features)));
+    const int n = ObservationEStep::kBlockSize * 5 + 7;  // six blocks, the last one short
+    const std::vector<ObservedTrajectory> data = random_observed(mdp, policy, n, trial % 4 == 3 ? 0 : 4, rng);
+    ObservationPrior prior;
+    prior.num_symbols = 3;
+    prior.num_confounders = 2;
+    prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), 3, 1.0) + Eigen::MatrixXd::Random(mdp.num_pairs(), 3).cwiseAbs();
+    prior.confounder_alpha = Eigen::MatrixXd::Ones(2, 3);
+    prior.learn_eta = trial % 2 == 0;
+    ObservationEStepOptions options;
+    options.watch = ObservationEStep::kBlockSize * (trial % 6) + 3;
+    const ObservationEStep whole(mdp, data, prior, options);
+    (whole.uses_kind_table() ? tables : plain)++;
+    const ObservationModel model = dirichlet_mean(prior);
+    const std::optional<RowMatrix> eta = whole.learned_eta(whole.initial_state(1).alpha.value());
+    ASSERT_EQ(eta.has_value(), prior.learn_eta);
+    RowMatrix moved;  // learned eta away from the stated one, as after some EM iterations
+    if (eta) moved = (eta->array() + 0.2 * Eigen::ArrayXXd::Random(eta->rows(), eta->cols()).abs()).matrix();
+    for (const std::vector<int>& share : std::vector<std::vector<int>>{{0}, {5}, {1, 3}, {2, 4, 5}, {0, 1, 2, 3, 4, 5}}) {
+      std::vector<ObservedTrajectory> held;
+      int watch = -1;
+      for (int b : share) {
+        for (int i = b * ObservationEStep::kBlockSize; i < std::min(n, (b + 1) * ObservationEStep::kBlockSize); ++i) {
+          if (i == options.watch) watch = static_cast<int>(held.size());
+          held.push_back(whole.trajectories()[static_cast<size_t>(i)]);
+        }
+      }
+      ObservationPrior shape = prior;
+      ObservationEStepOptions share_options;
+      share_options.kind_table = whole.uses_kind_table();
+      share_options.watch = watch;
+      const ObservationEStep part(mdp, held, shape, share_options);
+      std::vector<int> local(share.size());
+      for (size_t k = 0; k < share.size(); ++k) local[k] = static_cast<int>(k);
+      const RowMatrix* with = eta ? &moved : nullptr;
+      const std::vector<EStepStatistics> expected = whole.block_statistics(policy, model, 9, share, 1, with);
+      const std::vector<EStepStatistics> got = part.block_statistics(policy, model, 9, local, 1, with);
+      for (size_t k = 0; k < share.size(); ++k) {
+        const std::string what = "trial " + std::to_string(trial) + ", block " + std::to_string(share[k]);
+        const EStepStatistics& a = expected[k];
+        const EStepStatistics& b = got[k];
+        EXPECT_EQ(a.counts, b.counts) << what;
+        EXPECT_EQ(a.alpha_dot.subject, b.alpha_dot.subject) << what;
+        EXPECT_EQ(a.alpha_dot.confounders, b.alpha_dot.confounders) << what;
+        EXPECT_EQ(a.log_likelihood, b.log_likelihood) << what;
+        EXPECT_EQ(a.impossible, b.impossible) << what;
+        EXPECT_EQ(a.watched, b.watched) << what;
+        // The share numbers no context it does not hold: compare the rows it has.
+        ASSERT_LE(b.source_counts.rows(), a.source_counts.rows()) << what;
+        EXPECT_EQ(a.source_counts.topRows(b.source_counts.rows()), b.source_counts) << what;
+        if (b.source_counts.rows() < a.source_counts.rows()) {
+          EXPECT_TRUE((a.source_counts.bottomRows(a.source_counts.rows() - b.source_counts.rows()).array() == 0.0).all()) << what;
+        }
+      }
+    }
+  }
+  EXPECT_GT(tables, 4);
+  EXPECT_GT(plain, 1);
 }
 
 // With learn = false the observation model stays the prior's mean and the E-step makes no

@@ -102,7 +102,7 @@ WorkerThread::WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id
 struct Optimiser {
   explicit Optimiser(std::shared_ptr<MemoryHub> hub, BusExecutorOptions options = {}, const Task& t = task())
       : bus(std::move(hub)), counters(quiet("optimiser")),
-        executor(std::make_shared<BusBlockExecutor>(bus, t.task.mdp, "gridworld", t.observed, counters, options)) {}
+        executor(std::make_shared<BusBlockExecutor>(bus, t.task.mdp, "gridworld", counters, options)) {}
   MemoryBus bus;
   Counters counters;
   std::shared_ptr<BusBlockExecutor> executor;
@@ -112,30 +112,30 @@ TEST(EStepService, TrajectoriesRoundTrip) {
   const auto& observed = task().observed;
   std::vector<ObservedTrajectory> back;
   for (size_t i = 0; i < observed.size(); ++i) {
-    back.push_back(from_message(to_message(observed[i], static_cast<int>(i), static_cast<int>(observed.size()), 1)));
+    back.push_back(from_message(to_message(observed[i], static_cast<int>(i), static_cast<int>(observed.size()), 1, "w")));
   }
   EXPECT_EQ(dataset_digest(back), dataset_digest(observed));
-  hbirl::trajectory_t bad = to_message(observed[0], 0, 1, 1);
+  hbirl::trajectory_t bad = to_message(observed[0], 0, 1, 1, "w");
   bad.step_begin[1] = bad.n + 5;
   EXPECT_THROW(from_message(bad), InputError);
-  bad = to_message(observed[0], 0, 1, 1);
+  bad = to_message(observed[0], 0, 1, 1, "w");
   bad.eta[0][0] = std::nan("");
   EXPECT_THROW(from_message(bad), InputError);
   // Contexts go with the data (and into its digest).
   const std::vector<ObservedTrajectory> with_contexts = with_learned_eta(true).observed;
   back.clear();
   for (size_t i = 0; i < with_contexts.size(); ++i) {
-    back.push_back(from_message(to_message(with_contexts[i], static_cast<int>(i), static_cast<int>(with_contexts.size()), 1)));
+    back.push_back(from_message(to_message(with_contexts[i], static_cast<int>(i), static_cast<int>(with_contexts.size()), 1, "w")));
   }
   EXPECT_EQ(dataset_digest(back), dataset_digest(with_contexts));
   EXPECT_NE(dataset_digest(back), dataset_digest(observed));
   const auto refused = [](const hbirl::trajectory_t& m, const std::string& field) {
     hbirl::testing::expect_refused([&] { from_message(m); }, field);
   };
-  bad = to_message(with_contexts[0], 0, 1, 1);
+  bad = to_message(with_contexts[0], 0, 1, 1, "w");
   bad.context[1] = kMaxContexts;
   refused(bad, "trajectory.context");
-  bad = to_message(with_contexts[0], 0, 1, 1);
+  bad = to_message(with_contexts[0], 0, 1, 1, "w");
   bad.context.pop_back();
   bad.num_context -= 1;
   refused(bad, "trajectory.num_context");
@@ -302,7 +302,7 @@ TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
   MemoryBus front(hub), back(behind);
   std::atomic<int> forged{0};
   const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
-  for (const std::string& channel : {channels::kEStepRequest, channels::kMdp, channels::kTrajectory}) {
+  for (const std::string& channel : {channels::kEStepRequest, channels::kMdp, channels::trajectory_channel("sampler-a")}) {
     front.subscribe(channel, forward_to(back), 100000);
   }
   back.subscribe(channels::kStatus, forward_to(front), 1000);
@@ -383,9 +383,9 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
                                      copy.request_id -= 1;
                                      publish(meddler, channels::kEStepResult, copy, meddler_counters);
                                      const char garbage[] = "garbage";
-                                     for (const auto* ch : {&channels::kEStepResult, &channels::kEStepRequest,
-                                                            &channels::kTrajectory, &channels::kStatus}) {
-                                       meddler.publish(*ch, garbage, sizeof garbage);
+                                     for (const std::string& ch : {channels::kEStepResult, channels::kEStepRequest,
+                                                                   channels::trajectory_channel("sampler-a"), channels::kStatus}) {
+                                       meddler.publish(ch, garbage, sizeof garbage);
                                      }
                                    },
                                    1000);
@@ -405,9 +405,9 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   EXPECT_GT(worker.counters().bad_messages, 0);
 }
 
-// A data set's declared size takes no memory until its trajectories arrive (a 61-byte
-// TRAJECTORY claiming 10 million used to make a worker allocate 1.1 GB), and a data set
-// beyond the worker's --max-dataset-mb is refused and dropped.
+// A block's declared data set size takes no memory until its trajectories arrive (a
+// 61-byte TRAJECTORY claiming 10 million used to make a worker allocate 1.1 GB), and blocks
+// beyond the worker's --max-dataset-mb are refused and dropped.
 TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   const auto max_rss_kb = [] {
     rusage u{};
@@ -418,18 +418,40 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   MemoryBus bus(hub), sender(hub);
   Counters counters = quiet("sampler"), out = quiet("sender");
   SamplerWorker worker(bus, "sampler-a", counters, std::int64_t{1} << 20);
-  hbirl::trajectory_t claim = to_message(task().observed[0], 5, 10'000'000, 42);
+  const std::string channel = channels::trajectory_channel("sampler-a");
+  hbirl::trajectory_t claim = to_message(task().observed[0], 5, 10'000'000, 42, "sampler-a");
   const long before = max_rss_kb();
-  publish(sender, channels::kTrajectory, claim, out);
+  publish(sender, channel, claim, out);
   bus.handle(0);
   EXPECT_LT(max_rss_kb() - before, 50 * 1024) << "kB more at the peak";
-  EXPECT_EQ(counters.bad_messages, 0);  // a fine message: its data set is just not complete
-  // A data set of 1000 claimed trajectories, each ~2.5 KB held: past 1 MB after ~430.
-  for (int i = 0; i < 1000; ++i) publish(sender, channels::kTrajectory, to_message(task().observed[0], i, 1000, 43), out);
+  EXPECT_EQ(counters.bad_messages, 0);  // a fine message: its block is just not complete
+  // The first trajectory of 1000 made-up blocks, each ~2.5 KB held: past 1 MB after ~430.
+  for (int i = 0; i < 1000; ++i) {
+    publish(sender, channel, to_message(task().observed[0], i * ObservationEStep::kBlockSize, 1000 * ObservationEStep::kBlockSize,
+                                        static_cast<std::uint64_t>(1000 + i), "sampler-a"), out);
+  }
   bus.handle(0);
   EXPECT_GT(counters.bad_messages, 0);
   EXPECT_NE(counters.last_problem.find("--max-dataset-mb"), std::string::npos) << counters.last_problem;
-  EXPECT_EQ(worker.digest(), 0u);  // nothing complete was taken in
+  EXPECT_EQ(worker.trajectories_held(), 0);  // nothing complete was taken in
+  // A whole block whose trajectories do not have the digest it is sent under is refused.
+  Counters fresh = quiet("sampler-b");
+  SamplerWorker b(bus, "sampler-b", fresh);
+  const std::vector<ObservedTrajectory> first = block_of(task().observed, 0);
+  for (int i = 0; i < ObservationEStep::kBlockSize; ++i) {
+    publish(sender, channels::trajectory_channel("sampler-b"),
+            to_message(first[static_cast<size_t>(i)], i, 40, dataset_digest(first) ^ 1, "sampler-b"), out);
+  }
+  bus.handle(0);
+  EXPECT_NE(fresh.last_problem.find("trajectory.block_digest"), std::string::npos) << fresh.last_problem;
+  EXPECT_EQ(b.trajectories_held(), 0);
+  // Sent under its own digest, it is held.
+  for (int i = 0; i < ObservationEStep::kBlockSize; ++i) {
+    publish(sender, channels::trajectory_channel("sampler-b"), to_message(first[static_cast<size_t>(i)], i, 40, dataset_digest(first), "sampler-b"),
+            out);
+  }
+  bus.handle(0);
+  EXPECT_EQ(b.trajectories_held(), ObservationEStep::kBlockSize);
 }
 
 // A worker that lies about its blocks is caught by the optimiser's spot check in the first
@@ -498,7 +520,7 @@ TEST(EStepService, ForgedAnswersDoNotChangeTheta) {
                                           hbirl::estep_result_t r{};
                                           r.request_id = m.request_id;
                                           r.worker = name_the_assigned_worker ? to : "forger";
-                                          r.dataset_digest = m.dataset_digest;
+                                          r.block_digest = m.block_digest[static_cast<size_t>(b)];
                                           r.block = b;
                                           r.num_pairs = m.num_pairs;
                                           r.counts.assign(static_cast<size_t>(m.num_pairs), 1.0);
@@ -555,7 +577,7 @@ TEST(EStepService, FakeWorkerHeartbeatsCostNothingWithAKey) {
     std::unique_ptr<Bus> opt_bus = endpoint(oc);
     BusExecutorOptions options;
     options.timeout_ms = 300;
-    auto executor = std::make_shared<BusBlockExecutor>(*opt_bus, task().task.mdp, "gridworld", task().observed, oc, options);
+    auto executor = std::make_shared<BusBlockExecutor>(*opt_bus, task().task.mdp, "gridworld", oc, options);
     ASSERT_EQ(executor->wait_for_workers(1, 10000), 1);
     MemoryBus forger(hub);
     for (int k = 0; k < 300; ++k) {
@@ -564,8 +586,6 @@ TEST(EStepService, FakeWorkerHeartbeatsCostNothingWithAKey) {
       s.id = "sampler-fake-" + std::to_string(k);
       s.seq = 1;
       s.state = "running";
-      s.trajectories = static_cast<std::int32_t>(task().observed.size());
-      s.dataset_digest = static_cast<std::int64_t>(executor->digest());
       s.mdp_digest = static_cast<std::int64_t>(worker.mdp_digest());
       s.numerics = static_cast<std::int64_t>(numerics_fingerprint());
       publish(forger, channels::kStatus, s, fc);
@@ -606,8 +626,7 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
       s.id = "sampler-other-build";
       s.seq = seq;
       s.state = "running";
-      s.trajectories = static_cast<std::int32_t>(task().observed.size());
-      s.dataset_digest = static_cast<std::int64_t>(opt.executor->digest());
+      s.mdp_digest = static_cast<std::int64_t>(worker.worker().mdp_digest());  // it could take work but for its numerics
       s.numerics = static_cast<std::int64_t>(numerics_fingerprint() ^ 1);
       publish(other, channels::kStatus, s, other_counters);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -634,15 +653,72 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
   EXPECT_GT(stats.remote_blocks, 0);
 }
 
-// A worker that starts after the data set went out asks for it by reporting its digest.
-TEST(EStepService, LateWorkerGetsTheDataSet) {
+// A worker that starts after learning has begun is given work -- one block while it is
+// unproven, then its even share -- and is sent just those blocks, which the worker that
+// had them drops: together they hold the data set once, and theta is the one-process run's.
+TEST(EStepService, LateWorkerGetsItsShare) {
   auto hub = std::make_shared<MemoryHub>();
   WorkerThread early(hub, "sampler-a");
   Optimiser opt(hub);
   ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  const Task& t = task();
+  const SoftSolution policy = soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights));
+  ObservationEStepOptions remote;
+  remote.executor = opt.executor;
+  const ObservationEStep there(t.task.mdp, t.observed, t.prior, remote);
+  const ObservationModel model = dirichlet_mean(t.prior);
+  const EStepStatistics here = ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5);
+  EXPECT_EQ(there.statistics(policy, model, 5).counts, here.counts);
+  EXPECT_EQ(early.worker().trajectories_held(), 40);
   WorkerThread late(hub, "sampler-b");
   EXPECT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
-  EXPECT_EQ(late.worker().digest(), opt.executor->digest());
+  for (int pass = 0; pass < 3; ++pass) {
+    const EStepStatistics s = there.statistics(policy, model, 5);
+    EXPECT_EQ(s.counts, here.counts) << pass;
+    EXPECT_EQ(s.log_likelihood, here.log_likelihood) << pass;
+  }
+  EXPECT_GT(late.worker().blocks_computed(), 0);
+  EXPECT_GT(late.worker().trajectories_held(), 0);
+  EXPECT_LT(early.worker().trajectories_held(), 40);
+  EXPECT_EQ(early.worker().trajectories_held() + late.worker().trajectories_held(), 40);
+  EXPECT_EQ(opt.executor->stats().local_blocks, 0);
+}
+
+// 256 trajectories (16 blocks) and four workers: each worker is sent its quarter of the
+// data set's bytes, once for the whole run (blocks stay with their worker from pass to
+// pass), holds only those trajectories, and theta is bit-identical to learning in one
+// process.
+TEST(EStepService, EachWorkerIsSentOnlyItsShare) {
+  Task t = task();
+  Rng rng(11);
+  t.task = make_gridworld_task({}, 256, 10, rng);
+  GridworldObservationOptions options;
+  options.per_step = 6;
+  t.observed = observe_gridworld(t.task.mdp, t.task.trajectories, gridworld_subject_observation_model(5, 1.0),
+                                 random_confounder_observation_model(3, rng), options, rng)
+                   .trajectories;
+  auto hub = std::make_shared<MemoryHub>();
+  std::vector<std::unique_ptr<WorkerThread>> workers;
+  for (int w = 0; w < 4; ++w) workers.push_back(std::make_unique<WorkerThread>(hub, "sampler-" + std::to_string(w)));
+  Optimiser opt(hub, {}, t);
+  ASSERT_EQ(opt.executor->wait_for_workers(4, 10000), 4);
+  expect_identical(learn(t, opt.executor), learn(t, nullptr));
+  // The whole data set as the workers are sent it: one message per trajectory.
+  std::int64_t whole = 0;
+  const ObservationEStep estep(t.task.mdp, t.observed, t.prior);
+  for (size_t i = 0; i < estep.trajectories().size(); ++i) {
+    whole += to_message(estep.trajectories()[i], static_cast<int>(i), 256, 0, "sampler-0").getEncodedSize();
+  }
+  const auto stats = opt.executor->stats();
+  EXPECT_EQ(stats.local_blocks, 0);
+  EXPECT_EQ(stats.trajectories_sent, 256) << "every trajectory sent once in the whole run";
+  EXPECT_EQ(stats.bytes_sent, whole);
+  for (const auto& w : workers) {
+    const double share = static_cast<double>(w->worker().trajectory_bytes_received()) / static_cast<double>(whole);
+    EXPECT_GT(share, 0.2) << w->worker().id();
+    EXPECT_LT(share, 0.3) << w->worker().id();
+    EXPECT_EQ(w->worker().trajectories_held(), 64) << w->worker().id();
+  }
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 
 #include "hbirl/service_status_t.hpp"
 #include "sample_messages.hpp"
+#include "services/channels.hpp"
 
 namespace {
 
@@ -63,13 +64,17 @@ int main(int argc, char** argv) {
   const auto samples = hbirl::test::sample_messages();
   int sent = 0;
   for (int c = 2; c < argc; ++c) {
-    const std::string channel = argv[c];
+    // TRAJECTORY:ID: the trajectory samples on the channel of the sampler worker ID.
+    const std::string arg = argv[c];
+    const bool trajectories = arg.rfind("TRAJECTORY:", 0) == 0;
+    const std::string channel = trajectories ? hbirl::services::channels::trajectory_channel(arg.substr(11)) : arg;
+    const std::string samples_of = trajectories ? "TRAJECTORY" : arg;
     for (int k = 0; k < 3; ++k) {
       sent += lcm.publish(channel, junk.data(), static_cast<unsigned>(junk.size() - static_cast<size_t>(k * 50))) == 0;
       sent += lcm.publish(channel, &wrong) == 0;
     }
     for (const auto& sample : samples) {
-      if (sample.channel != channel) continue;
+      if (sample.channel != samples_of) continue;
       int n = 0;
       for (const auto& bytes : hostile_variants(sample)) {
         sent += lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size())) == 0;

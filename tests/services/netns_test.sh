@@ -273,7 +273,7 @@ PY
     # to INT_MIN (a hostile string or array length) on every channel: each service counts
     # them and runs on; a recording full of them is read by report and the dashboard.
     for s in perception labeller sampler; do
-      "$build/hbirl-$s" --url "$url" >"$tmp/$s.log" 2>&1 &
+      "$build/hbirl-$s" --url "$url" --id "$s-netns" >"$tmp/$s.log" 2>&1 &
       eval "pid_$s=$!"
     done
     # The optimiser learns the onion domain, the simulator publishes a Gridworld run: the
@@ -287,7 +287,7 @@ PY
     pid_dashboard=$!
     for i in 1 2 3; do  # again and again: a slow service may subscribe late
       sleep 1
-      "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH MDP TRAJECTORY ESTEP_REQUEST ESTEP_RESULT STATUS \
+      "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH MDP TRAJECTORY:sampler-netns ESTEP_REQUEST ESTEP_RESULT STATUS \
         EM_PROGRESS REWARD OBSERVATION_MODEL POSTERIOR FRAME_REQUEST >/dev/null
     done
     sleep 1

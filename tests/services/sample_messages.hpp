@@ -89,7 +89,7 @@ inline std::vector<SampleMessage> sample_messages() {
   }
   {
     hbirl::trajectory_t m{};
-    m.index = 0, m.num_trajectories = 1, m.num_steps = 2, m.step_begin = {0, 1}, m.n = 2, m.symbol = {0, 1},
+    m.block_digest = 9, m.index = 0, m.num_trajectories = 1, m.block_size = 16, m.worker = "sampler-a", m.num_steps = 2, m.step_begin = {0, 1}, m.n = 2, m.symbol = {0, 1},
     m.num_sources = 2, m.eta = {{1, 0}, {0.5, 0.5}}, m.num_weights = 2, m.weights = {1, 2};
     m.num_context = 2, m.context = {1, 0};
     all.push_back(sample_of("TRAJECTORY", m));
@@ -97,6 +97,7 @@ inline std::vector<SampleMessage> sample_messages() {
   {
     hbirl::estep_request_t m{};
     m.request_id = 7, m.num_trajectories = 1, m.block_size = 1, m.num_blocks = 2, m.assigned_worker = {"sampler-a", "b"};
+    m.block_digest = {3, 4}, m.kind_table = true;
     m.engine = "exact", m.watch = -1, m.num_pairs = 2, m.log_policy = {0, 0}, m.policy = {1, 1}, m.num_symbols = 2,
     m.num_confounders = 1, m.subject_o = {{0.5, 0.5}, {0.5, 0.5}}, m.confounder_o = {{0.5, 0.5}};
     m.num_contexts = 2, m.num_sources = 2, m.context_eta = {{0.8, 0.2}, {0.3, 0.7}};
@@ -104,7 +105,7 @@ inline std::vector<SampleMessage> sample_messages() {
   }
   {
     hbirl::estep_result_t m{};
-    m.request_id = 7, m.worker = "sampler-a", m.num_pairs = 2, m.counts = {1, 2}, m.num_symbols = 2, m.num_confounders = 1,
+    m.request_id = 7, m.worker = "sampler-a", m.block_digest = 3, m.num_pairs = 2, m.counts = {1, 2}, m.num_symbols = 2, m.num_confounders = 1,
     m.alpha_subject = {{1, 0}, {0, 1}}, m.alpha_confounder = {{1, 1}}, m.num_watched_steps = 1, m.watched = {{0.5, 0.5}};
     m.num_contexts = 2, m.num_sources = 2, m.source_counts = {{1.5, 0.5}, {0, 2}};
     all.push_back(sample_of("ESTEP_RESULT", m));
@@ -141,6 +142,7 @@ inline std::vector<SampleMessage> sample_messages() {
   {
     hbirl::service_status_t m{};
     m.service = "sampler", m.id = "sampler-x-1", m.state = "running", m.detail = "fine";
+    m.num_held_blocks = 2, m.held_block = {3, 4};
     all.push_back(sample_of("STATUS", m));
   }
   return all;

@@ -81,6 +81,11 @@ struct ObservationEStepOptions {
   // per pass when the data have at most this many kinds, and at most a quarter as many
   // kinds as observations (0: never). Same result to rounding.
   int max_kinds = 1024;
+  // Set: use the kind table (within max_kinds) or not, whatever the data's ratio of kinds to
+  // observations. An E-step over some blocks of a larger data set (a sampler worker's share,
+  // services/sampler_worker.hpp) must decide as the whole data set's E-step did, or its
+  // sums differ from that E-step's in the last bits. Unset: decided from the data.
+  std::optional<bool> kind_table;
   // Where the blocks of a pass are computed: null = here, on `threads` threads.
   std::shared_ptr<const BlockExecutor> executor;
   // Keep this trajectory's posterior from every pass (the exact engine; -1: none): what a

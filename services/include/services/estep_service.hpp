@@ -8,18 +8,25 @@
 //   MDP            optimiser -> workers: the MDP's dynamics (mdp_message.hpp), with its
 //                  digest. Re-sent when a worker reports another digest: workers need
 //                  no domain of their own.
-//   TRAJECTORY     optimiser -> workers: its data set, one trajectory_t each, with the
-//                  data set's digest. Re-sent when a worker reports another digest.
+//   TRAJECTORY_<tag>  optimiser -> one worker (channels::trajectory_channel): the
+//                  trajectories of the blocks it is assigned, as the optimiser's E-step
+//                  holds them, each block known by the digest of its trajectories. Sent
+//                  once: a block stays with its worker from pass to pass while the worker
+//                  is live, so each worker receives and holds only its share; the blocks of
+//                  a worker that dies go to the others, who are sent just those.
 //   STATUS         every service, about once a second: service_status_t; a sampler's
-//                  carries its MDP's and its data set's digests.
+//                  carries its MDP's digest and the digests of the blocks it holds (a
+//                  block it was sent but does not hold is sent again).
 //   ESTEP_REQUEST  optimiser -> workers: request id, attempt, the policy and the
-//                  observation model, and which worker computes which block.
-//   ESTEP_RESULT   worker -> optimiser: one block's statistics, echoing the request id.
+//                  observation model, which worker computes which block, and each
+//                  block's digest.
+//   ESTEP_RESULT   worker -> optimiser: one block's statistics, echoing the request id
+//                  and the block's digest.
 // The optimiser waits for a block's answer up to a timeout, then re-asks it of a worker
 // that has answered (a new attempt of the same request), and after max_attempts
 // computes what is still missing itself: learning never stalls. Answers to other
-// requests, for blocks it already has, or from workers with another data set are
-// counted and ignored. Workers answer only when their digests equal the request's.
+// requests, for blocks it already has, or computed on other trajectories are counted
+// and ignored. A worker answers a block once it holds the trajectories of its digest.
 // Here: the messages both sides share and the optimiser's side (BusBlockExecutor); the
 // workers' side is sampler_worker.hpp.
 #include <atomic>
@@ -46,9 +53,14 @@
 
 namespace hbirl::services {
 
-// Trajectories on the bus. from_message throws InputError naming the bad field.
-hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t digest);
+// Trajectories on the bus: trajectory `index` of a data set of `count`, in the block
+// whose trajectories have `block_digest`, sent to `worker`. from_message throws
+// InputError naming the bad field.
+hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
+                               const std::string& worker);
 ObservedTrajectory from_message(const hbirl::trajectory_t& m);
+// The trajectories of block `b` of `trajectories` (ObservationEStep::kBlockSize each).
+std::vector<ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b);
 
 
 // A fingerprint of this build's floating-point results: the bits of a fixed small E-step
@@ -90,19 +102,20 @@ struct BusExecutorOptions {
 // optimiser's process must not handle the same bus elsewhere at the same time.
 class BusBlockExecutor final : public BlockExecutor {
  public:
-  // `mdp` and `dataset`: what the workers are sent and must hold to get work; `domain`
-  // names the MDP in its messages.
-  BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, std::vector<ObservedTrajectory> dataset,
-                   Counters& counters, BusExecutorOptions options = {});
+  // `mdp`: what the workers are sent and must hold to get work; `domain` names it in its
+  // messages. Each pass's trajectories are the E-step's own (run()): each worker is sent
+  // those of its blocks when it is first given them.
+  BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters, BusExecutorOptions options = {});
   std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
                                    std::uint64_t seed, const RowMatrix* eta = nullptr) const override;
 
-  // Publishes the MDP and the data set (all trajectories) now.
-  void publish_dataset() const;
-  // Handles the bus until `count` workers with this MDP and data set are live, or timeout_ms
-  // passes; returns how many are.
+  // Publishes the MDP now.
+  void publish_mdp() const;
+  // Handles the bus until `count` workers with this MDP are live, or timeout_ms passes;
+  // returns how many are.
   int wait_for_workers(int count, int timeout_ms) const;
-  std::uint64_t digest() const { return digest_; }
+  // The digest of the data set of the last pass given to workers, as they are sent it (0: none yet).
+  std::uint64_t digest() const;
 
   struct Stats {
     std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
@@ -112,14 +125,15 @@ class BusBlockExecutor final : public BlockExecutor {
     std::int64_t conflicts = 0;                           // two different answers to a block under one name (a pass's blocks of that name computed here)
     std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
     double round_trip_s = 0.0;                            // summed over requests
+    std::int64_t trajectories_sent = 0, bytes_sent = 0;   // TRAJECTORY_<tag> messages to workers, and their bytes
   };
   Stats stats() const;
 
  private:
   struct Worker {
-    std::uint64_t digest = 0;
     std::uint64_t mdp_digest = 0;
-    int trajectories = 0;
+    std::set<std::uint64_t> held;  // the blocks it holds (their digests), as its last heartbeat said
+    std::map<std::uint64_t, std::chrono::steady_clock::time_point> sent;  // blocks sent to it, not yet seen held
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
@@ -135,20 +149,30 @@ class BusBlockExecutor final : public BlockExecutor {
   void check_spot(int block, const EStepStatistics& here) const;
   void distrust(const std::string& worker, const std::string& why) const;
   void forget_answers_of(const std::string& worker) const;
+  void prepare_blocks(const ObservationEStep& estep) const;
+  void send_blocks(const ObservationEStep& estep, const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
   std::uint64_t mdp_digest_;
-  std::vector<ObservedTrajectory> dataset_;
-  std::uint64_t digest_;
-  std::uint64_t merged_digest_ = 0;  // of the data set as ObservationEStep holds it
   std::uint64_t numerics_ = 0;       // numerics_fingerprint() here
+  // The data set of the E-step last given to workers, by blocks: the E-step it was read
+  // from, and each block's digest.
+  mutable const ObservationEStep* prepared_ = nullptr;
+  mutable std::uint64_t prepared_input_ = 0;
+  mutable int prepared_contexts_ = -1;
+  mutable bool prepared_kinds_ = false;
+  mutable std::vector<std::uint64_t> block_digests_;
+  mutable std::uint64_t data_digest_ = 0;
+  // Per block: the worker it was last given to. It stays there while that worker is live
+  // (assignment()), so the worker is sent its trajectories once.
+  mutable std::vector<std::string> owner_;
   Counters& counters_;
   BusExecutorOptions options_;
   mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held
   mutable std::map<std::string, Worker> workers_;
   mutable std::set<std::string> other_numerics_;  // workers reported with another fingerprint
-  mutable std::chrono::steady_clock::time_point last_dataset_sent_{};
+  mutable std::chrono::steady_clock::time_point last_mdp_sent_{};
   // The pass in flight.
   mutable std::int64_t request_id_ = 0;
   mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0, contexts_ = 0;
