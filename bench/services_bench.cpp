@@ -1,14 +1,23 @@
-// The E-step over the bus (docs/BENCHMARKS.md has the figures and the command): one pass
+// The E-step over the bus (docs/BENCHMARKS.md has the figures and the commands): one pass
 // of the E-step computed here, and farmed out to 1, 2 and 4 sampler workers (threads with
 // their own in-memory bus endpoints: the protocol's real code path, without the network),
-// on the paper's Gridworld with 64 trajectories (4 blocks).
+// on the paper's Gridworld with 64 trajectories (4 blocks); and farmed out over LCM on
+// loopback to 1-8 hbirl-sampler processes (BM_EStepPassOverLcm: run it inside a private
+// network namespace, bench/in_netns.sh).
 #include <benchmark/benchmark.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 
 #include <atomic>
+#include <map>
+#include <mutex>
 #include <thread>
 
 #include "services/estep_service.hpp"
 #include "services/keyed_bus.hpp"
+#include "services/lcm_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/sampler_worker.hpp"
 #include "sim_driver/gridworld.hpp"
@@ -23,10 +32,9 @@ struct Data {
   ObservationPrior prior;
 };
 
-const Data& data() {
-  static const Data d = [] {
+Data make_data(int trajectories) {
     Rng rng(1);
-    Data out{make_gridworld_task({}, 64, 10, rng), {}, {}};
+    Data out{make_gridworld_task({}, trajectories, 10, rng), {}, {}};
     GridworldObservationOptions options;  // 40 observations per step, 3 confounders, plausible eta
     out.observed = observe_gridworld(out.task.mdp, out.task.trajectories, gridworld_subject_observation_model(5, 1.0),
                                      random_confounder_observation_model(3, rng), options, rng)
@@ -37,7 +45,10 @@ const Data& data() {
     out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
     out.prior.learn_eta = false;  // eta as stated: the pass's cost without the contexts' counts
     return out;
-  }();
+}
+
+const Data& data() {
+  static const Data d = make_data(64);
   return d;
 }
 
@@ -49,6 +60,121 @@ void BM_EStepPassHere(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
 }
 BENCHMARK(BM_EStepPassHere)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The data of the process benchmarks: 1,024 trajectories (64 blocks), 10 steps, 40
+// observations per step.
+const Data& large_data() {
+  static const Data d = make_data(1024);
+  return d;
+}
+
+// One pass over the 64 blocks here, on one thread: the compute the workers share.
+void BM_EStepPassHereLarge(benchmark::State& state) {
+  const Data& d = large_data();
+  const ObservationEStep estep(d.task.mdp, d.observed, d.prior);
+  const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
+  const ObservationModel model = dirichlet_mean(d.prior);
+  for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
+  state.counters["blocks"] = estep.num_blocks();
+}
+BENCHMARK(BM_EStepPassHereLarge)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Counts the bytes on every channel of an LCM bus, from a thread of its own.
+class BusSpy {
+ public:
+  explicit BusSpy(const std::string& url) : bus_(open_bus(url)) {
+    bus_->subscribe(".*", [this](const Message& m) {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      bytes_[m.channel.rfind("TRAJECTORY_", 0) == 0 ? "TRAJECTORY_<tag>" : m.channel] += m.size;
+    }, 100000);
+    thread_ = std::thread([this] {
+      while (!stop_) bus_->handle(10);
+    });
+  }
+  ~BusSpy() {
+    stop_ = true;
+    thread_.join();
+  }
+  std::map<std::string, std::int64_t> take() {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // what is in flight
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return std::exchange(bytes_, {});
+  }
+
+ private:
+  std::unique_ptr<Bus> bus_;
+  std::mutex mutex_;
+  std::map<std::string, std::int64_t> bytes_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// One pass farmed out over LCM (loopback multicast) to `workers` hbirl-sampler processes:
+// the real processes, sockets and protocol. The first pass, which sends every worker its
+// share of the trajectories, is timed apart (first_pass_ms, share_MB); the timed passes
+// send requests and answers only (bus_kB_per_pass: every byte on the bus, heartbeats
+// included). No spot check: the protocol's cost alone. On 2 cores more than 2 workers
+// cannot compute faster: compare with BM_EStepPassHereLarge for the overhead per block.
+void BM_EStepPassOverLcm(benchmark::State& state) {
+  const Data& d = large_data();
+  const int n = static_cast<int>(state.range(0));
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+  const std::string sampler = std::string(HBIRL_BINARY_DIR) + "/hbirl-sampler";
+  std::vector<pid_t> pids;
+  for (int w = 0; w < n; ++w) {
+    const std::string id = "bench-sampler-" + std::to_string(w);
+    std::vector<std::string> args = {sampler, "--url", url, "--id", id};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t quiet;
+    posix_spawn_file_actions_init(&quiet);
+    posix_spawn_file_actions_addopen(&quiet, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    if (posix_spawn(&pid, sampler.c_str(), &quiet, nullptr, argv.data(), environ) == 0) pids.push_back(pid);
+    posix_spawn_file_actions_destroy(&quiet);
+  }
+  {
+    BusSpy spy(url);
+    Counters c;
+    c.quiet = true;
+    std::unique_ptr<Bus> bus = open_bus(url);
+    BusExecutorOptions executor_options;
+    executor_options.spot_check = false;
+    executor_options.timeout_ms = 10000;
+    auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", c, executor_options);
+    if (executor->wait_for_workers(n, 20000) != n) state.SkipWithError("workers did not come up (inside a network namespace? bench/in_netns.sh)");
+    ObservationEStepOptions options;
+    options.executor = executor;
+    const ObservationEStep estep(d.task.mdp, d.observed, d.prior, options);
+    const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
+    const ObservationModel model = dirichlet_mean(d.prior);
+    const auto start = std::chrono::steady_clock::now();
+    estep.statistics(policy, model, 1);
+    state.counters["first_pass_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    state.counters["share_MB"] = static_cast<double>(executor->stats().bytes_sent) / 1e6;
+    spy.take();
+    std::int64_t passes = 0;
+    for (auto _ : state) {
+      benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
+      ++passes;
+    }
+    std::int64_t total = 0;
+    for (const auto& [channel, bytes] : spy.take()) {
+      total += bytes;
+      if (channel == "ESTEP_REQUEST" || channel == "ESTEP_RESULT" || channel == "TRAJECTORY_<tag>") {
+        state.counters[channel + "_kB"] = static_cast<double>(bytes) / 1e3 / static_cast<double>(passes);
+      }
+    }
+    state.counters["bus_kB_per_pass"] = static_cast<double>(total) / 1e3 / static_cast<double>(passes);
+    const auto s = executor->stats();
+    state.counters["local_blocks"] = static_cast<double>(s.local_blocks);
+    state.counters["retried"] = static_cast<double>(s.retried_blocks);
+  }
+  for (pid_t pid : pids) kill(pid, SIGTERM);
+  for (pid_t pid : pids) waitpid(pid, nullptr, 0);
+}
+BENCHMARK(BM_EStepPassOverLcm)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->ArgName("workers")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Arguments: workers; then 0: as before issue 14 (no spot check, no key), 1: the default
 // (the optimiser spot-checks one block per pass), 2: the default with every message signed

@@ -173,13 +173,14 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) const {
   if (owner_.size() != block_digests_.size()) owner_.assign(block_digests_.size(), std::string());
 }
 
-// Each block of `todo` to the worker `assigned` to it, unless that worker holds it (its
-// heartbeat says so) or was sent it less than a timeout ago.
+// Each block of `todo` is queued for the worker `assigned` to it, unless that worker holds
+// it (its heartbeat says so) or was sent it less than a timeout ago; then as many are
+// sent as the send window takes.
 void BusBlockExecutor::send_blocks(const ObservationEStep& estep, const std::vector<int>& todo,
                                    const std::vector<std::string>& assigned) const {
   const auto now = Clock::now();
   const auto resend_after = std::chrono::milliseconds(options_.timeout_ms);
-  const int n = static_cast<int>(estep.trajectories().size());
+  to_send_.clear();
   for (int b : todo) {
     const std::string& id = assigned[static_cast<size_t>(b)];
     if (id.empty()) continue;
@@ -187,17 +188,50 @@ void BusBlockExecutor::send_blocks(const ObservationEStep& estep, const std::vec
     const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
     if (w.held.count(digest)) continue;
     const auto sent = w.sent.find(digest);
-    if (sent != w.sent.end() && now - sent->second < resend_after) continue;
+    if (sent != w.sent.end() && now - sent->second.when < resend_after) continue;
+    to_send_.emplace_back(b, id);
+  }
+  pump_blocks(estep);
+}
+
+// Bytes sent to workers that no heartbeat has acknowledged yet (less than a timeout ago:
+// older ones are taken as lost).
+std::int64_t BusBlockExecutor::bytes_in_flight() const {
+  const auto now = Clock::now();
+  const auto lost_after = std::chrono::milliseconds(options_.timeout_ms);
+  std::int64_t bytes = 0;
+  for (const auto& [id, w] : workers_) {
+    for (const auto& [digest, sent] : w.sent) {
+      if (now - sent.when < lost_after) bytes += sent.bytes;
+    }
+  }
+  return bytes;
+}
+
+// Sends queued blocks while the window has room (one block at least when nothing is in
+// flight, whatever its size).
+void BusBlockExecutor::pump_blocks(const ObservationEStep& estep) const {
+  if (to_send_.empty()) return;
+  std::int64_t in_flight = bytes_in_flight();
+  const int n = static_cast<int>(estep.trajectories().size());
+  size_t k = 0;
+  for (; k < to_send_.size() && (in_flight == 0 || in_flight < options_.send_window_bytes); ++k) {
+    const auto& [b, id] = to_send_[k];
+    const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
     const std::string channel = channels::trajectory_channel(id);
+    std::int64_t bytes = 0;
     const int end = std::min(n, (b + 1) * ObservationEStep::kBlockSize);
     for (int i = b * ObservationEStep::kBlockSize; i < end; ++i) {
       const hbirl::trajectory_t m = to_message(estep.trajectories()[static_cast<size_t>(i)], i, n, digest, id);
       publish(bus_, channel, m, counters_);
-      ++stats_.trajectories_sent;
-      stats_.bytes_sent += m.getEncodedSize();
+      bytes += m.getEncodedSize();
     }
-    w.sent[digest] = now;
+    stats_.trajectories_sent += end - b * ObservationEStep::kBlockSize;
+    stats_.bytes_sent += bytes;
+    workers_[id].sent[digest] = {Clock::now(), bytes};
+    in_flight += bytes;
   }
+  to_send_.erase(to_send_.begin(), to_send_.begin() + static_cast<std::ptrdiff_t>(k));
 }
 
 namespace {
@@ -237,7 +271,7 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   w.held.clear();
   for (const std::int64_t d : m.held_block) {
     w.held.insert(static_cast<std::uint64_t>(d));
-    w.sent.erase(static_cast<std::uint64_t>(d));
+    progress_ += static_cast<std::int64_t>(w.sent.erase(static_cast<std::uint64_t>(d)));
   }
   w.last_seen = Clock::now();
   const auto numerics = static_cast<std::uint64_t>(m.numerics);
@@ -335,6 +369,7 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     return;
   }
   slot = std::move(s);
+  ++progress_;
   answered_.insert(m.worker);
   answered_by_[static_cast<size_t>(m.block)] = m.worker;
   Worker& w = workers_[m.worker];
@@ -589,7 +624,10 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       spot_results = estep.block_statistics(policy, model, seed, spots, options_.local_threads, eta);
       stats_.spot_checks += static_cast<std::int64_t>(spots.size());
     }
-    const auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
+    // Waiting ends a timeout after the last progress (an answer, a block acknowledged):
+    // a worker still receiving its share or computing a long block is not re-asked.
+    auto deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
+    std::int64_t seen = progress_;
     // Waiting is pointless once every missing block is a refused worker's.
     const auto awaited = [&] {
       for (int b : missing()) {
@@ -602,7 +640,13 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       if (options_.stop && options_.stop()) throw Stopped();
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
       if (bus_.handle(static_cast<int>(std::clamp<long long>(left, 0, 50))) < 0) break;
+      pump_blocks(estep);
+      if (progress_ != seen) {
+        seen = progress_;
+        deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
+      }
     }
+    to_send_.clear();  // what is still queued goes with the next attempt, to whoever gets it
     // Workers that left blocks unanswered get no more work until they are heard from again.
     for (int b : missing()) {
       const std::string& w = request.assigned_worker[static_cast<size_t>(b)];

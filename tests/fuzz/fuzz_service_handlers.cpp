@@ -59,13 +59,11 @@ class SharedRun final : public Simulation {
   const Simulation& run_;
 };
 
-// What every input shares, built once: the simulated domain and its run, the data set
-// the optimiser's side holds, and a run key.
+// What every input shares, built once: the simulated domain and its run, and a run key.
 struct World {
   std::unique_ptr<Domain> domain;
   SimDriverOptions sim;
   std::unique_ptr<Simulation> run;
-  std::vector<ObservedTrajectory> observed;
   RunKey key = RunKey::generate();
 
   World() {
@@ -80,9 +78,6 @@ struct World {
     sim.simulation.confounders = 1;
     sim.max_frames_per_second = 0;
     run = domain->simulate(sim.simulation);
-    for (size_t id = 0; id < run->episodes.size(); ++id) {
-      if (!run->episodes[id].controlled) observed.push_back(run->observed(static_cast<int>(id)));
-    }
   }
 };
 
@@ -115,7 +110,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   SimDriver driver(bus, w.domain->name(), std::make_unique<SharedRun>(*w.run), w.sim, counters);
   BusExecutorOptions executor_options;
   executor_options.timeout_ms = 0;
-  BusBlockExecutor executor(bus, mdp, w.domain->name(), w.observed, counters, executor_options);
+  BusBlockExecutor executor(bus, mdp, w.domain->name(), counters, executor_options);
   dashboard::DashboardState dashboard;
   dashboard.subscribe(bus, counters);
   KeyedBus keyed(std::make_unique<MemoryBus>(hub), w.key, counters);

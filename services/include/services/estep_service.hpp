@@ -76,7 +76,7 @@ struct Stopped : std::runtime_error {
 
 struct BusExecutorOptions {
   std::function<bool()> stop;  // checked while waiting for answers; true: run() throws Stopped
-  int timeout_ms = 2000;       // wait this long for a block's answer before re-asking
+  int timeout_ms = 2000;       // wait this long without progress (an answer, a block received) before re-asking
   int max_attempts = 3;        // attempts over the bus; then the optimiser computes the rest
   double worker_silence_s = 3.0;  // workers not heard from for this long get no work
   int local_threads = 1;       // for blocks the optimiser computes itself
@@ -95,6 +95,11 @@ struct BusExecutorOptions {
   // differs has one per observation) is not sent each pass: the optimiser computes the
   // E-step itself, and says so once.
   int max_contexts = kMaxContexts;
+  // Trajectories sent to workers and not yet acknowledged (their heartbeats list the blocks
+  // they hold) take at most this many bytes: on LCM's one multicast group every worker's
+  // socket receives every worker's share, and a burst beyond its receive buffer
+  // (recv_buf_size, 2 MB in services/launch.sh) is lost.
+  std::int64_t send_window_bytes = std::int64_t{1} << 20;
 };
 
 // The optimiser's side: a BlockExecutor that farms blocks out to the workers it hears
@@ -133,7 +138,11 @@ class BusBlockExecutor final : public BlockExecutor {
   struct Worker {
     std::uint64_t mdp_digest = 0;
     std::set<std::uint64_t> held;  // the blocks it holds (their digests), as its last heartbeat said
-    std::map<std::uint64_t, std::chrono::steady_clock::time_point> sent;  // blocks sent to it, not yet seen held
+    struct Sent {
+      std::chrono::steady_clock::time_point when;
+      std::int64_t bytes = 0;
+    };
+    std::map<std::uint64_t, Sent> sent;  // blocks sent to it, not yet seen held
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
     bool suspect = false;  // left blocks unanswered; gets work again once heard from
@@ -151,6 +160,8 @@ class BusBlockExecutor final : public BlockExecutor {
   void forget_answers_of(const std::string& worker) const;
   void prepare_blocks(const ObservationEStep& estep) const;
   void send_blocks(const ObservationEStep& estep, const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
+  void pump_blocks(const ObservationEStep& estep) const;
+  std::int64_t bytes_in_flight() const;
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
@@ -167,6 +178,9 @@ class BusBlockExecutor final : public BlockExecutor {
   // Per block: the worker it was last given to. It stays there while that worker is live
   // (assignment()), so the worker is sent its trajectories once.
   mutable std::vector<std::string> owner_;
+  // Blocks waiting for room in the send window: (block, worker), in order.
+  mutable std::vector<std::pair<int, std::string>> to_send_;
+  mutable std::int64_t progress_ = 0;  // answers taken and blocks acknowledged: what keeps a pass waiting
   Counters& counters_;
   BusExecutorOptions options_;
   mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held
