@@ -52,15 +52,6 @@ const Data& data() {
   return d;
 }
 
-void BM_EStepPassHere(benchmark::State& state) {
-  const Data& d = data();
-  const ObservationEStep estep(d.task.mdp, d.observed, d.prior);
-  const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
-  const ObservationModel model = dirichlet_mean(d.prior);
-  for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
-}
-BENCHMARK(BM_EStepPassHere)->Unit(benchmark::kMillisecond)->UseRealTime();
-
 // The data of the process benchmarks: 1,024 trajectories (64 blocks), 10 steps, 40
 // observations per step.
 const Data& large_data() {
@@ -68,16 +59,17 @@ const Data& large_data() {
   return d;
 }
 
-// One pass over the 64 blocks here, on one thread: the compute the workers share.
-void BM_EStepPassHereLarge(benchmark::State& state) {
-  const Data& d = large_data();
+// One pass here, on one thread: the compute the workers share. Argument: 0 the 64
+// trajectories, 1 the 1,024.
+void BM_EStepPassHere(benchmark::State& state) {
+  const Data& d = state.range(0) == 0 ? data() : large_data();
   const ObservationEStep estep(d.task.mdp, d.observed, d.prior);
   const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
   const ObservationModel model = dirichlet_mean(d.prior);
   for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
   state.counters["blocks"] = estep.num_blocks();
 }
-BENCHMARK(BM_EStepPassHereLarge)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EStepPassHere)->Arg(0)->Arg(1)->ArgName("large")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Counts the bytes on every channel of an LCM bus, from a thread of its own.
 class BusSpy {
@@ -114,7 +106,7 @@ class BusSpy {
 // share of the trajectories, is timed apart (first_pass_ms, share_MB); the timed passes
 // send requests and answers only (bus_kB_per_pass: every byte on the bus, heartbeats
 // included). No spot check: the protocol's cost alone. On 2 cores more than 2 workers
-// cannot compute faster: compare with BM_EStepPassHereLarge for the overhead per block.
+// cannot compute faster: compare with BM_EStepPassHere/large:1 for the overhead per block.
 void BM_EStepPassOverLcm(benchmark::State& state) {
   const Data& d = large_data();
   const int n = static_cast<int>(state.range(0));
