@@ -4,6 +4,10 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 
+namespace hbirl {
+class Domain;
+}  // namespace hbirl
+
 namespace hbirl::cli {
 
 using Command = std::function<int()>;
@@ -18,6 +22,11 @@ Command add_report(CLI::App& app);
 Command add_publish(CLI::App& app);
 Command add_export(CLI::App& app);
 Command add_keygen(CLI::App& app);
+// In `hbirl`, the commands of hbirl-full (full_commands.hpp) run it with main's arguments,
+// which remember_arguments() keeps (forward.cpp).
+struct FullCommand;
+Command add_forwarded(CLI::App& app, const FullCommand& command);
+void remember_arguments(int argc, char** argv);
 
 // Output that could not be written (a full disk, a closed pipe): exit status 1, one line.
 struct OutputError : std::runtime_error {
@@ -38,7 +47,7 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 #include "learner/mcmc_diagnostics.hpp"
 #include "problem/json_format.hpp"
 #include "problem/problem_file.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/domain_options.hpp"
 
 namespace hbirl::cli {
 // Read a problem file; warnings go to stderr, errors are rethrown as InputError whose

@@ -132,12 +132,5 @@ void add_key_option(CLI::App* cmd, std::string& key_file) {
                   "and drop, counting them, those it did not sign (docs/RELIABILITY.md)");
 }
 
-std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args) {
-  if (args.spec.empty()) return nullptr;
-  std::vector<std::string> warnings;
-  std::shared_ptr<const Domain> domain = open_domain(args.spec, args.options, &warnings);
-  warn_all(args.spec, warnings);
-  return domain;
-}
 
 }  // namespace hbirl::cli

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "experiments/eta_experiments.hpp"
 #include "experiments/gridworld_experiment.hpp"
 #include "experiments/onion_regimes.hpp"
@@ -476,7 +477,7 @@ int run_onion_regimes_command(OnionRegimesArgs& args) {
 }  // namespace
 
 Command add_experiment(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("experiment", "Reproduce the paper's experiments (runs, summary, figure).");
+  CLI::App* cmd = app.add_subcommand(kExperiment.name, kExperiment.description);
   cmd->require_subcommand(1);
   auto g = std::make_shared<GridworldExperimentArgs>();
   CLI::App* grid = cmd->add_subcommand(

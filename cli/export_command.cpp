@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "problem/json_format.hpp"
 #include "services/optimiser.hpp"
 
@@ -65,12 +66,7 @@ int run_export(const ExportArgs& args) {
 
 Command add_export(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "export",
-      "Turn a recorded run (services/launch.sh --record) into a problem file: the domain's MDP and names,\n"
-      "the demonstrations as the optimiser received them, and the observation prior it learned from (the\n"
-      "controlled run's counts included). `hbirl learn --problem OUT` then learns the live run's theta bit\n"
-      "for bit, and `hbirl posterior` shows what the optimiser inferred.");
+  CLI::App* cmd = app.add_subcommand(kExport.name, kExport.description);
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out,-o", args->out, "Problem file to write (default: stdout)");
   add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");

@@ -14,38 +14,12 @@
 #include "learner/observation_support.hpp"
 #include "problem/json_format.hpp"
 #include "problem/problem_observations.hpp"
-#include "services/optimiser.hpp"
+#include "learn_args.hpp"
 
 namespace hbirl::cli {
 
 namespace {
 
-struct LearnArgs {
-  std::string problem;
-  std::string log;
-  std::string key_file;       // --log: the run's key
-  bool allow_incomplete = false;
-  DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
-  std::string from = "observations";
-  std::string optimizer = "lbfgs";
-  double l2 = 0.0;
-  int restarts = 1;  // more changed nothing on average on the random tasks (docs/results/random_tasks)
-  std::uint64_t seed = 1;
-  int threads = 0;
-  int max_iterations = 1000;
-  double tolerance = 1e-9;
-  double eg_radius = 50.0;
-  double eg_rate = 0.25;
-  EngineArgs engine;
-  int max_em_iterations = 300;
-  double alpha_tolerance = 1e-4;
-  int max_alpha_iterations = 10;
-  AlphaUpdate update = AlphaUpdate::kPosterior;
-  bool update_given = false;  // --alpha-update overrides the file's observation_model.update
-  bool verbose = false;
-  std::string eta = "file";  // "stated", "learned", or as the file's observation_model.learn_eta says
-  std::string out;
-};
 
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
@@ -95,41 +69,6 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
   nlohmann::ordered_json confounders = nlohmann::ordered_json::array();
   for (int e = 0; e < model.num_confounders(); ++e) confounders.push_back(to_vector(model.confounders.row(e).transpose()));
   return {{"subject", subject}, {"confounders", confounders}};
-}
-
-// Offline from a recorded run of the service set: the same data set and the same learning
-// as hbirl-optimiser, so the same theta (services/optimiser.hpp).
-int run_learn_from_log(const LearnArgs& args) {
-  services::LearningOptions options;
-  options.seed = args.seed;
-  if (args.eta != "file") options.learn_eta = args.eta == "learned";
-  services::Counters counters;
-  counters.service = "hbirl learn";
-  const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
-  const services::OptimiserResult r =
-      services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, options, counters, domain);
-  if (!r.incomplete.empty()) std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
-  nlohmann::ordered_json out;
-  out["log"] = args.log;
-  out["domain"] = r.data.domain;
-  out["feature_names"] = services::domain_of(r.data, domain)->names(1).features;
-  out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
-  if (r.data.true_weights) {
-    out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
-  }
-  if (r.learned.ile) out["ile"] = *r.learned.ile;
-  out["log_likelihood"] = r.learned.log_likelihood;
-  out["em_iterations"] = r.learned.em_iterations;
-  if (r.learned.eta) out["learned_eta"] = services::learned_eta_json(*r.learned.eta);
-  out["demonstrations"] = r.learned.trajectories;
-  out["controlled_episodes"] = r.data.controlled_observed.size();
-  out["dataset_digest"] = r.learned.digest;
-  out["missing_frames"] = r.missing_frames;
-  out["bad_messages"] = counters.bad_messages;
-  out["authenticated"] = counters.authenticated;
-  if (!r.incomplete.empty()) out["incomplete"] = r.incomplete;
-  emit(out.dump(2) + "\n", args.out);
-  return 0;
 }
 
 int run_learn(const LearnArgs& args) {
@@ -229,7 +168,7 @@ int run_learn(const LearnArgs& args) {
       om["prior_strength_chosen"] = used.automatic_strength;
       if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
     }
-    if (const std::optional<LearnedEta> eta = observed->learned_eta_report(used)) om["learned_eta"] = services::learned_eta_json(*eta);
+    if (const std::optional<LearnedEta> eta = observed->learned_eta_report(used)) om["learned_eta"] = learned_eta_json(*eta);
     out["observation_model"] = om;
   }
   out["selected_restart"] = learned.selected_restart;

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "learner/input_error.hpp"
 
 namespace {
@@ -29,14 +30,20 @@ int main(int argc, char** argv) {
   };
   remember(hbirl::cli::add_learn(app));
   remember(hbirl::cli::add_posterior(app));
-  remember(hbirl::cli::add_validate(app));
   remember(hbirl::cli::add_generate(app));
+#ifdef HBIRL_FULL
+  remember(hbirl::cli::add_validate(app));
   remember(hbirl::cli::add_experiment(app));
   remember(hbirl::cli::add_render(app));
   remember(hbirl::cli::add_report(app));
   remember(hbirl::cli::add_publish(app));
   remember(hbirl::cli::add_export(app));
   remember(hbirl::cli::add_keygen(app));
+#else
+  // These run in hbirl-full: the learning commands need none of what it loads.
+  hbirl::cli::remember_arguments(argc, argv);
+  for (const hbirl::cli::FullCommand& command : hbirl::cli::kFullCommands) remember(hbirl::cli::add_forwarded(app, command));
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "problem/domain_file.hpp"
 #include "services/keyed_bus.hpp"
 #include "services/process.hpp"
@@ -75,13 +76,7 @@ int run_publish(const PublishArgs& args) {
 
 Command add_publish(CLI::App& app) {
   auto args = std::make_shared<PublishArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "publish",
-      "Stream a problem file's demonstration onto the bus exactly as a sensor would (README.md \"Your own task\"):\n"
-      "EPISODE markers, one OBSERVATIONS message per step, and GROUND_TRUTH for the trajectories marked\n"
-      "\"controlled\". A live optimiser started with --domain on the same file learns what `hbirl learn\n"
-      "--problem FILE` learns (with the same --eta), bit for bit. Waits for the optimiser's heartbeat first, and\n"
-      "afterwards sends steps lost on the way again until the optimiser's reward.");
+  CLI::App* cmd = app.add_subcommand(kPublish.name, kPublish.description);
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
   cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");
   cmd->add_option("--key", args->key_file,

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "learner/input_error.hpp"
 #include "perception/blobs.hpp"
 #include "perception/image_codec.hpp"
@@ -86,13 +87,7 @@ int run_render(const RenderArgs& args) {
 
 Command add_render(CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "render",
-      "Render frames of the simulated onion-sorting camera (paper §Experiments B): the expert sorting\n"
-      "onions with the chosen confounding elements, each frame with the blobs perception\n"
-      "found, their symbol (gN: gripper region N of 20; B/D: bright/dark onion) and the\n"
-      "labeller's eta for the expert. Writes PNGs to --out and a JSON list of them (with the\n"
-      "true state, action and observed symbols of each frame) to stdout.");
+  CLI::App* cmd = app.add_subcommand(kRender.name, kRender.description);
   cmd->add_option("--config,-c", a->config,
                   "Scene: controlled, all, or a comma-separated list of blue-shirt, other-onions,\n"
                   "foreground, mirror")

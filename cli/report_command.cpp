@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "full_commands.hpp"
 #include "dashboard/report.hpp"
 
 namespace hbirl::cli {
@@ -13,11 +14,7 @@ Command add_report(CLI::App& app) {
     DomainArgs domain;
   };
   auto args = std::make_shared<Args>();
-  CLI::App* cmd = app.add_subcommand(
-      "report",
-      "Write the dashboard's views of a recorded run (services/launch.sh --record) as a static page:\n"
-      "OUT/index.html with the figures as PNG and SVG (gnuplot; each with its script), the last\n"
-      "camera frame with its detections coloured by their most likely source, and OUT/state.json.");
+  CLI::App* cmd = app.add_subcommand(kReport.name, kReport.description);
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out", args->out, "Folder to write the report to (created)")->required();
   add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");

@@ -1,5 +1,7 @@
 // hbirl validate: check a problem file or a domain file and summarise it.
 #include "commands.hpp"
+#include "full_commands.hpp"
+#include "sim_driver/domain.hpp"
 #include "problem/domain_file.hpp"
 #include "problem/json_format.hpp"
 
@@ -94,12 +96,7 @@ int run_validate_domain(const std::string& path) {
 Command add_validate(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto domain = std::make_shared<std::string>();
-  CLI::App* cmd = app.add_subcommand(
-      "validate",
-      "Check a problem file (or, with --domain, a domain file) and print a JSON summary (sizes,\n"
-      "trajectories, steps, observations, occluded steps; a domain's names and sensor). Problems\n"
-      "are reported as one line on stderr naming the field and position, with exit status 2;\n"
-      "unknown keys only warn.");
+  CLI::App* cmd = app.add_subcommand(kValidate.name, kValidate.description);
   CLI::Option* problem = cmd->add_option("--problem,-p", *path, "Problem file (JSON, see README.md)");
   CLI::Option* domain_file = cmd->add_option("--domain", *domain, "Domain file (JSON, README.md \"Your own task\")");
   problem->excludes(domain_file);

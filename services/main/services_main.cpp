@@ -16,6 +16,7 @@
 #include "services/estep_service.hpp"
 #include "services/keyed_bus.hpp"
 #include "services/labeller_service.hpp"
+#include "problem/json_format.hpp"
 #include "services/learning.hpp"
 #include "services/optimiser.hpp"
 #include "services/perception_service.hpp"

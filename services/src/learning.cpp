@@ -5,17 +5,6 @@
 
 namespace hbirl::services {
 
-// Per context (the file's or the sensor's, else each distinct stated eta): stated and
-// learned source distributions and how many observations the context covers.
-nlohmann::ordered_json learned_eta_json(const LearnedEta& eta) {
-  nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
-  const auto row = [](const RowMatrix& m, Eigen::Index r) { return std::vector<double>(m.row(r).begin(), m.row(r).end()); };
-  for (Eigen::Index c = 0; c < eta.learned.rows(); ++c) {
-    contexts.push_back({{"context", c}, {"stated", row(eta.stated, c)}, {"learned", row(eta.learned, c)}, {"observations", eta.observations[c]}});
-  }
-  return contexts;
-}
-
 std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data) {
   std::optional<Eigen::VectorXd> w = data.true_weights ? data.true_weights : domain.true_weights();
   if (w && w->size() != domain.mdp().num_features()) return std::nullopt;

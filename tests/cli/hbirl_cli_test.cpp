@@ -1,5 +1,7 @@
 // The `hbirl` binary as a user meets it: exit status, what goes to stdout and stderr.
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <sys/wait.h>
 
 #include <cmath>
@@ -101,6 +103,33 @@ TEST_F(Cli, HelpForEveryCommand) {
   }
   EXPECT_NE(run("learn --help").out.find("--problem"), std::string::npos);
   EXPECT_EQ(run("--version").status, 0);
+}
+
+// `hbirl` links only what its learning commands use -- no OpenCV, LCM, libsodium, OpenSSL or
+// HTTP server (docs/BENCHMARKS.md, "Start-up") -- and runs hbirl-full, next to it, for the
+// other commands: their own help and options, and one clear line when it is missing.
+TEST_F(Cli, LearningCommandsLoadNothingElse) {
+  const fs::path listing = dir_ / "ldd";
+  ASSERT_EQ(std::system(("ldd '" + std::string(HBIRL_BIN) + "' >'" + listing.string() + "'").c_str()), 0);
+  const std::string libraries = slurp(listing);
+  for (const char* heavy : {"libopencv", "liblcm", "libsodium", "libssl", "libcpp-httplib", "libgdal"}) {
+    EXPECT_EQ(libraries.find(heavy), std::string::npos) << heavy << " in\n" << libraries;
+  }
+  EXPECT_NE(run("render --help").out.find("--out"), std::string::npos);
+  EXPECT_NE(run("validate --help").out.find("--domain"), std::string::npos);
+  const Outcome version = run("--version");
+  EXPECT_EQ(version.out.rfind("hbirl ", 0), 0u) << version.out;
+  // hbirl without hbirl-full beside it.
+  const fs::path alone = dir_ / "alone";
+  fs::create_directories(alone);
+  fs::copy_file(HBIRL_BIN, alone / "hbirl");
+  const std::string cmd = "'" + (alone / "hbirl").string() + "' render --help >'" + (dir_ / "out").string() + "' 2>'" +
+                          (dir_ / "err").string() + "'";
+  const int raw = std::system(cmd.c_str());
+  EXPECT_EQ(WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, 1);
+  const std::string err = slurp(dir_ / "err");
+  EXPECT_NE(err.find("hbirl-full"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
 }
 
 TEST_F(Cli, UsageErrors) {

@@ -5,8 +5,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "learner/estep_observations.hpp"
+
 namespace hbirl {
 
 std::string format_json(const nlohmann::ordered_json& value);
+
+// Learned eta as hbirl learn and hbirl-optimiser print it: per context, its id, the
+// stated and learned source distributions and how many observations it covers.
+nlohmann::ordered_json learned_eta_json(const LearnedEta& eta);
 
 }  // namespace hbirl

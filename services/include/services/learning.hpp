@@ -46,10 +46,6 @@ struct Learned {
 using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const ObservationPrior&, const EStepResult&,
                                       const LearnedEta*)>;
 
-// Learned eta as hbirl learn and hbirl-optimiser print it: per context, its id, the
-// stated and learned source distributions and how many observations it covers.
-nlohmann::ordered_json learned_eta_json(const LearnedEta& eta);
-
 // The expert's true weights, for the ILE: the ground truth's, else the domain's; none when
 // they do not fit the domain's features.
 std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data);

@@ -17,6 +17,7 @@
 #include "learner/mdp.hpp"
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
+#include "sim_driver/domain_options.hpp"
 #include "sim_driver/gridworld_observations.hpp"
 #include "sim_driver/onion_scene.hpp"
 
@@ -105,10 +106,6 @@ class Domain {
 
  protected:
   virtual ControlledPriorOptions controlled_prior_options() const { return {}; }
-};
-
-struct DomainOptions {
-  int gridworld_size = 5;
 };
 
 // A domain by spec: "onion"; "gridworld" (options.gridworld_size cells a side) or

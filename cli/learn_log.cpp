@@ -1,0 +1,45 @@
+// hbirl learn --log: learning from a recorded run of the service set (hbirl-full only).
+#include <iostream>
+
+#include "learn_args.hpp"
+#include "problem/json_format.hpp"
+#include "services/optimiser.hpp"
+
+namespace hbirl::cli {
+
+// Offline from a recorded run of the service set: the same data set and the same learning
+// as hbirl-optimiser, so the same theta (services/optimiser.hpp).
+int run_learn_from_log(const LearnArgs& args) {
+  services::LearningOptions options;
+  options.seed = args.seed;
+  if (args.eta != "file") options.learn_eta = args.eta == "learned";
+  services::Counters counters;
+  counters.service = "hbirl learn";
+  const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
+  const services::OptimiserResult r =
+      services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, options, counters, domain);
+  if (!r.incomplete.empty()) std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
+  nlohmann::ordered_json out;
+  out["log"] = args.log;
+  out["domain"] = r.data.domain;
+  out["feature_names"] = services::domain_of(r.data, domain)->names(1).features;
+  out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
+  if (r.data.true_weights) {
+    out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
+  }
+  if (r.learned.ile) out["ile"] = *r.learned.ile;
+  out["log_likelihood"] = r.learned.log_likelihood;
+  out["em_iterations"] = r.learned.em_iterations;
+  if (r.learned.eta) out["learned_eta"] = learned_eta_json(*r.learned.eta);
+  out["demonstrations"] = r.learned.trajectories;
+  out["controlled_episodes"] = r.data.controlled_observed.size();
+  out["dataset_digest"] = r.learned.digest;
+  out["missing_frames"] = r.missing_frames;
+  out["bad_messages"] = counters.bad_messages;
+  out["authenticated"] = counters.authenticated;
+  if (!r.incomplete.empty()) out["incomplete"] = r.incomplete;
+  emit(out.dump(2) + "\n", args.out);
+  return 0;
+}
+
+}  // namespace hbirl::cli
