@@ -1,5 +1,10 @@
 // Speed of the E-step engines (docs/BENCHMARKS.md has the figures and the command).
 #include <benchmark/benchmark.h>
+#include <malloc.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <fstream>
 
 #include "learner/estep_mcmc.hpp"
 #include "learner/estep_observations.hpp"
@@ -92,6 +97,42 @@ BENCHMARK(BM_EStepLength)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicros
 
 void BM_EStepTrajectories(benchmark::State& state) { estep_pass(state, static_cast<int>(state.range(0)), 10, 40); }
 BENCHMARK(BM_EStepTrajectories)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+
+// This process's resident memory now, in bytes (what malloc keeps free given back first).
+double resident_bytes() {
+  malloc_trim(0);
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE));
+}
+
+// range(0) trajectories x 10 steps x 40 observations: one exact pass, and the memory the
+// data take as generated (data_B_per_obs: the observations with their eta), as the E-step
+// holds them (estep_B_per_obs: merged identical observations, their kinds), and at the
+// peak. Run it alone (--benchmark_filter), so that no other benchmark's memory counts.
+void BM_EStepManyTrajectories(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double before = resident_bytes();
+  const Setup s = setup(n, 10, 40);
+  const double generated = resident_bytes();
+  const ObservationEStep estep(s.task.mdp, s.observations.trajectories, s.prior);
+  const double held = resident_bytes();
+  const ObservationModel model = dirichlet_mean(s.prior);
+  for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(s.policy, model, 1).log_likelihood);
+  double observations = 0.0, rows = 0.0;
+  for (const auto& t : s.observations.trajectories) observations += t.num_observations();
+  for (const auto& t : estep.trajectories()) rows += t.num_observations();
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["observations"] = observations;
+  state.counters["merged_rows"] = rows;
+  state.counters["data_B_per_obs"] = (generated - before) / observations;
+  state.counters["estep_B_per_obs"] = (held - generated) / observations;
+  state.counters["peak_MB"] = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  state.counters["obs_per_s"] = benchmark::Counter(observations, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_EStepManyTrajectories)->Arg(10000)->Arg(100000)->Iterations(1)->Unit(benchmark::kSecond);
 
 // The observation model's refinement on the paper's Gridworld data (20 trajectories x 10
 // steps x 40 observations, plausible eta), range(0) = 0: one E-step refinement with the

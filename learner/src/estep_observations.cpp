@@ -15,7 +15,7 @@ EngineFactory exact_engine_factory() {
   return [](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<ExactPosteriorEngine>(mdp); };
 }
 
-ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories,
+ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTrajectory>& trajectories,
                                    ObservationPrior prior, ObservationEStepOptions options)
     : mdp_(mdp), prior_(std::move(prior)), options_(std::move(options)) {
   for (const auto& t : trajectories) trajectories_.push_back(merge_identical_observations(t));

@@ -103,7 +103,7 @@ struct LearnedEta {
 
 class ObservationEStep final : public EStep {
  public:
-  ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory> trajectories, ObservationPrior prior,
+  ObservationEStep(const Mdp& mdp, const std::vector<ObservedTrajectory>& trajectories, ObservationPrior prior,
                    ObservationEStepOptions options = {});
 
   // The learned source distribution of each context at `alpha` (its eta_alpha's mean),
