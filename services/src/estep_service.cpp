@@ -169,6 +169,7 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) const {
   prepared_kinds_ = estep.uses_kind_table();
   block_digests_.clear();
   for (int b = 0; b < estep.num_blocks(); ++b) block_digests_.push_back(dataset_digest(block_of(estep.trajectories(), b)));
+  current_blocks_ = std::set<std::uint64_t>(block_digests_.begin(), block_digests_.end());
   data_digest_ = dataset_digest(estep.trajectories());
   if (owner_.size() != block_digests_.size()) owner_.assign(block_digests_.size(), std::string());
 }
@@ -230,6 +231,7 @@ void BusBlockExecutor::pump_blocks(const ObservationEStep& estep) const {
     stats_.bytes_sent += bytes;
     workers_[id].sent[digest] = {Clock::now(), bytes};
     in_flight += bytes;
+    ++progress_;  // sending goes on: the pass is not stuck
   }
   to_send_.erase(to_send_.begin(), to_send_.begin() + static_cast<std::ptrdiff_t>(k));
 }
@@ -269,10 +271,13 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
   Worker& w = workers_[m.id];
   w.mdp_digest = static_cast<std::uint64_t>(m.mdp_digest);
   w.held.clear();
-  for (const std::int64_t d : m.held_block) {
+  for (const std::int64_t d : m.held_block) {  // only this data set's blocks: a made-up list takes no memory
+    if (!current_blocks_.count(static_cast<std::uint64_t>(d))) continue;
     w.held.insert(static_cast<std::uint64_t>(d));
     progress_ += static_cast<std::int64_t>(w.sent.erase(static_cast<std::uint64_t>(d)));
   }
+  // Heard from after it left blocks unanswered: work again, one block until it answers.
+  if (w.suspect && Clock::now() > w.suspect_since) w.suspect = false;
   w.last_seen = Clock::now();
   const auto numerics = static_cast<std::uint64_t>(m.numerics);
   if (numerics != numerics_ && other_numerics_.insert(m.id).second) {
@@ -646,11 +651,18 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
         deadline = Clock::now() + std::chrono::milliseconds(options_.timeout_ms);
       }
     }
+    // Workers with blocks still queued were not given the chance to answer: not their fault.
+    std::set<std::string> queued;
+    for (const auto& [b, id] : to_send_) queued.insert(id);
     to_send_.clear();  // what is still queued goes with the next attempt, to whoever gets it
     // Workers that left blocks unanswered get no more work until they are heard from again.
     for (int b : missing()) {
       const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
-      if (!w.empty() && !answered_.count(w)) workers_[w].suspect = true;
+      if (w.empty() || answered_.count(w) || queued.count(w)) continue;
+      Worker& silent = workers_[w];
+      silent.suspect = true;
+      silent.suspect_since = Clock::now();
+      silent.answers = 0;  // once heard from again it gets one block until it answers
     }
   }
   for (size_t k = 0; k < spots.size(); ++k) {

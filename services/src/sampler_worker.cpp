@@ -93,7 +93,6 @@ void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
 
 void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
   trajectory_bytes_ += bytes;
-  last_trajectory_ = Clock::now();
   if (m.worker != id_) return;  // another worker's whose id has the same channel tag
   if (m.block_size != ObservationEStep::kBlockSize) {
     throw InputError("trajectory.block_size", std::to_string(m.block_size) + ", this worker's blocks have " +
@@ -102,11 +101,12 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
   if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
     throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
   }
+  last_trajectory_ = Clock::now();  // (after the checks: junk must not hold up serve())
   const auto digest = static_cast<std::uint64_t>(m.block_digest);
   if (held_.count(digest)) return;  // have it already
   const int block = m.index / m.block_size;
   const int size = std::min(m.block_size, m.num_trajectories - block * m.block_size);
-  if (!incoming_.count(digest) && incoming_.size() >= kMaxIncomingBlocks) {  // made-up digests: forget the oldest
+  if (!incoming_.count(digest) && incoming_.size() >= kMaxIncomingBlocks) {  // made-up digests: forget one (the smallest digest)
     release(incoming_.begin()->first);
     incoming_.erase(incoming_.begin());
   }
@@ -209,16 +209,18 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   for (int b = 0; b < m.num_blocks; ++b) {
     if (m.assigned_worker[static_cast<size_t>(b)] == id_) mine.push_back(b);
   }
-  if (m.attempt == 0) {  // its share of this pass: what it holds beyond that went to other workers
-    if (!mine.empty()) check_request(m);
+  if (!mine.empty()) check_request(m);
+  if (!request_ || request_->request_id != m.request_id) {  // another pass: what the last one asked is over
+    pending_.clear();
+    request_.reset();
+    // Its blocks are this pass's only: never a mix of two passes' (two optimisers, a forger).
     assigned_.clear();
-    for (int b : mine) assigned_[b] = static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]);
-    drop_unassigned(true);
+  } else if (m.num_blocks != request_->num_blocks || m.block_digest != request_->block_digest) {
+    throw InputError("estep_request.block_digest", "differs from an earlier attempt of the same request");
   }
-  if (mine.empty()) return;
-  check_request(m);
   for (int b : mine) assigned_[b] = static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]);
-  if (!request_ || request_->request_id != m.request_id) pending_.clear();
+  if (m.attempt == 0) drop_unassigned(true);  // its share of this pass: what it holds beyond went to other workers
+  if (mine.empty()) return;
   last_dataset_digest_ = static_cast<std::uint64_t>(m.dataset_digest);
   request_ = m;
   pending_.insert(mine.begin(), mine.end());

@@ -353,6 +353,54 @@ TEST(EStepService, WorkerKilledMidRunSameTheta) {
   EXPECT_GE(doomed.worker().blocks_computed(), 5);
 }
 
+// A worker that misses a request (here a relay drops the first one it would get) leaves its
+// blocks unanswered, gets no work while it is silent, and once its next heartbeat comes it
+// gets work again -- one block, then its share -- instead of being left out for the run.
+TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
+  auto hub = std::make_shared<MemoryHub>();
+  auto behind = std::make_shared<MemoryHub>();
+  WorkerThread steady(hub, "sampler-a");
+  WorkerThread missing(behind, "sampler-b");
+  MemoryBus front(hub), back(behind);
+  std::atomic<int> dropped{0};
+  const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
+  front.subscribe(channels::kEStepRequest, [&](const Message& m) {
+    if (dropped++ == 0) return;  // the first request never reaches it
+    back.publish(m.channel, m.data, m.size);
+  }, 100000);
+  front.subscribe(channels::kMdp, forward_to(back), 100000);
+  front.subscribe(channels::trajectory_channel("sampler-b"), forward_to(back), 100000);
+  back.subscribe(channels::kStatus, forward_to(front), 1000);
+  back.subscribe(channels::kEStepResult, forward_to(front), 100000);
+  std::atomic<bool> stop{false};
+  std::thread relay([&] {
+    while (!stop) {
+      front.handle(1);
+      back.handle(1);
+    }
+  });
+  BusExecutorOptions options;
+  options.timeout_ms = 300;
+  Optimiser opt(hub, options);
+  ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
+  const Task& t = task();
+  ObservationEStepOptions remote;
+  remote.executor = opt.executor;
+  const ObservationEStep there(t.task.mdp, t.observed, t.prior, remote);
+  const ObservationModel model = dirichlet_mean(t.prior);
+  const SoftSolution policy = soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights));
+  const EStepStatistics here = ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5);
+  for (int pass = 0; pass < 8 && missing.worker().blocks_computed() == 0; ++pass) {
+    EXPECT_EQ(there.statistics(policy, model, 5).counts, here.counts) << pass;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its heartbeat comes
+  }
+  stop = true;
+  relay.join();
+  EXPECT_GT(dropped, 1);
+  EXPECT_GT(missing.worker().blocks_computed(), 0) << "left out after one missed request";
+  EXPECT_GT(opt.executor->stats().retried_blocks, 0);
+}
+
 // No worker at all: the optimiser computes every block itself; learning does not stall.
 TEST(EStepService, NoWorkersComputesLocally) {
   auto hub = std::make_shared<MemoryHub>();
@@ -452,6 +500,43 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   }
   bus.handle(0);
   EXPECT_EQ(b.trajectories_held(), ObservationEStep::kBlockSize);
+}
+
+// A second attempt of a request that names other blocks than its first (a forger re-using
+// a live request's id) is refused naming the field -- it used to make the worker read past
+// the new request's arrays for the blocks the first one left pending.
+TEST(SamplerWorker, AnotherAttemptWithOtherBlocksIsRefused) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub), sender(hub);
+  Counters counters = quiet("sampler"), out = quiet("sender");
+  SamplerWorker worker(bus, "sampler-a", counters);
+  for (const auto& m : to_messages(task().task.mdp, "gridworld")) publish(sender, channels::kMdp, m, out);
+  bus.handle(0);
+  ASSERT_NE(worker.mdp_digest(), 0u);
+  const int P = task().task.mdp.num_pairs();
+  hbirl::estep_request_t r{};
+  r.request_id = 7;
+  r.mdp_digest = static_cast<std::int64_t>(worker.mdp_digest());
+  r.num_trajectories = 40, r.block_size = ObservationEStep::kBlockSize, r.num_blocks = 3;
+  r.assigned_worker = {"sampler-a", "sampler-a", "sampler-a"};
+  r.block_digest = {11, 12, 13};  // blocks it does not hold: pending
+  r.engine = "exact", r.watch = -1, r.max_kinds = 1024;
+  r.num_pairs = P, r.log_policy.assign(static_cast<size_t>(P), -1.0), r.policy.assign(static_cast<size_t>(P), 0.25);
+  r.num_symbols = 4, r.num_confounders = 3;
+  r.subject_o.assign(static_cast<size_t>(P), std::vector<double>(4, 0.25));
+  r.confounder_o.assign(3, std::vector<double>(4, 0.25));
+  publish(sender, channels::kEStepRequest, r, out);
+  bus.handle(0);
+  EXPECT_EQ(counters.bad_messages, 0) << counters.last_problem;
+  r.attempt = 1, r.num_trajectories = 16, r.num_blocks = 1;
+  r.assigned_worker = {"sampler-a"};
+  r.block_digest = {11};
+  publish(sender, channels::kEStepRequest, r, out);
+  bus.handle(0);
+  EXPECT_EQ(counters.bad_messages, 1);
+  EXPECT_NE(counters.last_problem.find("estep_request.block_digest"), std::string::npos) << counters.last_problem;
+  worker.handle(300);  // past the quiet time: what is pending is served, within its own request's arrays
+  EXPECT_EQ(worker.blocks_computed(), 0);
 }
 
 // A worker that lies about its blocks is caught by the optimiser's spot check in the first

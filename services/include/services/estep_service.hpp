@@ -145,7 +145,8 @@ class BusBlockExecutor final : public BlockExecutor {
     std::map<std::uint64_t, Sent> sent;  // blocks sent to it, not yet seen held
     std::chrono::steady_clock::time_point last_seen;
     std::uint64_t numerics = 0;
-    bool suspect = false;  // left blocks unanswered; gets work again once heard from
+    bool suspect = false;  // left blocks unanswered; gets work again once heard from (a heartbeat after suspect_since)
+    std::chrono::steady_clock::time_point suspect_since;
     bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
     bool checked = false;      // one of its answers matched the optimiser's own computation
@@ -174,6 +175,7 @@ class BusBlockExecutor final : public BlockExecutor {
   mutable int prepared_contexts_ = -1;
   mutable bool prepared_kinds_ = false;
   mutable std::vector<std::uint64_t> block_digests_;
+  mutable std::set<std::uint64_t> current_blocks_;  // the same, to look up
   mutable std::uint64_t data_digest_ = 0;
   // Per block: the worker it was last given to. It stays there while that worker is live
   // (assignment()), so the worker is sent its trajectories once.
