@@ -148,13 +148,14 @@ int run_learn(const LearnArgs& args) {
   out["em_evaluations"] = best.em_evaluations;
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) {
-    const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.theta);
+    const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, learned.theta);
+    const InverseLearningError& ile = metrics.ile;
     if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
       throw in_file(args.problem, InputError("true_weights", "give an ILE that is not a finite number: the true rewards are too large"));
     }
     out["ile"] = ile.ile;
     out["ile_relative"] = ile.relative();
-    out["policy_agreement"] = policy_agreement(mdp, *problem.true_weights, learned.theta);
+    out["policy_agreement"] = metrics.agreement;
     out["true_weights"] = to_vector(*problem.true_weights);
   }
   if (model) {

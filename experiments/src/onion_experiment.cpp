@@ -203,10 +203,10 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
                   learn);
               break;
           }
-          const InverseLearningError ile = inverse_learning_error(mdp, expert_weights(), learned.theta);
-          r.ile = ile.ile;
-          r.ile_relative = ile.relative();
-          r.policy_agreement = policy_agreement(mdp, expert_weights(), learned.theta);
+          const PolicyMetrics metrics = policy_metrics(mdp, expert_weights(), learned.theta);
+          r.ile = metrics.ile.ile;
+          r.ile_relative = metrics.ile.relative();
+          r.policy_agreement = metrics.agreement;
           r.em_evaluations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
           r.log_likelihood = learned.log_likelihood;
         } catch (const std::exception& e) {

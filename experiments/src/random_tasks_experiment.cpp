@@ -82,11 +82,11 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     learned = learn_reward(task.mdp, estep, options);
   }
   const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
-  const InverseLearningError ile = inverse_learning_error(task.mdp, task.true_weights, learned.theta);
-  r.ile = ile.ile;
-  r.ile_relative = ile.relative();
+  const PolicyMetrics metrics = policy_metrics(task.mdp, task.true_weights, learned.theta);
+  r.ile = metrics.ile.ile;
+  r.ile_relative = metrics.ile.relative();
   r.optimal = r.ile_relative <= kOptimalTolerance;
-  r.policy_agreement = policy_agreement(task.mdp, task.true_weights, learned.theta);
+  r.policy_agreement = metrics.agreement;
   r.em_evaluations = best.em_evaluations;  // the cost
   r.converged = best.converged;
   r.log_likelihood = learned.log_likelihood;

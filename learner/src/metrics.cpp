@@ -8,23 +8,22 @@
 
 namespace hbirl {
 
-InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_theta,
-                                            const Eigen::VectorXd& learned_theta) {
-  const Eigen::VectorXd true_reward = mdp.reward(true_theta);
-  const OptimalPolicy expert = value_iteration(mdp, true_reward);
-  const OptimalPolicy learner = value_iteration(mdp, mdp.reward(learned_theta));
-  const Eigen::VectorXd v_expert = policy_evaluation(mdp, true_reward, expert.actions);
-  const Eigen::VectorXd v_learner = policy_evaluation(mdp, true_reward, learner.actions);
+namespace {
+
+// ILE from the two optimal policies: the expert's value is its policy's exact evaluation,
+// which value_iteration leaves in .value; the learner's policy is evaluated under the
+// true reward, from the expert's values (the same policy: the same values, ILE 0).
+InverseLearningError ile_of(const Mdp& mdp, const Eigen::VectorXd& true_reward, const OptimalPolicy& expert,
+                            const OptimalPolicy& learner) {
+  const Eigen::VectorXd v_learner =
+      learner.actions == expert.actions ? expert.value : policy_evaluation(mdp, true_reward, learner.actions, &expert.value);
   InverseLearningError result;
-  result.ile = (v_expert - v_learner).lpNorm<1>();
-  result.optimal_value_l1 = v_expert.lpNorm<1>();
+  result.ile = (expert.value - v_learner).lpNorm<1>();
+  result.optimal_value_l1 = expert.value.lpNorm<1>();
   return result;
 }
 
-double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
-                        const Eigen::VectorXd& learned_theta) {
-  const OptimalPolicy expert = value_iteration(mdp, mdp.reward(true_theta));
-  const OptimalPolicy learner = value_iteration(mdp, mdp.reward(learned_theta));
+double agreement_of(const Mdp& mdp, const OptimalPolicy& expert, const OptimalPolicy& learner) {
   const double tie = 1e-9 * std::max(1.0, expert.value.lpNorm<Eigen::Infinity>());
   int states = 0;
   int agree = 0;
@@ -35,6 +34,26 @@ double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
     if (q_learned >= expert.value[s] - tie) ++agree;
   }
   return states == 0 ? 1.0 : static_cast<double>(agree) / states;
+}
+
+}  // namespace
+
+InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_theta,
+                                            const Eigen::VectorXd& learned_theta) {
+  const Eigen::VectorXd true_reward = mdp.reward(true_theta);
+  return ile_of(mdp, true_reward, value_iteration(mdp, true_reward), value_iteration(mdp, mdp.reward(learned_theta)));
+}
+
+double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
+                        const Eigen::VectorXd& learned_theta) {
+  return agreement_of(mdp, value_iteration(mdp, mdp.reward(true_theta)), value_iteration(mdp, mdp.reward(learned_theta)));
+}
+
+PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta) {
+  const Eigen::VectorXd true_reward = mdp.reward(true_theta);
+  const OptimalPolicy expert = value_iteration(mdp, true_reward);
+  const OptimalPolicy learner = value_iteration(mdp, mdp.reward(learned_theta));
+  return {ile_of(mdp, true_reward, expert, learner), agreement_of(mdp, expert, learner)};
 }
 
 Eigen::VectorXd expected_feature_counts(const Mdp& mdp, const Eigen::VectorXd& policy,

@@ -23,8 +23,8 @@ void q_values(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::Vector
   }
 }
 
-Eigen::VectorXd solve_policy(PolicyMatrix& matrix, const Eigen::VectorXd& b) {
-  Eigen::VectorXd x = b;
+Eigen::VectorXd solve_policy(PolicyMatrix& matrix, const Eigen::VectorXd& b, const Eigen::VectorXd* guess) {
+  Eigen::VectorXd x = guess && guess->size() == b.size() ? *guess : b;
   if (!matrix.solve(b, x)) {
     // Neumann series: x = b + gamma P_pi x, a contraction for gamma < 1.
     const SparseRowMatrix& m = matrix.matrix();
@@ -65,9 +65,12 @@ OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, dou
     q.segment(static_cast<Eigen::Index>(s) * A, A).maxCoeff(&best);
     result.actions[static_cast<size_t>(s)] = static_cast<int>(best);
   }
-  // Policy iteration polish: switch an action only for a gain beyond rounding noise.
+  // Policy iteration polish: switch an action only for a gain beyond rounding noise. Each
+  // evaluation starts from the last values (value iteration's, then the previous policy's).
+  result.value = v;
   for (;;) {
-    result.value = policy_evaluation(mdp, reward, result.actions);
+    const Eigen::VectorXd previous = std::move(result.value);
+    result.value = policy_evaluation(mdp, reward, result.actions, &previous);
     q_values(mdp, reward, result.value, q);
     const double noise = 1e-12 * std::max(1.0, result.value.lpNorm<Eigen::Infinity>());
     bool improved = false;
@@ -86,7 +89,7 @@ OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, dou
 }
 
 Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const std::vector<int>& actions) {
+                                  const std::vector<int>& actions, const Eigen::VectorXd* guess) {
   if (actions.size() != static_cast<size_t>(mdp.num_states)) {
     throw std::invalid_argument("policy_evaluation: one action per state expected");
   }
@@ -99,11 +102,11 @@ Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
     }
     policy[mdp.pair(s, a)] = 1.0;
   }
-  return policy_evaluation(mdp, reward, policy);
+  return policy_evaluation(mdp, reward, policy, guess);
 }
 
 Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const Eigen::VectorXd& policy) {
+                                  const Eigen::VectorXd& policy, const Eigen::VectorXd* guess) {
   const int A = mdp.num_actions;
   Eigen::VectorXd b = Eigen::VectorXd::Zero(mdp.num_states);
   for (int s = 0; s < mdp.num_states; ++s) {
@@ -115,7 +118,7 @@ Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
   }
   PolicyMatrix matrix(mdp);
   matrix.set_policy(policy);
-  return solve_policy(matrix, b);
+  return solve_policy(matrix, b, guess);
 }
 
 }  // namespace hbirl

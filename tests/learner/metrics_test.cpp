@@ -64,3 +64,30 @@ TEST(FeatureCountError, ZeroWhenTheDataAreTheExpectation) {
 
 }  // namespace
 }  // namespace hbirl
+
+namespace hbirl {
+namespace {
+
+// policy_metrics computes one optimal policy per reward for both metrics: the same bits as
+// the ILE and the policy agreement computed on their own, on random MDPs (terminal states,
+// impossible actions, discounts 0 to 0.99); and the ILE is 0 for the true reward itself.
+TEST(PolicyMetrics, SameAsTheIleAndTheAgreementOnTheirOwn) {
+  Rng rng(31);
+  for (int trial = 0; trial < 30; ++trial) {
+    const Mdp mdp = testing::random_mdp(testing::varied_options(trial), rng);
+    const Eigen::VectorXd truth = Eigen::VectorXd::Random(mdp.num_features());
+    const Eigen::VectorXd learned = Eigen::VectorXd::Random(mdp.num_features());
+    const PolicyMetrics both = policy_metrics(mdp, truth, learned);
+    const InverseLearningError ile = inverse_learning_error(mdp, truth, learned);
+    EXPECT_EQ(both.ile.ile, ile.ile) << trial;
+    EXPECT_EQ(both.ile.optimal_value_l1, ile.optimal_value_l1) << trial;
+    EXPECT_EQ(both.agreement, policy_agreement(mdp, truth, learned)) << trial;
+    EXPECT_GE(both.ile.ile, 0.0) << trial;
+    const PolicyMetrics self = policy_metrics(mdp, truth, truth);
+    EXPECT_EQ(self.ile.ile, 0.0) << trial;
+    EXPECT_EQ(self.agreement, 1.0) << trial;
+  }
+}
+
+}  // namespace
+}  // namespace hbirl

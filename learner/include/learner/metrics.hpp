@@ -23,6 +23,13 @@ InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorX
 double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
                         const Eigen::VectorXd& learned_theta);
 
+// Both, from one optimal policy per reward (what the two above would compute twice each).
+struct PolicyMetrics {
+  InverseLearningError ile;
+  double agreement = 0.0;
+};
+PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta);
+
 // E[phi] of a policy (one probability per pair), averaged over rollouts from the start
 // distribution, one rollout per entry of `lengths` (trajectories stop early when they
 // enter a terminal state).

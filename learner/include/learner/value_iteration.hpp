@@ -23,10 +23,12 @@ OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward,
 
 // V^pi for the reward: solves (I - gamma P_pi) V = R_pi exactly (up to the linear
 // solver's 1e-14 relative tolerance). Deterministic policy: one action per state.
+// `guess`: where the iterative solver starts (a nearby policy's value saves most of its
+// iterations); none: from R_pi.
 Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const std::vector<int>& actions);
+                                  const std::vector<int>& actions, const Eigen::VectorXd* guess = nullptr);
 // Stochastic policy: one probability per (s, a) pair.
 Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const Eigen::VectorXd& policy);
+                                  const Eigen::VectorXd& policy, const Eigen::VectorXd* guess = nullptr);
 
 }  // namespace hbirl
