@@ -77,7 +77,7 @@ class BusSpy {
   explicit BusSpy(const std::string& url) : bus_(open_bus(url)) {
     bus_->subscribe(".*", [this](const Message& m) {
       const std::lock_guard<std::mutex> lock(mutex_);
-      bytes_[m.channel.rfind("TRAJECTORY_", 0) == 0 ? "TRAJECTORY_<tag>" : m.channel] += m.size;
+      bytes_[m.channel] += m.size;
     }, 100000);
     thread_ = std::thread([this] {
       while (!stop_) bus_->handle(10);
@@ -103,7 +103,8 @@ class BusSpy {
 
 // One pass farmed out over LCM (loopback multicast) to `workers` hbirl-sampler processes:
 // the real processes, sockets and protocol. The first pass, which sends every worker its
-// share of the trajectories, is timed apart (first_pass_ms, share_MB); the timed passes
+// share of the trajectories, is timed apart (first_pass_ms, share_MB; worker_share_min and
+// _max: the smallest and largest part of those bytes one worker's channel carried); the timed passes
 // send requests and answers only (bus_kB_per_pass: every byte on the bus, heartbeats
 // included). No spot check: the protocol's cost alone. On 2 cores more than 2 workers
 // cannot compute faster: compare with BM_EStepPassHere/large:1 for the overhead per block.
@@ -145,7 +146,18 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     estep.statistics(policy, model, 1);
     state.counters["first_pass_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     state.counters["share_MB"] = static_cast<double>(executor->stats().bytes_sent) / 1e6;
-    spy.take();
+    // What each worker's channel carried in that first pass, as a share of all the
+    // trajectories sent: its share of the data set (1 / workers when even).
+    double smallest = 1.0, largest = 0.0;
+    const auto first = spy.take();
+    for (int w = 0; w < n; ++w) {
+      const auto it = first.find(channels::trajectory_channel("bench-sampler-" + std::to_string(w)));
+      const double share = it == first.end() ? 0.0 : static_cast<double>(it->second) / static_cast<double>(executor->stats().bytes_sent);
+      smallest = std::min(smallest, share);
+      largest = std::max(largest, share);
+    }
+    state.counters["worker_share_min"] = smallest;
+    state.counters["worker_share_max"] = largest;
     std::int64_t passes = 0;
     for (auto _ : state) {
       benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
@@ -154,7 +166,7 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     std::int64_t total = 0;
     for (const auto& [channel, bytes] : spy.take()) {
       total += bytes;
-      if (channel == "ESTEP_REQUEST" || channel == "ESTEP_RESULT" || channel == "TRAJECTORY_<tag>") {
+      if (channel == "ESTEP_REQUEST" || channel == "ESTEP_RESULT") {
         state.counters[channel + "_kB"] = static_cast<double>(bytes) / 1e3 / static_cast<double>(passes);
       }
     }
