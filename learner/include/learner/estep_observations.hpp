@@ -148,8 +148,9 @@ class ObservationEStep final : public EStep {
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
   // The digest (dataset_digest) of the trajectories as given, merged, before learned eta
-  // gave them contexts: what a BlockExecutor compares with the data its workers hold
-  // (they give the same contexts the same way). Set only with an executor.
+  // gave them contexts: how a BlockExecutor tells the E-steps it serves apart (the
+  // trajectories it sends workers are trajectories(), contexts included). Set only with an
+  // executor.
   std::uint64_t input_digest() const { return input_digest_; }
   // The trajectory with each observation's eta replaced by its context's row of `eta`
   // (learned_eta): what the learned model believes of each observation's source.
