@@ -71,6 +71,29 @@ void BM_EStepPassHere(benchmark::State& state) {
 }
 BENCHMARK(BM_EStepPassHere)->Arg(0)->Arg(1)->ArgName("large")->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// An E-step whose blocks go to `workers` sampler workers over `bus`, and a pass's inputs.
+struct PassOverBus {
+  std::shared_ptr<BusBlockExecutor> executor;
+  std::unique_ptr<ObservationEStep> estep;
+  SoftSolution policy;
+  ObservationModel model;
+};
+
+PassOverBus pass_over_bus(Bus& bus, Counters& counters, const Data& d, const BusExecutorOptions& options, int workers,
+                          int wait_ms, benchmark::State& state) {
+  PassOverBus p;
+  p.executor = std::make_shared<BusBlockExecutor>(bus, d.task.mdp, "gridworld", counters, options);
+  if (p.executor->wait_for_workers(workers, wait_ms) != workers) {
+    state.SkipWithError("workers did not come up (over LCM: inside a network namespace? bench/in_netns.sh)");
+  }
+  ObservationEStepOptions estep_options;
+  estep_options.executor = p.executor;
+  p.estep = std::make_unique<ObservationEStep>(d.task.mdp, d.observed, d.prior, estep_options);
+  p.policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
+  p.model = dirichlet_mean(d.prior);
+  return p;
+}
+
 // Counts the bytes on every channel of an LCM bus, from a thread of its own.
 class BusSpy {
  public:
@@ -135,15 +158,10 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     BusExecutorOptions executor_options;
     executor_options.spot_check = false;
     executor_options.timeout_ms = 10000;
-    auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", c, executor_options);
-    if (executor->wait_for_workers(n, 20000) != n) state.SkipWithError("workers did not come up (inside a network namespace? bench/in_netns.sh)");
-    ObservationEStepOptions options;
-    options.executor = executor;
-    const ObservationEStep estep(d.task.mdp, d.observed, d.prior, options);
-    const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
-    const ObservationModel model = dirichlet_mean(d.prior);
+    const PassOverBus pass = pass_over_bus(*bus, c, d, executor_options, n, 20000, state);
+    const auto& [executor, estep, policy, model] = pass;
     const auto start = std::chrono::steady_clock::now();
-    estep.statistics(policy, model, 1);
+    estep->statistics(policy, model, 1);
     state.counters["first_pass_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     state.counters["share_MB"] = static_cast<double>(executor->stats().bytes_sent) / 1e6;
     // What each worker's channel carried in that first pass, as a share of all the
@@ -160,7 +178,7 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     state.counters["worker_share_max"] = largest;
     std::int64_t passes = 0;
     for (auto _ : state) {
-      benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
+      benchmark::DoNotOptimize(estep->statistics(policy, model, 1).log_likelihood);
       ++passes;
     }
     std::int64_t total = 0;
@@ -214,17 +232,11 @@ void BM_EStepPassOverBus(benchmark::State& state) {
   std::unique_ptr<Bus> bus = endpoint(c);
   BusExecutorOptions executor_options;
   executor_options.spot_check = mode >= 1;
-  auto executor = std::make_shared<BusBlockExecutor>(*bus, d.task.mdp, "gridworld", c, executor_options);
-  if (executor->wait_for_workers(n, 10000) != n) state.SkipWithError("workers did not come up");
-  ObservationEStepOptions options;
-  options.executor = executor;
-  const ObservationEStep estep(d.task.mdp, d.observed, d.prior, options);
-  const SoftSolution policy = soft_value_iteration(d.task.mdp, d.task.mdp.features * d.task.true_weights);
-  const ObservationModel model = dirichlet_mean(d.prior);
-  for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(policy, model, 1).log_likelihood);
+  const PassOverBus pass = pass_over_bus(*bus, c, d, executor_options, n, 10000, state);
+  for (auto _ : state) benchmark::DoNotOptimize(pass.estep->statistics(pass.policy, pass.model, 1).log_likelihood);
   stop = true;
   for (auto& t : threads) t.join();
-  const auto s = executor->stats();
+  const auto s = pass.executor->stats();
   state.counters["local_blocks"] = static_cast<double>(s.local_blocks);
   state.counters["retried"] = static_cast<double>(s.retried_blocks);
 }

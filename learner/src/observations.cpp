@@ -13,7 +13,7 @@
 namespace hbirl {
 
 
-std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories) {
+std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories) {
   Fnv1a h;
   h.add(static_cast<std::uint64_t>(trajectories.size()));
   for (const auto& t : trajectories) {

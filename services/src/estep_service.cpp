@@ -121,10 +121,9 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
   return t;
 }
 
-std::vector<ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b) {
+std::span<const ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b) {
   const auto begin = static_cast<size_t>(b) * ObservationEStep::kBlockSize;
-  const size_t end = std::min(trajectories.size(), begin + ObservationEStep::kBlockSize);
-  return {trajectories.begin() + static_cast<std::ptrdiff_t>(begin), trajectories.begin() + static_cast<std::ptrdiff_t>(end)};
+  return std::span<const ObservedTrajectory>(trajectories).subspan(begin, std::min<size_t>(ObservationEStep::kBlockSize, trajectories.size() - begin));
 }
 
 BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters,
@@ -149,11 +148,6 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& 
 void BusBlockExecutor::publish_mdp() const {
   last_mdp_sent_ = Clock::now();
   for (const auto& m : mdp_messages_) publish(bus_, channels::kMdp, m, counters_);
-}
-
-std::uint64_t BusBlockExecutor::digest() const {
-  const std::lock_guard<std::recursive_mutex> lock(mutex_);
-  return data_digest_;
 }
 
 // The blocks of the E-step's trajectories as the workers are sent them, and their

@@ -485,7 +485,7 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   // A whole block whose trajectories do not have the digest it is sent under is refused.
   Counters fresh = quiet("sampler-b");
   SamplerWorker b(bus, "sampler-b", fresh);
-  const std::vector<ObservedTrajectory> first = block_of(task().observed, 0);
+  const std::span<const ObservedTrajectory> first = block_of(task().observed, 0);
   for (int i = 0; i < ObservationEStep::kBlockSize; ++i) {
     publish(sender, channels::trajectory_channel("sampler-b"),
             to_message(first[static_cast<size_t>(i)], i, 40, dataset_digest(first) ^ 1, "sampler-b"), out);

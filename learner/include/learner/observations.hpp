@@ -7,6 +7,7 @@
 #include <optional>
 #include <cstdint>
 #include <string>
+#include <span>
 #include <vector>
 
 namespace hbirl {
@@ -40,7 +41,7 @@ struct ObservedTrajectory {
 
 // A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta and weight, bit for
 // bit. Two processes with the same digest hold the same data (services/ compares them).
-std::uint64_t dataset_digest(const std::vector<ObservedTrajectory>& trajectories);
+std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories);
 
 // A source distribution eta as it comes in at the edge (a file, a message), checked and
 // normalised in one place: its n entries must be finite and >= 0 and sum to 1 within

@@ -59,8 +59,8 @@ namespace hbirl::services {
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
                                const std::string& worker);
 ObservedTrajectory from_message(const hbirl::trajectory_t& m);
-// The trajectories of block `b` of `trajectories` (ObservationEStep::kBlockSize each).
-std::vector<ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b);
+// The trajectories of block `b` of `trajectories` (ObservationEStep::kBlockSize each), in place.
+std::span<const ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b);
 
 
 // A fingerprint of this build's floating-point results: the bits of a fixed small E-step
@@ -119,8 +119,6 @@ class BusBlockExecutor final : public BlockExecutor {
   // Handles the bus until `count` workers with this MDP are live, or timeout_ms passes;
   // returns how many are.
   int wait_for_workers(int count, int timeout_ms) const;
-  // The digest of the data set of the last pass given to workers, as they are sent it (0: none yet).
-  std::uint64_t digest() const;
 
   struct Stats {
     std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
