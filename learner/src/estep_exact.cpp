@@ -43,28 +43,32 @@ double log_sum_exp_row(const SparseRowMatrix& log_w, int row, const double* v) {
   return m + std::log(sum);
 }
 
-// out = log(M exp(x)) for a sparse non-negative M, computed as exp(x - max) -> sparse
-// product -> log + max: vectorised, and exact as long as no finite entry of x lies more
-// than ~700 below the maximum (exp would underflow). Returns false, touching nothing,
-// when that is not so; the caller then takes the per-row log-sum-exp.
-bool shifted_product(const SparseRowMatrix& m, const Eigen::VectorXd& x, Eigen::VectorXd& out, Eigen::VectorXd& scaled) {
+// Below this, a row of M exp(x - max) may have lost terms to underflow (exp_in_place
+// drops what is under 1e-300): such rows are summed again in log space.
+constexpr double kUnderflowFloor = 1e-250;
+
+// out = log(M exp(x)) for a sparse non-negative M (log_m: its logs, same pattern),
+// computed as exp(x - max) -> sparse product -> log + max: vectorised. A row whose sum
+// falls below kUnderflowFloor (every term of it far below the maximum of x) is
+// recomputed by its own log-sum-exp, so every row is exact to rounding: a dropped term
+// is under 1e-300 of the maximum, i.e. under 1e-50 of any row that is kept.
+void log_product(const SparseRowMatrix& m, const SparseRowMatrix& log_m, const Eigen::VectorXd& x, Eigen::VectorXd& out,
+                 Eigen::VectorXd& scaled, std::vector<int>& low_rows) {
   double hi = kNegInf;
-  double lo = std::numeric_limits<double>::infinity();
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    if (x[i] == kNegInf) continue;
-    hi = std::max(hi, x[i]);
-    lo = std::min(lo, x[i]);
-  }
+  for (Eigen::Index i = 0; i < x.size(); ++i) hi = std::max(hi, x[i]);
   if (hi == kNegInf) {
     out.setConstant(m.rows(), kNegInf);
-    return true;
+    return;
   }
-  if (hi - lo > 700.0) return false;
   scaled = x.array() - hi;
   exp_in_place(scaled);
   out.noalias() = m * scaled;
+  low_rows.clear();
+  for (Eigen::Index i = 0; i < out.size(); ++i) {
+    if (out[i] < kUnderflowFloor) low_rows.push_back(static_cast<int>(i));
+  }
   out = out.array().log() + hi;
-  return true;
+  for (int i : low_rows) out[i] = log_sum_exp_row(log_m, i, x.data());
 }
 
 }  // namespace
@@ -155,8 +159,9 @@ double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory&
   for (int t = 0; t < T; ++t) {
     if (t == 0) {
       scratch_ = log_start_;
-    } else if (!shifted_product(incoming_, log_alpha_.row(t - 1).transpose(), scratch_, shifted_)) {
-      for (int s = 0; s < S; ++s) scratch_[s] = log_sum_exp_row(log_incoming_, s, log_alpha_.row(t - 1).data());
+    } else {
+      previous_ = log_alpha_.row(t - 1).transpose();
+      log_product(incoming_, log_incoming_, previous_, scratch_, shifted_, low_rows_);
     }
     for (int s = 0; s < S; ++s) {
       if (mdp_.is_terminal(s)) scratch_[s] = kNegInf;  // never occupied at a step
@@ -206,11 +211,8 @@ double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory&
       for (int a = 0; a < A; ++a) sum += shift_[s * A + a];
       scratch_[s] += std::log(sum);
     }
-    Eigen::VectorXd row(P);
-    if (!shifted_product(mdp_.transitions, scratch_, row, shifted_)) {
-      for (int r = 0; r < P; ++r) row[r] = log_sum_exp_row(log_transitions_, r, scratch_.data());
-    }
-    log_beta_.row(t) = row.transpose();
+    log_product(mdp_.transitions, log_transitions_, scratch_, row_, shifted_, low_rows_);
+    log_beta_.row(t) = row_.transpose();
   }
   return ll;
 }

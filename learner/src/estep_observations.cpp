@@ -293,8 +293,11 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
   parallel_for(n, options_.threads, [&](int i) {
     std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
     ExactEngine exact(mdp_);
-    const ObservedTrajectory trajectory =
-        eta ? with_eta(trajectories_[static_cast<size_t>(i)], *eta) : trajectories_[static_cast<size_t>(i)];
+    std::vector<ObservedTrajectory> one;
+    one.push_back(eta ? with_eta(trajectories_[static_cast<size_t>(i)], *eta) : trajectories_[static_cast<size_t>(i)]);
+    const ObservedTrajectory& trajectory = one.front();
+    // Its observation kinds: each strength's emissions are a log per kind, not per observation.
+    const ObservationKinds kinds = *observation_kinds(one, std::numeric_limits<int>::max());
     EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
     Rng rng = root.split(static_cast<std::uint64_t>(i));
     engine->accumulate(policy, model, trajectory, rng, own);
@@ -304,7 +307,8 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     for (size_t k = 0; k < strengths.size(); ++k) {
       const AlphaCounts posterior = dirichlet_posterior(prior_, strengths[k], others);
       const ObservationModel without{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)};
-      held_out(i, static_cast<Eigen::Index>(k)) = exact.log_likelihood(policy, without, trajectory);
+      held_out(i, static_cast<Eigen::Index>(k)) =
+          exact.log_likelihood(policy, trajectory, kinds.of.front(), kind_emissions(without, kinds));
     }
   });
   StrengthChoice choice;

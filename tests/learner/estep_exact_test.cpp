@@ -62,6 +62,111 @@ TEST(ExactEngine, ThousandsOfObservationsAndLongTrajectoriesDoNotUnderflow) {
   for (int n = 0; n < tr.num_observations(); n += 333) EXPECT_NEAR(post.sources.row(n).sum(), 1.0, 1e-9);
 }
 
+// log sum_j exp(x_j), -inf for none: the reference below sums every row in log space.
+double reference_lse(const std::vector<double>& x) {
+  double m = -INFINITY;
+  for (double v : x) m = std::max(m, v);
+  if (m == -INFINITY) return m;
+  double sum = 0.0;
+  for (double v : x) sum += std::exp(v - m);
+  return m + std::log(sum);
+}
+
+// Heavy observations (weights in the hundreds, as merged repeats give) make the steps'
+// log emissions differ by thousands between pairs, so states fall e^-1000 below others
+// and become likely again later: the engine's vectorised sums must then recompute the
+// rows that underflow. Against a plain log-space forward-backward, every row summed by
+// its own log-sum-exp, on random MDPs (terminal states, impossible actions,
+// deterministic transitions).
+TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
+  Rng rng(77);
+  int extreme = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    testing::RandomMdpOptions o = testing::varied_options(trial);
+    o.states = 4 + trial % 7;
+    o.actions = 2 + trial % 3;
+    o.successors = std::min(3, o.states);
+    const Mdp mdp = testing::random_mdp(o, rng);
+    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(testing::random_vector(o.features, rng, 2.0)));
+    ObservationModel model;
+    const int symbols = 3;
+    model.subject = testing::random_distributions(mdp.num_pairs(), symbols, rng);
+    model.confounders = testing::random_distributions(trial % 3, symbols, rng);
+    for (Eigen::Index i = 0; i < model.subject.size(); ++i) {
+      if (rng.uniform() < 0.3) model.subject.data()[i] *= 1e-3;  // near-impossible symbols
+    }
+    const int E = model.num_confounders();
+    ObservedTrajectory tr;
+    const int T = 6;
+    for (int t = 0; t < T; ++t) {
+      for (int i = rng.uniform_int(3); i > 0; --i) {
+        tr.symbols.push_back(rng.uniform_int(symbols));
+        tr.weights.push_back(50.0 + rng.uniform_int(900));
+      }
+      tr.step_begin.push_back(static_cast<int>(tr.symbols.size()));
+    }
+    tr.eta.resize(tr.num_observations(), 1 + E);
+    for (int n = 0; n < tr.num_observations(); ++n) {
+      for (int z = 0; z <= E; ++z) tr.eta(n, z) = z == 0 ? 0.7 : 0.3 / E;
+    }
+    // The reference, straight from the definitions.
+    const int P = mdp.num_pairs();
+    const int A = mdp.num_actions;
+    std::vector<std::vector<double>> e(T, std::vector<double>(static_cast<size_t>(P), 0.0));
+    double spread = 0.0;
+    for (int t = 0; t < T; ++t) {
+      for (int r = 0; r < P; ++r) {
+        for (int n = tr.step_begin[static_cast<size_t>(t)]; n < tr.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+          const int w = tr.symbols[static_cast<size_t>(n)];
+          double p = tr.eta(n, 0) * model.subject(r, w);
+          for (int z = 0; z < E; ++z) p += tr.eta(n, z + 1) * model.confounders(z, w);
+          e[t][static_cast<size_t>(r)] += tr.weight(n) * std::log(p);
+        }
+      }
+      const auto [lo, hi] = std::minmax_element(e[t].begin(), e[t].end());
+      spread = std::max(spread, *hi - *lo);
+    }
+    auto log_t = [&](int r, int s2) { return std::log(mdp.transitions.coeff(r, s2)); };
+    std::vector<std::vector<double>> la(T, std::vector<double>(static_cast<size_t>(P)));
+    std::vector<std::vector<double>> lb(T, std::vector<double>(static_cast<size_t>(P), 0.0));
+    for (int t = 0; t < T; ++t) {
+      for (int r = 0; r < P; ++r) {
+        const int s = r / A;
+        double d = std::log(mdp.start[s]);
+        if (t > 0) {
+          std::vector<double> in;
+          for (int q = 0; q < P; ++q) in.push_back(la[t - 1][static_cast<size_t>(q)] + log_t(q, s));
+          d = reference_lse(in);
+        }
+        la[t][static_cast<size_t>(r)] = mdp.is_terminal(s) ? -INFINITY : d + policy.log_policy[r] + e[t][static_cast<size_t>(r)];
+      }
+    }
+    for (int t = T - 2; t >= 0; --t) {
+      for (int r = 0; r < P; ++r) {
+        std::vector<double> out;
+        for (int q = 0; q < P; ++q) {
+          if (mdp.is_terminal(q / A)) continue;
+          out.push_back(log_t(r, q / A) + policy.log_policy[q] + e[t + 1][static_cast<size_t>(q)] + lb[t + 1][static_cast<size_t>(q)]);
+        }
+        lb[t][static_cast<size_t>(r)] = reference_lse(out);
+      }
+    }
+    const double ll = reference_lse(la[T - 1]);
+    ASSERT_TRUE(std::isfinite(ll)) << "trial " << trial;
+    extreme += spread > 1000.0;
+    ExactEngine engine(mdp);
+    const TrajectoryPosterior post = engine.posterior(policy, model, tr);
+    EXPECT_NEAR(post.log_likelihood, ll, 1e-12 * std::abs(ll)) << "trial " << trial;
+    for (int t = 0; t < T; ++t) {
+      for (int r = 0; r < P; ++r) {
+        const double gamma = std::exp(la[t][static_cast<size_t>(r)] + lb[t][static_cast<size_t>(r)] - ll);
+        EXPECT_NEAR(post.marginals(t, r), gamma, 1e-9) << "trial " << trial << " step " << t << " pair " << r;
+      }
+    }
+  }
+  EXPECT_GE(extreme, 20);  // most trials had log emissions more than 1000 apart within a step
+}
+
 TEST(ExactEngine, ImpossibleObservationsGiveMinusInfinity) {
   Rng rng(1);
   testing::TinyProblem p = testing::tiny_problem(1, rng);

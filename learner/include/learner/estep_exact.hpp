@@ -77,6 +77,13 @@ class ExactEngine {
                         const ObservedTrajectory& trajectory) {
     return forward_backward(policy, model, trajectory, false);
   }
+  // The same with the emissions of the trajectory's observation kinds precomputed (see
+  // accumulate below): the same number, without a log per observation and pair.
+  double log_likelihood(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
+                        const KindEmissions& table) {
+    emissions(trajectory, kinds_of, table);
+    return passes(policy, trajectory, false);
+  }
   // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out` (and,
   // when `watch`, its marginals and log-likelihood as out.watched).
   void accumulate(const SoftSolution& policy, const ObservationModel& model,
@@ -125,7 +132,10 @@ class ExactEngine {
   Eigen::ArrayXd ratio_;             // gamma / p of one observation
   Eigen::VectorXd scratch_;
   Eigen::ArrayXd shift_;             // per pair, backward pass
-  Eigen::VectorXd shifted_;          // per state, shifted_product
+  Eigen::VectorXd shifted_;          // log_product's workspace
+  Eigen::VectorXd previous_;         // log alpha of the step before, forward pass
+  Eigen::VectorXd row_;              // log beta of one step, backward pass
+  std::vector<int> low_rows_;        // log_product's rows summed again in log space
 };
 
 }  // namespace hbirl
