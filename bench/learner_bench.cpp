@@ -77,6 +77,42 @@ void BM_MaxCausalEntSolve(benchmark::State& state) {
 }
 BENCHMARK(BM_MaxCausalEntSolve)->Args({1, 0})->Args({4, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
 
+// How close the sparse operations run to this machine's memory bandwidth (issue 17, "Large
+// MDPs"): BM_StreamTriad is the bandwidth (a = b + s c over 3 x 128 MB; bytes counted as
+// read b, c and write a), BM_TransitionProduct one product q = T v with the N x N
+// Gridworld's transitions (bytes: the values, column indices and row starts read, q
+// written; v is small enough to stay in cache at N = 200: 320 kB), the operation the soft
+// Bellman backups and BiCGSTAB's products are made of.
+void BM_StreamTriad(benchmark::State& state) {
+  const Eigen::Index n = 16 * 1024 * 1024;
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
+  const Eigen::VectorXd c = Eigen::VectorXd::LinSpaced(n, 1.0, 2.0);
+  Eigen::VectorXd a(n);
+  for (auto _ : state) {
+    a.noalias() = b + 0.5 * c;
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * 3 * n * static_cast<int64_t>(sizeof(double)));
+}
+BENCHMARK(BM_StreamTriad)->Unit(benchmark::kMillisecond);
+
+void BM_TransitionProduct(benchmark::State& state) {
+  const GridworldTask t = task(static_cast<int>(state.range(0)), 1, 1);
+  const SparseRowMatrix& m = t.mdp.transitions;
+  const Eigen::VectorXd v = Eigen::VectorXd::LinSpaced(t.mdp.num_states, -1.0, 1.0);
+  Eigen::VectorXd q(m.rows());
+  for (auto _ : state) {
+    q.noalias() = m * v;
+    benchmark::DoNotOptimize(q.data());
+  }
+  const int64_t bytes = m.nonZeros() * static_cast<int64_t>(sizeof(double) + sizeof(int)) +
+                        m.rows() * static_cast<int64_t>(sizeof(int) + sizeof(double));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * bytes);
+  state.counters["nonzeros"] = static_cast<double>(m.nonZeros());
+}
+BENCHMARK(BM_TransitionProduct)->Arg(200)->Unit(benchmark::kMicrosecond);
+
 // The metrics of a learned reward on a large MDP (issue 17 "Large MDPs"): the ILE (value
 // iteration for both rewards' optimal policies, then exact policy evaluation) and the
 // policy agreement, as `hbirl learn` prints them (policy_metrics: one optimal policy per

@@ -6,8 +6,6 @@
 namespace hbirl {
 
 namespace {
-constexpr double kLinearTolerance = 1e-14;
-
 int slot_of(const SparseRowMatrix& m, int row, int col) {
   const int* begin = m.innerIndexPtr() + m.outerIndexPtr()[row];
   const int* end = m.innerIndexPtr() + m.outerIndexPtr()[row + 1];
@@ -49,8 +47,6 @@ PolicyMatrix::PolicyMatrix(const Mdp& mdp) : mdp_(mdp) {
       }
     }
   }
-  solver_.setTolerance(kLinearTolerance);
-  transposed_solver_.setTolerance(kLinearTolerance);
 }
 
 void PolicyMatrix::set_policy(const Eigen::VectorXd& policy) {
@@ -84,7 +80,8 @@ void PolicyMatrix::set_policy(const std::vector<int>& actions) {
 }
 
 bool PolicyMatrix::run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b,
-                       Eigen::VectorXd& x) {
+                       Eigen::VectorXd& x, double tolerance) {
+  solver.setTolerance(tolerance);
   solver.compute(a);
   Eigen::VectorXd guess = x;
   x = solver.solveWithGuess(b, guess);
@@ -92,11 +89,11 @@ bool PolicyMatrix::run(Solver& solver, const SparseRowMatrix& a, const Eigen::Ve
   // BiCGSTAB may stop a hair above a very tight tolerance; accept what a direct residual
   // check says is accurate to working precision.
   const double scale = std::max(1.0, b.lpNorm<Eigen::Infinity>());
-  return x.allFinite() && (b - a * x).lpNorm<Eigen::Infinity>() <= 1e-11 * scale;
+  return x.allFinite() && (b - a * x).lpNorm<Eigen::Infinity>() <= std::max(1e-11, tolerance) * scale;
 }
 
-bool PolicyMatrix::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  return run(solver_, matrix_, b, x);
+bool PolicyMatrix::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance) {
+  return run(solver_, matrix_, b, x, tolerance);
 }
 
 bool PolicyMatrix::solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -104,7 +101,7 @@ bool PolicyMatrix::solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x
     transposed_ = matrix_.transpose();
     transposed_stale_ = false;
   }
-  return run(transposed_solver_, transposed_, b, x);
+  return run(transposed_solver_, transposed_, b, x, kWorkingTolerance);
 }
 
 }  // namespace hbirl

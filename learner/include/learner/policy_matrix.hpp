@@ -16,6 +16,8 @@ namespace hbirl {
 
 class PolicyMatrix {
  public:
+  static constexpr double kWorkingTolerance = 1e-14;
+
   explicit PolicyMatrix(const Mdp& mdp);
 
   // policy: one probability per (s, a) pair; rows of terminal states are ignored.
@@ -25,7 +27,9 @@ class PolicyMatrix {
 
   // Solve (I - gamma P_pi) x = b. x holds the initial guess on entry. Returns false
   // if the iterative solver did not reach the tolerance (x then holds its best try).
-  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  // tolerance: the relative residual ||b - M x|| / ||b|| to reach (inexact Newton steps
+  // ask for less than working precision).
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance = kWorkingTolerance);
   // Solve (I - gamma P_pi)^T x = b, same conventions.
   bool solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
@@ -33,7 +37,7 @@ class PolicyMatrix {
 
  private:
   using Solver = Eigen::BiCGSTAB<SparseRowMatrix, Eigen::DiagonalPreconditioner<double>>;
-  bool run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  bool run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance);
 
   const Mdp& mdp_;
   SparseRowMatrix matrix_;          // S x S
