@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -166,6 +167,10 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) const {
   current_blocks_ = std::set<std::uint64_t>(block_digests_.begin(), block_digests_.end());
   data_digest_ = dataset_digest(estep.trajectories());
   if (owner_.size() != block_digests_.size()) owner_.assign(block_digests_.size(), std::string());
+  for (auto& [id, w] : workers_) {  // what a worker could not hold was of the last data set
+    w.unheld.clear();
+    w.cannot_hold.clear();
+  }
 }
 
 // Each block of `todo` is queued for the worker `assigned` to it, unless that worker holds
@@ -407,22 +412,48 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
 // some workers have proven themselves (answered before), each one that has not gets one
 // block, and no more of them than there are proven ones: heartbeats from processes that
 // never answer (a crashed build, a forger) cost a pass one timeout, not the whole pass.
+// A block a worker failed to hold twice goes to another (none can: computed here), and a
+// worker that failed to hold two and holds none gets nothing: a block it cannot hold would
+// cost every pass it is given in a timeout (Worker::cannot_hold).
 std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& todo, std::vector<std::string> workers) const {
+  for (const auto& w : workers) {  // failures to hold are forgotten a minute after the last
+    Worker& x = workers_.at(w);
+    if (!x.unheld.empty() && Clock::now() - x.last_unheld > std::chrono::minutes(1)) {
+      x.unheld.clear();
+      x.cannot_hold.clear();
+    }
+  }
+  const auto can_hold = [this](const std::string& w, int b) {
+    return !workers_.at(w).cannot_hold.count(block_digests_[static_cast<size_t>(b)]);
+  };
+  // A worker that failed to hold two blocks and holds none gets no more (for this data set):
+  // each block it is given would cost the pass a timeout.
+  workers.erase(std::remove_if(workers.begin(), workers.end(),
+                               [this](const std::string& w) {
+                                 const Worker& x = workers_.at(w);
+                                 return x.cannot_hold.size() >= 2 && x.held.empty();
+                               }),
+                workers.end());
   std::vector<std::string> proven, unproven;
   for (const auto& w : workers) (workers_.at(w).answers > 0 ? proven : unproven).push_back(w);
   std::vector<std::string> out(static_cast<size_t>(blocks_));
   std::vector<int> rest = todo;
   if (!proven.empty()) {
     unproven.resize(std::min(unproven.size(), proven.size()));
-    for (const auto& w : unproven) {  // the block it has, else one from the end
+    for (const auto& w : unproven) {  // the block it has, else the last one it can hold
       if (rest.empty()) break;
       auto pick = std::find_if(rest.begin(), rest.end(), [&](int b) { return owner_[static_cast<size_t>(b)] == w; });
-      if (pick == rest.end()) pick = rest.end() - 1;
+      if (pick == rest.end()) {
+        const auto last = std::find_if(rest.rbegin(), rest.rend(), [&](int b) { return can_hold(w, b); });
+        if (last == rest.rend()) continue;
+        pick = std::prev(last.base());
+      }
       out[static_cast<size_t>(*pick)] = w;
       rest.erase(pick);
     }
     workers = proven;
   }
+  if (workers.empty()) return out;
   const size_t n = workers.size();
   std::map<std::string, size_t> share, given;  // even shares, the first ones one larger
   for (size_t k = 0; k < n; ++k) share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);
@@ -430,18 +461,26 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
   for (int b : rest) {
     const std::string& owner = owner_[static_cast<size_t>(b)];
     const auto it = share.find(owner);
-    if (it != share.end() && given[owner] < it->second) {
+    if (it != share.end() && given[owner] < it->second && can_hold(owner, b)) {
       out[static_cast<size_t>(b)] = owner;
       ++given[owner];
     } else {
       loose.push_back(b);
     }
   }
-  size_t k = 0;
-  for (int b : loose) {
-    while (given[workers[k]] >= share[workers[k]]) ++k;
-    out[static_cast<size_t>(b)] = workers[k];
-    ++given[workers[k]];
+  for (int b : loose) {  // the first worker under its share that can hold it, else the least loaded that can
+    std::string pick;
+    for (const auto& w : workers) {
+      if (!can_hold(w, b)) continue;
+      if (given[w] < share[w]) {
+        pick = w;
+        break;
+      }
+      if (pick.empty() || given[w] < given[pick]) pick = w;
+    }
+    if (pick.empty()) continue;  // no worker can: computed here
+    out[static_cast<size_t>(b)] = pick;
+    ++given[pick];
   }
   for (int b : todo) {  // a block moved: its old worker drops it (sampler_worker.hpp)
     std::string& owner = owner_[static_cast<size_t>(b)];
@@ -649,11 +688,19 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     std::set<std::string> queued;
     for (const auto& [b, id] : to_send_) queued.insert(id);
     to_send_.clear();  // what is still queued goes with the next attempt, to whoever gets it
-    // Workers that left blocks unanswered get no more work until they are heard from again.
     for (int b : missing()) {
       const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
-      if (w.empty() || answered_.count(w) || queued.count(w)) continue;
-      Worker& silent = workers_[w];
+      if (w.empty() || queued.count(w)) continue;
+      // Sent and still not held: counted; twice, and the block goes to others.
+      Worker& x = workers_[w];
+      const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
+      if (x.sent.count(digest) && !x.held.count(digest)) {
+        x.last_unheld = Clock::now();
+        if (++x.unheld[digest] >= 2) x.cannot_hold.insert(digest);
+      }
+      // Workers that left blocks unanswered get no more work until they are heard from again.
+      if (answered_.count(w)) continue;
+      Worker& silent = x;
       silent.suspect = true;
       silent.suspect_since = Clock::now();
       silent.answers = 0;  // once heard from again it gets one block until it answers

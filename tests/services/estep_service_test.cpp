@@ -356,6 +356,32 @@ TEST(EStepService, WorkerKilledMidRunSameTheta) {
 // A worker that misses a request (here a relay drops the first one it would get) leaves its
 // blocks unanswered, gets no work while it is silent, and once its next heartbeat comes it
 // gets work again -- one block, then its share -- instead of being left out for the run.
+// Passes that re-ask after 300 ms without progress, not 2 s.
+BusExecutorOptions short_timeout() {
+  BusExecutorOptions options;
+  options.timeout_ms = 300;
+  return options;
+}
+
+// The task's E-step over an optimiser's workers and the same E-step's pass in one process,
+// at the true reward and the prior's mean O.
+struct RemoteAndLocal {
+  explicit RemoteAndLocal(std::shared_ptr<const BlockExecutor> executor, const Task& t = task())
+      : there(t.task.mdp, t.observed, t.prior, with_executor(std::move(executor))),
+        model(dirichlet_mean(t.prior)),
+        policy(soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights))),
+        here(ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5)) {}
+  static ObservationEStepOptions with_executor(std::shared_ptr<const BlockExecutor> executor) {
+    ObservationEStepOptions o;
+    o.executor = std::move(executor);
+    return o;
+  }
+  const ObservationEStep there;
+  const ObservationModel model;
+  const SoftSolution policy;
+  const EStepStatistics here;
+};
+
 TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
   auto hub = std::make_shared<MemoryHub>();
   auto behind = std::make_shared<MemoryHub>();
@@ -379,17 +405,10 @@ TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
       back.handle(1);
     }
   });
-  BusExecutorOptions options;
-  options.timeout_ms = 300;
-  Optimiser opt(hub, options);
+  Optimiser opt(hub, short_timeout());
   ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
-  const Task& t = task();
-  ObservationEStepOptions remote;
-  remote.executor = opt.executor;
-  const ObservationEStep there(t.task.mdp, t.observed, t.prior, remote);
-  const ObservationModel model = dirichlet_mean(t.prior);
-  const SoftSolution policy = soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights));
-  const EStepStatistics here = ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5);
+  const RemoteAndLocal r(opt.executor);
+  const auto& [there, model, policy, here] = r;
   for (int pass = 0; pass < 8 && missing.worker().blocks_computed() == 0; ++pass) {
     EXPECT_EQ(there.statistics(policy, model, 5).counts, here.counts) << pass;
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its heartbeat comes
@@ -767,6 +786,35 @@ TEST(EStepService, LateWorkerGetsItsShare) {
   EXPECT_LT(early.worker().trajectories_held(), 40);
   EXPECT_EQ(early.worker().trajectories_held() + late.worker().trajectories_held(), 40);
   EXPECT_EQ(opt.executor->stats().local_blocks, 0);
+}
+
+// A worker that cannot hold the blocks it is sent (here: its --max-dataset-mb is one byte)
+// stops being given them: every pass is still the one-process pass bit for bit, the
+// blocks end up with the worker that can hold them, and after the first passes no block is
+// re-asked (before, each of its heartbeats earned it one block again, which cost the next
+// pass a timeout and a second attempt).
+TEST(EStepService, BlocksAWorkerCannotHoldGoToAnother) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread able(hub, "sampler-a");
+  testing::WorkerThread small(hub, "sampler-b", -1, false, 1);
+  Optimiser opt(hub, short_timeout());
+  ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
+  const RemoteAndLocal r(opt.executor);
+  const auto& [there, model, policy, here] = r;
+  // Each heartbeat (one a second) makes the silent worker eligible for one block again.
+  BusBlockExecutor::Stats before;
+  for (int pass = 0; pass < 12; ++pass) {
+    if (pass == 8) before = opt.executor->stats();
+    const EStepStatistics s = there.statistics(policy, model, 5);
+    EXPECT_EQ(s.counts, here.counts) << pass;
+    EXPECT_EQ(s.log_likelihood, here.log_likelihood) << pass;
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));  // heartbeats come
+  }
+  const BusBlockExecutor::Stats after = opt.executor->stats();
+  EXPECT_EQ(small.worker().trajectories_held(), 0);
+  EXPECT_EQ(able.worker().trajectories_held(), 40);
+  EXPECT_EQ(after.local_blocks, before.local_blocks) << "the last passes computed nothing here";
+  EXPECT_EQ(after.retried_blocks, before.retried_blocks) << "the last passes re-asked nothing";
 }
 
 void each_worker_is_sent_only_its_share(std::int64_t window) {

@@ -47,8 +47,9 @@ class ServiceThread {
 // like a process killed with SIGKILL.
 class WorkerThread {
  public:
-  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1, bool lying = false)
-      : bus_(std::move(hub)), counters_(quiet(id)), worker_(bus_, id, counters_) {
+  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1, bool lying = false,
+               std::int64_t max_dataset_bytes = SamplerWorker::kDefaultMaxDatasetBytes)
+      : bus_(std::move(hub)), counters_(quiet(id)), worker_(bus_, id, counters_, max_dataset_bytes) {
     if (lying) worker_.lie_for_testing();
     thread_ = std::thread([this, die_after] {
       while (!stop_) {

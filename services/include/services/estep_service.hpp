@@ -148,6 +148,13 @@ class BusBlockExecutor final : public BlockExecutor {
     bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
     bool checked = false;      // one of its answers matched the optimiser's own computation
+    // Blocks sent to it that it did not hold when its attempt ended (lost on the way, or
+    // refused: over its --max-dataset-mb, a digest that did not match), and those it failed
+    // to hold twice: they go to other workers (for this data set, and for a minute after the
+    // last such failure, lest a lossy start keep a worker out for good).
+    std::map<std::uint64_t, int> unheld;
+    std::set<std::uint64_t> cannot_hold;
+    std::chrono::steady_clock::time_point last_unheld;
   };
   void on_status(const hbirl::service_status_t& m) const;
   void on_result(const hbirl::estep_result_t& m) const;
