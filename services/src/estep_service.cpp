@@ -312,6 +312,7 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     ++stats_.duplicates;
     return;
   }
+  if (m.worker.empty()) throw InputError("estep_result.worker", "is empty");
   if (!assigned_[static_cast<size_t>(m.block)].count(m.worker)) {  // only the worker given the block is believed
     ++stats_.unassigned;
     throw InputError("estep_result.worker", "'" + m.worker + "' was not given block " + std::to_string(m.block));
@@ -413,8 +414,9 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
 // block, and no more of them than there are proven ones: heartbeats from processes that
 // never answer (a crashed build, a forger) cost a pass one timeout, not the whole pass.
 // A block a worker failed to hold twice goes to another (none can: computed here), and a
-// worker that failed to hold two and holds none gets nothing: a block it cannot hold would
-// cost every pass it is given in a timeout (Worker::cannot_hold).
+// worker that failed to hold two and holds none gets nothing -- a block it cannot hold would
+// cost every pass it is given in a timeout -- for this data set, or until a minute passes
+// without such a failure (Worker::cannot_hold).
 std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& todo, std::vector<std::string> workers) const {
   for (const auto& w : workers) {  // failures to hold are forgotten a minute after the last
     Worker& x = workers_.at(w);
@@ -440,9 +442,9 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
   std::vector<int> rest = todo;
   if (!proven.empty()) {
     unproven.resize(std::min(unproven.size(), proven.size()));
-    for (const auto& w : unproven) {  // the block it has, else the last one it can hold
+    for (const auto& w : unproven) {  // the block it has, else the last one; either one it can hold
       if (rest.empty()) break;
-      auto pick = std::find_if(rest.begin(), rest.end(), [&](int b) { return owner_[static_cast<size_t>(b)] == w; });
+      auto pick = std::find_if(rest.begin(), rest.end(), [&](int b) { return owner_[static_cast<size_t>(b)] == w && can_hold(w, b); });
       if (pick == rest.end()) {
         const auto last = std::find_if(rest.rbegin(), rest.rend(), [&](int b) { return can_hold(w, b); });
         if (last == rest.rend()) continue;
@@ -453,10 +455,9 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
     }
     workers = proven;
   }
-  if (workers.empty()) return out;
   const size_t n = workers.size();
   std::map<std::string, size_t> share, given;  // even shares, the first ones one larger
-  for (size_t k = 0; k < n; ++k) share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);
+  for (size_t k = 0; k < n; ++k) share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);  // none: all loose
   std::vector<int> loose;
   for (int b : rest) {
     const std::string& owner = owner_[static_cast<size_t>(b)];
@@ -653,7 +654,10 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     ++stats_.attempts;
     request.attempt = attempt;
     request.assigned_worker = assignment(todo, workers);
-    for (int b : todo) assigned_[static_cast<size_t>(b)].insert(request.assigned_worker[static_cast<size_t>(b)]);
+    for (int b : todo) {  // a block given to nobody (none can hold it) is computed here: no answer to it is believed
+      const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
+      if (!w.empty()) assigned_[static_cast<size_t>(b)].insert(w);
+    }
     send_blocks(estep, todo, request.assigned_worker);
     publish(bus_, channels::kEStepRequest, request, counters_);
     if (attempt == 0 && options_.spot_check) {  // computed here while the workers compute the rest
@@ -691,10 +695,14 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     for (int b : missing()) {
       const std::string& w = request.assigned_worker[static_cast<size_t>(b)];
       if (w.empty() || queued.count(w)) continue;
-      // Sent and still not held: counted; twice, and the block goes to others.
+      // Sent, and a heartbeat since that says it is not held: counted; twice, and the block
+      // goes to others. (A worker busy computing sends no heartbeat: no strike. A name whose
+      // answers are doubted is not judged by what may be a forger's heartbeats.)
       Worker& x = workers_[w];
       const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
-      if (x.sent.count(digest) && !x.held.count(digest)) {
+      const auto sent = x.sent.find(digest);
+      if (sent != x.sent.end() && x.last_seen > sent->second.when && !x.held.count(digest) && !doubted_.count(w) &&
+          !x.distrusted) {
         x.last_unheld = Clock::now();
         if (++x.unheld[digest] >= 2) x.cannot_hold.insert(digest);
       }

@@ -57,7 +57,12 @@ int SamplerWorker::handle(int timeout_ms) {
   return handled;
 }
 
+void SamplerWorker::status_soon() {
+  next_status_ = std::min(next_status_, std::max(Clock::now(), last_status_ + std::chrono::milliseconds(100)));
+}
+
 void SamplerWorker::publish_status(const std::string& state) {
+  last_status_ = Clock::now();
   hbirl::service_status_t s{};
   s.utime = wall_utime();
   s.service = "sampler";
@@ -120,6 +125,7 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
   if (bytes_ + need > max_dataset_bytes_) {
     release(digest);
     incoming_.erase(digest);
+    status_soon();
     throw InputError("trajectory", "the blocks would take more than --max-dataset-mb " + std::to_string(max_dataset_bytes_ >> 20) +
                                        " MB: this block is dropped");
   }
@@ -133,6 +139,7 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
   incoming_.erase(digest);
   if (dataset_digest(all) != digest) {
     release(digest);
+    status_soon();
     throw InputError("trajectory.block_digest", "does not match the block's trajectories received");
   }
   held_.emplace(digest, std::move(all));

@@ -16,7 +16,8 @@
 //                  a worker that dies go to the others, who are sent just those.
 //   STATUS         every service, about once a second: service_status_t; a sampler's
 //                  carries its MDP's digest and the digests of the blocks it holds (a
-//                  block it was sent but does not hold is sent again).
+//                  block it was sent but does not hold is sent again; one a heartbeat after
+//                  its sending said it did not hold, twice, goes to another worker).
 //   ESTEP_REQUEST  optimiser -> workers: request id, attempt, the policy and the
 //                  observation model, which worker computes which block, and each
 //                  block's digest.

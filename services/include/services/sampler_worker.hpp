@@ -94,6 +94,10 @@ class SamplerWorker {
   std::int64_t status_seq_ = 0;
   bool lying_ = false;
   std::chrono::steady_clock::time_point next_status_{};
+  std::chrono::steady_clock::time_point last_status_{};
+  // The next heartbeat within 100 ms of the last (not one per message: junk cannot make it
+  // a flood): after a block is refused, so that the optimiser stops waiting for it.
+  void status_soon();
   Subscriptions subs_;  // last: ends first
 };
 
