@@ -428,8 +428,8 @@ std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& to
   const auto can_hold = [this](const std::string& w, int b) {
     return !workers_.at(w).cannot_hold.count(block_digests_[static_cast<size_t>(b)]);
   };
-  // A worker that failed to hold two blocks and holds none gets no more (for this data set):
-  // each block it is given would cost the pass a timeout.
+  // A worker that failed to hold two blocks and holds none gets no more (for this data set,
+  // or until the minute above passes): each block it is given would cost the pass a timeout.
   workers.erase(std::remove_if(workers.begin(), workers.end(),
                                [this](const std::string& w) {
                                  const Worker& x = workers_.at(w);
