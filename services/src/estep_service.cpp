@@ -167,10 +167,7 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) const {
   current_blocks_ = std::set<std::uint64_t>(block_digests_.begin(), block_digests_.end());
   data_digest_ = dataset_digest(estep.trajectories());
   if (owner_.size() != block_digests_.size()) owner_.assign(block_digests_.size(), std::string());
-  for (auto& [id, w] : workers_) {  // what a worker could not hold was of the last data set
-    w.unheld.clear();
-    w.cannot_hold.clear();
-  }
+  for (auto& [id, w] : workers_) w.unheld.clear();  // what a worker could not hold was of the last data set
 }
 
 // Each block of `todo` is queued for the worker `assigned` to it, unless that worker holds
@@ -416,24 +413,21 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
 // A block a worker failed to hold twice goes to another (none can: computed here), and a
 // worker that failed to hold two and holds none gets nothing -- a block it cannot hold would
 // cost every pass it is given in a timeout -- for this data set, or until a minute passes
-// without such a failure (Worker::cannot_hold).
+// without such a failure (Worker::unheld).
 std::vector<std::string> BusBlockExecutor::assignment(const std::vector<int>& todo, std::vector<std::string> workers) const {
   for (const auto& w : workers) {  // failures to hold are forgotten a minute after the last
     Worker& x = workers_.at(w);
-    if (!x.unheld.empty() && Clock::now() - x.last_unheld > std::chrono::minutes(1)) {
-      x.unheld.clear();
-      x.cannot_hold.clear();
-    }
+    if (!x.unheld.empty() && Clock::now() - x.last_unheld > std::chrono::minutes(1)) x.unheld.clear();
   }
   const auto can_hold = [this](const std::string& w, int b) {
-    return !workers_.at(w).cannot_hold.count(block_digests_[static_cast<size_t>(b)]);
+    return workers_.at(w).can_hold(block_digests_[static_cast<size_t>(b)]);
   };
   // A worker that failed to hold two blocks and holds none gets no more (for this data set,
   // or until the minute above passes): each block it is given would cost the pass a timeout.
   workers.erase(std::remove_if(workers.begin(), workers.end(),
                                [this](const std::string& w) {
                                  const Worker& x = workers_.at(w);
-                                 return x.cannot_hold.size() >= 2 && x.held.empty();
+                                 return x.blocks_it_cannot_hold() >= 2 && x.held.empty();
                                }),
                 workers.end());
   std::vector<std::string> proven, unproven;
@@ -704,7 +698,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       if (sent != x.sent.end() && x.last_seen > sent->second.when && !x.held.count(digest) && !doubted_.count(w) &&
           !x.distrusted) {
         x.last_unheld = Clock::now();
-        if (++x.unheld[digest] >= 2) x.cannot_hold.insert(digest);
+        ++x.unheld[digest];
       }
       // Workers that left blocks unanswered get no more work until they are heard from again.
       if (answered_.count(w)) continue;

@@ -30,6 +30,7 @@
 // and ignored. A worker answers a block once it holds the trajectories of its digest.
 // Here: the messages both sides share and the optimiser's side (BusBlockExecutor); the
 // workers' side is sampler_worker.hpp.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -149,13 +150,19 @@ class BusBlockExecutor final : public BlockExecutor {
     bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
     bool checked = false;      // one of its answers matched the optimiser's own computation
-    // Blocks sent to it that it did not hold when its attempt ended (lost on the way, or
-    // refused: over its --max-dataset-mb, a digest that did not match), and those it failed
-    // to hold twice: they go to other workers (for this data set, and for a minute after the
+    // Per block sent to it: how many heartbeats after its sending said it was not held (lost
+    // on the way, or refused: over its --max-dataset-mb, a digest that did not match). Twice,
+    // and the block goes to other workers (for this data set, and for a minute after the
     // last such failure, lest a lossy start keep a worker out for good).
     std::map<std::uint64_t, int> unheld;
-    std::set<std::uint64_t> cannot_hold;
     std::chrono::steady_clock::time_point last_unheld;
+    bool can_hold(std::uint64_t digest) const {
+      const auto it = unheld.find(digest);
+      return it == unheld.end() || it->second < 2;
+    }
+    int blocks_it_cannot_hold() const {
+      return static_cast<int>(std::count_if(unheld.begin(), unheld.end(), [](const auto& u) { return u.second >= 2; }));
+    }
   };
   void on_status(const hbirl::service_status_t& m) const;
   void on_result(const hbirl::estep_result_t& m) const;
