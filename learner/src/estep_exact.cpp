@@ -43,9 +43,41 @@ double log_sum_exp_row(const SparseRowMatrix& log_w, int row, const double* v) {
   return m + std::log(sum);
 }
 
+// out = M x for a sparse row-major M, each row summed in four interleaved partial sums:
+// the rows here are short (a state's predecessors, a pair's successors) and a single
+// running sum would wait on every addition. The order is fixed: the same bits always.
+void sparse_times(const SparseRowMatrix& m, const double* x, double* out) {
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  const double* v = m.valuePtr();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    int j = outer[i];
+    const int end = outer[i + 1];
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (; j + 4 <= end; j += 4) {
+      s0 += v[j] * x[inner[j]];
+      s1 += v[j + 1] * x[inner[j + 1]];
+      s2 += v[j + 2] * x[inner[j + 2]];
+      s3 += v[j + 3] * x[inner[j + 3]];
+    }
+    for (; j < end; ++j) s0 += v[j] * x[inner[j]];
+    out[i] = (s0 + s1) + (s2 + s3);
+  }
+}
+
 // Below this, a row of M exp(x - max) may have lost terms to underflow (exp_in_place
 // drops what is under 1e-300): such rows are summed again in log space.
 constexpr double kUnderflowFloor = 1e-250;
+
+// The scaled passes (ExactEngine::scaled_passes): an entry of a forward message under
+// kDropped may have lost precision or underflowed; the passes give way to the log-space
+// ones when the mass that can have been lost reaches exp(kLogNegligible) of the kept, or
+// a backward message exceeds kMaxScaledBackward. Emissions of pairs the forward message
+// does not reach are capped at exp(kMaxScaledSpread) times the step's scale.
+constexpr double kDropped = 1e-300;
+constexpr double kLogNegligible = -69.0;  // ~1e-30
+constexpr double kMaxScaledSpread = 600.0;
+constexpr double kMaxScaledBackward = 1e250;
 
 // out = log(M exp(x)) for a sparse non-negative M (log_m: its logs, same pattern),
 // computed as exp(x - max) -> sparse product -> log + max: vectorised. A row whose sum
@@ -101,16 +133,20 @@ EStepStatistics& EStepStatistics::operator+=(const EStepStatistics& other) {
 
 ExactEngine::ExactEngine(const Mdp& mdp) : mdp_(mdp) {
   incoming_ = mdp.transitions.transpose();
-  log_transitions_ = mdp.transitions;
-  for (Eigen::Index j = 0; j < log_transitions_.nonZeros(); ++j) {
-    log_transitions_.valuePtr()[j] = std::log(log_transitions_.valuePtr()[j]);
-  }
-  log_incoming_ = log_transitions_.transpose();
-  log_start_ = mdp.start.array().log();
   marginal_.resize(mdp.num_pairs());
   ratio_.resize(mdp.num_pairs());
   scratch_.resize(mdp.num_states);
   shift_.resize(mdp.num_pairs());
+}
+
+void ExactEngine::prepare_log_space() {
+  if (log_start_.size() == mdp_.num_states) return;
+  log_transitions_ = mdp_.transitions;
+  for (Eigen::Index j = 0; j < log_transitions_.nonZeros(); ++j) {
+    log_transitions_.valuePtr()[j] = std::log(log_transitions_.valuePtr()[j]);
+  }
+  log_incoming_ = log_transitions_.transpose();
+  log_start_ = mdp_.start.array().log();
 }
 
 void ExactEngine::mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n) {
@@ -149,6 +185,116 @@ double ExactEngine::forward_backward(const SoftSolution& policy, const Observati
 }
 
 double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {
+  const double ll = scaled_passes(policy, trajectory, with_backward);
+  scaled_ = !std::isnan(ll);
+  return scaled_ ? ll : log_passes(policy, trajectory, with_backward);
+}
+
+double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const int T = trajectory.length();
+  const int S = mdp_.num_states;
+  const int A = mdp_.num_actions;
+  const int P = mdp_.num_pairs();
+  const Eigen::VectorXd& pi = policy.policy;  // 0 on impossible pairs and terminal states
+  // Forward: a_t(r) = d_t(s) pi(r) e_t(r) exp(-m_t) with d_t = T^T alpha_hat_{t-1} (the start
+  // distribution at t = 0), c_t = sum_r a_t(r), alpha_hat_t = a_t / c_t; then
+  // log Pr(observations up to t) = sum_u (m_u + log c_u).
+  //
+  // What linear space can lose: entries of a_t under kDropped (products that underflow,
+  // emissions exp_in_place flushes), each truly below kDropped. lost_[t] bounds, in units
+  // of alpha_hat_t, all the forward mass lost up to t: what was lost before grows at most
+  // by exp(reach_t - m_t) / c_t per step (reach_t: the largest log emission over every
+  // pair the policy can take, which a lost path may have reached), and P kDropped / c_t
+  // joins it at a step that has a small entry.
+  alpha_hat_.resize(T, P);
+  emission_.resize(T, P);
+  scale_.resize(T);
+  lost_.resize(T);
+  prior_.resize(P);
+  row_.resize(P);
+  double ll = 0.0;
+  double log_lost = kNegInf;
+  for (int t = 0; t < T; ++t) {
+    if (t == 0) {
+      scratch_ = mdp_.start;
+    } else {
+      sparse_times(incoming_, alpha_hat_.row(t - 1).data(), scratch_.data());
+    }
+    // Per pair: d_t(s) pi(a|s), which is 0 on terminal states (pi is).
+    Eigen::Map<Eigen::MatrixXd>(prior_.data(), A, S) =
+        Eigen::Map<const Eigen::MatrixXd>(pi.data(), A, S) * scratch_.asDiagonal();
+    // m_t: the largest log emission among the pairs the forward message reaches.
+    const auto log_e = log_emission_.row(t).transpose().array();
+    double m = kNegInf;
+    double reach = kNegInf;
+    for (int r = 0; r < P; ++r) {
+      const double x = log_e[r];
+      const double if_reached = prior_[r] > 0.0 ? x : kNegInf;
+      const double if_possible = pi[r] > 0.0 ? x : kNegInf;
+      m = m < if_reached ? if_reached : m;
+      reach = reach < if_possible ? if_possible : reach;
+    }
+    if (reach == kNegInf) return kNegInf;  // no pair can emit this step's observations
+    if (m == kNegInf) return log_lost == kNegInf ? kNegInf : kNaN;
+    // Emissions of pairs the message does not reach are capped: they only meet zeros
+    // (unless mass was lost, which the bound below catches).
+    auto emission = emission_.row(t);
+    emission = (log_e - m).min(kMaxScaledSpread).transpose();
+    exp_in_place(emission);
+    auto a = alpha_hat_.row(t);
+    a = prior_.transpose().cwiseProduct(emission);
+    const double c = a.sum();
+    const bool small = ((pi.array() > 0.0) && (a.transpose().array() < kDropped)).any();
+    if (c == 0.0) return log_lost == kNegInf && !small ? kNegInf : kNaN;
+    if (!(c >= kUnderflowFloor)) return kNaN;
+    const double carried = log_lost + (reach - m);
+    const double dropped = small ? std::log(P * kDropped) : kNegInf;
+    log_lost = std::max(carried, dropped) + std::log1p(std::exp(-std::abs(carried - dropped))) - std::log(c);
+    if (std::isnan(log_lost)) log_lost = kNegInf;  // both -inf
+    if (!(log_lost <= kLogNegligible)) return kNaN;
+    a /= c;
+    scale_[t] = c;
+    lost_[t] = log_lost;
+    ll += m + std::log(c);
+  }
+  // The last step's backward message: 1, or Pr(next state is terminal | r) when the
+  // trajectory is known to have ended by entering a terminal state.
+  beta_hat_.resize(T, P);
+  if (trajectory.ends_in_terminal) {
+    for (int s = 0; s < S; ++s) scratch_[s] = mdp_.is_terminal(s) ? 1.0 : 0.0;
+    beta_hat_.row(T - 1).noalias() = (mdp_.transitions * scratch_).transpose();
+  } else {
+    beta_hat_.row(T - 1).setOnes();
+  }
+  normaliser_ = alpha_hat_.row(T - 1).dot(beta_hat_.row(T - 1));
+  if (normaliser_ == 0.0) return log_lost == kNegInf ? kNegInf : kNaN;
+  // The lost mass against the kept at the last step (beta_hat <= 1 there).
+  if (!(normaliser_ >= kUnderflowFloor) || !(lost_[T - 1] - std::log(normaliser_) <= kLogNegligible)) return kNaN;
+  ll += std::log(normaliser_);
+  if (!with_backward) return ll;
+  // Backward: beta_hat_t(r) = sum_s' T(s'|r) g(s') / c_{t+1},
+  //           g(s') = sum_a' pi(a'|s') e_{t+1}(s',a') beta_hat_{t+1}(s',a'),
+  // so that alpha_hat_t beta_hat_t / normaliser_ is the marginal at every step.
+  for (int t = T - 2; t >= 0; --t) {
+    prior_ = pi.cwiseProduct(emission_.row(t + 1).transpose()).cwiseProduct(beta_hat_.row(t + 1).transpose());
+    scratch_ = Eigen::Map<const Eigen::MatrixXd>(prior_.data(), A, S).colwise().sum().transpose();
+    sparse_times(mdp_.transitions, scratch_.data(), row_.data());
+    row_ /= scale_[t + 1];
+    // Lost forward mass meets these messages at step t: it must stay negligible against
+    // the marginals' total (normaliser_), and the messages within the double range.
+    const double largest = row_.maxCoeff();
+    if (!(largest <= kMaxScaledBackward) ||
+        !(lost_[t] + std::log(std::max(largest, 1.0)) - std::log(normaliser_) <= kLogNegligible)) {
+      return kNaN;
+    }
+    beta_hat_.row(t) = row_.transpose();
+  }
+  return ll;
+}
+
+double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {
+  prepare_log_space();
   const int T = trajectory.length();
   const int S = mdp_.num_states;
   const int A = mdp_.num_actions;
@@ -218,6 +364,10 @@ double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory&
 }
 
 void ExactEngine::marginal(int t, double log_likelihood) {
+  if (scaled_) {
+    marginal_ = (alpha_hat_.row(t).array() * beta_hat_.row(t).array()).transpose() / normaliser_;
+    return;
+  }
   // -inf (alpha or beta) gives exactly 0; beta is never +inf.
   marginal_ = (log_alpha_.row(t).array() + log_beta_.row(t).array() - log_likelihood).transpose();
   exp_in_place(marginal_);

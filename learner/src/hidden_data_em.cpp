@@ -58,6 +58,7 @@ class EmMap {
       return step;
     }
     CausalLikelihood objective(mdp_, step.e.counts, options_.l2, options_.soft_vi);
+    objective.warm_start(solver_.solution());  // the E-step solved at x.theta, where the M-step starts
     const Objective f = [&objective](const Eigen::VectorXd& t, Eigen::VectorXd& g) { return objective.evaluate(t, &g); };
     step.m = maximize(f, x.theta, options_.optimizer);
     step.next.theta = step.m.x;

@@ -16,7 +16,8 @@ constexpr double kWorkingPrecision = 1e-6;
 
 struct LbfgsContext {
   const Objective* f = nullptr;
-  Eigen::VectorXd x;
+  Eigen::VectorXd x;  // the last evaluation: point, value and gradient
+  double value = 0.0;
   Eigen::VectorXd gradient;
   int evaluations = 0;
   int iterations = 0;
@@ -29,6 +30,7 @@ lbfgsfloatval_t lbfgs_evaluate(void* instance, const lbfgsfloatval_t* x, lbfgsfl
   auto* ctx = static_cast<LbfgsContext*>(instance);
   ctx->x = Eigen::Map<const Eigen::VectorXd>(x, n);
   const double value = (*ctx->f)(ctx->x, ctx->gradient);
+  ctx->value = value;
   ++ctx->evaluations;
   if (value > ctx->best_value) {
     ctx->best_value = value;
@@ -62,12 +64,19 @@ const char* lbfgs_status(int code) {
   }
 }
 
-// Evaluate f at result.x and fill the value, gradient norm and convergence flag.
-void finish(const Objective& f, OptimizeResult& result, const OptimizerOptions& options) {
-  Eigen::VectorXd gradient(result.x.size());
-  result.value = f(result.x, gradient);
-  ++result.evaluations;
-  result.gradient_norm = gradient.norm();
+// Fill the value, gradient norm and convergence flag at result.x, from the last
+// evaluation when that was at result.x (else by evaluating f there).
+void finish(const Objective& f, OptimizeResult& result, const OptimizerOptions& options,
+            const LbfgsContext* last = nullptr) {
+  if (last != nullptr && last->evaluations > 0 && last->x == result.x) {
+    result.value = last->value;
+    result.gradient_norm = last->gradient.norm();
+  } else {
+    Eigen::VectorXd gradient(result.x.size());
+    result.value = f(result.x, gradient);
+    ++result.evaluations;
+    result.gradient_norm = gradient.norm();
+  }
   result.converged =
       result.converged ||
       result.gradient_norm <= options.gradient_tolerance * std::max(1.0, result.x.norm());
@@ -116,7 +125,7 @@ OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0,
   result.converged =
       code == LBFGS_SUCCESS || code == LBFGS_STOP || code == LBFGS_ALREADY_MINIMIZED;
   result.status = lbfgs_status(code);
-  finish(f, result, options);
+  finish(f, result, options, &ctx);
   // Near the optimum the objective stops changing in double precision before the
   // gradient reaches a tight tolerance, and the line search gives up. That is the best
   // attainable point when the gradient is already small.

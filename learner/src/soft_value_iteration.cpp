@@ -118,12 +118,18 @@ const SoftSolution& SoftBellmanSolver::solve(const Eigen::VectorXd& reward) {
   return sol;
 }
 
+void SoftBellmanSolver::warm_start(const Eigen::VectorXd& value) {
+  if (value.size() != mdp_.num_states || !value.allFinite()) return;
+  solution_.value = value;
+  has_solution_ = true;
+}
+
 Eigen::VectorXd SoftBellmanSolver::solve_adjoint(const Eigen::VectorXd& rhs) {
   if (!policy_matrix_current_) {
     policy_matrix_.set_policy(solution_.policy);
     policy_matrix_current_ = true;
   }
-  Eigen::VectorXd x = rhs;
+  Eigen::VectorXd x = has_adjoint_ ? adjoint_ : rhs;
   if (!policy_matrix_.solve_transposed(rhs, x)) {
     // Fall back to the Neumann series x = sum_t (gamma P_pi^T)^t rhs, which converges
     // for gamma < 1; slow but certain.
@@ -137,6 +143,8 @@ Eigen::VectorXd SoftBellmanSolver::solve_adjoint(const Eigen::VectorXd& rhs) {
       if (change <= 1e-14 * std::max(1.0, x.lpNorm<Eigen::Infinity>())) break;
     }
   }
+  has_adjoint_ = x.allFinite();
+  if (has_adjoint_) adjoint_ = x;
   return x;
 }
 

@@ -13,6 +13,7 @@ namespace {
 TEST(ExactEngine, EqualsBruteForceEnumeration) {
   Rng rng(2024);
   int ends_tested = 0;
+  int scaled = 0;
   for (int trial = 0; trial < 60; ++trial) {
     const testing::TinyProblem p = testing::tiny_problem(trial, rng);
     const testing::BruteForce truth = testing::brute_force(p.mdp, p.policy, p.model, p.trajectory);
@@ -21,6 +22,7 @@ TEST(ExactEngine, EqualsBruteForceEnumeration) {
     ends_tested += p.trajectory.ends_in_terminal;
     ExactEngine engine(p.mdp);
     const TrajectoryPosterior post = engine.posterior(p.policy, p.model, p.trajectory);
+    scaled += engine.last_passes_scaled();
     EXPECT_NEAR(post.log_likelihood, std::log(truth.likelihood), 1e-9) << "trial " << trial;
     EXPECT_LT((post.marginals - truth.marginals).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
     if (p.trajectory.num_observations() > 0) {
@@ -36,6 +38,7 @@ TEST(ExactEngine, EqualsBruteForceEnumeration) {
     }
   }
   EXPECT_GE(ends_tested, 3);  // trajectories known to end in a terminal state were covered
+  EXPECT_GE(scaled, 40);       // mostly by the scaled passes (RowsFarBelowTheMaximumStayExact covers the others)
 }
 
 // Thousands of observations per step and long trajectories: a direct product of the
@@ -74,14 +77,18 @@ double reference_lse(const std::vector<double>& x) {
 
 // Heavy observations (weights in the hundreds, as merged repeats give) make the steps'
 // log emissions differ by thousands between pairs, so states fall e^-1000 below others
-// and become likely again later: the engine's vectorised sums must then recompute the
-// rows that underflow. Against a plain log-space forward-backward, every row summed by
-// its own log-sum-exp, on random MDPs (terminal states, impossible actions,
-// deterministic transitions).
+// and become likely again later: the engine must then leave its scaled linear-space
+// passes for the log-space ones, whose vectorised sums recompute the rows that
+// underflow. Lighter ones (the second half of the trials) spread tens to hundreds of
+// nats, where the scaled passes must be exact by themselves. Against a plain log-space
+// forward-backward, every row summed by its own log-sum-exp, on random MDPs (terminal
+// states, impossible actions, deterministic transitions).
 TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
   Rng rng(77);
   int extreme = 0;
-  for (int trial = 0; trial < 40; ++trial) {
+  int scaled = 0;
+  for (int trial = 0; trial < 80; ++trial) {
+    const bool heavy = trial < 40;
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = 4 + trial % 7;
     o.actions = 2 + trial % 3;
@@ -101,7 +108,7 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
     for (int t = 0; t < T; ++t) {
       for (int i = rng.uniform_int(3); i > 0; --i) {
         tr.symbols.push_back(rng.uniform_int(symbols));
-        tr.weights.push_back(50.0 + rng.uniform_int(900));
+        tr.weights.push_back(heavy ? 50.0 + rng.uniform_int(900) : 1.0 + rng.uniform_int(60));
       }
       tr.step_begin.push_back(static_cast<int>(tr.symbols.size()));
     }
@@ -153,9 +160,10 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
     }
     const double ll = reference_lse(la[T - 1]);
     ASSERT_TRUE(std::isfinite(ll)) << "trial " << trial;
-    extreme += spread > 1000.0;
+    extreme += heavy && spread > 1000.0;
     ExactEngine engine(mdp);
     const TrajectoryPosterior post = engine.posterior(policy, model, tr);
+    scaled += engine.last_passes_scaled();
     EXPECT_NEAR(post.log_likelihood, ll, 1e-12 * std::abs(ll)) << "trial " << trial;
     for (int t = 0; t < T; ++t) {
       for (int r = 0; r < P; ++r) {
@@ -164,7 +172,48 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
       }
     }
   }
-  EXPECT_GE(extreme, 20);  // most trials had log emissions more than 1000 apart within a step
+  EXPECT_GE(extreme, 20);  // most heavy trials had log emissions more than 1000 apart within a step
+  EXPECT_GE(scaled, 20);  // the scaled passes were exact by themselves in many
+}
+
+// Two states that keep to themselves (one action, deterministic self-loops), started
+// half and half. Step 0's observations favour A by 800 nats, so in linear space B's
+// forward probability underflows to 0; step 1's favour B by 1,600 nats, so B is in fact
+// the likely one. By hand: log Pr = log(0.5 e^{x_A} + 0.5 e^{x_B}) with x the summed log
+// emissions of each state's path, and B's marginal is 1 / (1 + e^{x_A - x_B}). The
+// engine must notice the mass it lost and go to log space.
+TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
+  const Mdp mdp = make_mdp(2, 1, 1, {{0, 0, 0, 1.0}, {1, 0, 1, 1.0}}, {{0, 0, 0, 1.0}},
+                           Eigen::Vector2d(0.5, 0.5), {}, 0.9);
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Zero(1)));
+  ObservationModel model;
+  model.subject.resize(2, 2);
+  model.subject << 0.9, 0.1,  // A mostly shows symbol 0
+      1e-4, 1.0 - 1e-4;       // B almost never
+  model.confounders.resize(0, 2);
+  ObservedTrajectory tr;
+  const double log_ratio = std::log(0.9 / 1e-4);           // nats per symbol-0 observation for A
+  const double w0 = 800.0 / log_ratio;                     // step 0: symbol 0, A ahead by 800 nats
+  const double w1 = 1600.0 / std::log((1.0 - 1e-4) / 0.1);  // step 1: symbol 1, B ahead by 1,600
+  tr.symbols = {0, 1};
+  tr.weights = {w0, w1};
+  tr.eta = RowMatrix::Ones(2, 1);
+  tr.step_begin = {0, 1, 2};
+  const double xa = w0 * std::log(0.9) + w1 * std::log(0.1);
+  const double xb = w0 * std::log(1e-4) + w1 * std::log(1.0 - 1e-4);
+  ASSERT_NEAR(xb - xa, 800.0, 1e-6);
+  const double ll = std::log(0.5) + xb + std::log1p(std::exp(xa - xb));
+  ExactEngine engine(mdp);
+  // The forward pass alone (held-out likelihoods) must notice it too.
+  EXPECT_NEAR(engine.log_likelihood(policy, model, tr), ll, 1e-9 * std::abs(xb));
+  EXPECT_FALSE(engine.last_passes_scaled());
+  const TrajectoryPosterior post = engine.posterior(policy, model, tr);
+  EXPECT_FALSE(engine.last_passes_scaled());
+  EXPECT_NEAR(post.log_likelihood, ll, 1e-9 * std::abs(xb));
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_NEAR(post.marginals(t, 1), 1.0, 1e-12) << t;  // B, the whole way
+    EXPECT_NEAR(post.marginals(t, 0), 0.0, 1e-12) << t;
+  }
 }
 
 TEST(ExactEngine, ImpossibleObservationsGiveMinusInfinity) {

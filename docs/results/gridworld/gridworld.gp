@@ -1,4 +1,4 @@
-# Written by hbirl; run `gnuplot /tmp/gw/gridworld.gp` to redraw.
+# Written by hbirl; run `gnuplot docs/results/gridworld/gridworld.gp` to redraw.
 $m0 << EOD
 0 0.158338 0.0292691
 1 0.158338 0.0292691
@@ -18,25 +18,25 @@ $m1 << EOD
 7 2.21192 1.82464
 9 8.97977 11.4942
 11 21.0591 19.5373
-13 33.1882 22.2612
-15 47.275 26.8216
+13 38.6622 24.3432
+15 47.2647 26.8187
 EOD
 $m2 << EOD
 0 0.95591 1.06625
 1 0.930202 1.21157
-3 2.36242 2.34495
-5 5.07124 3.7525
-7 7.17677 4.82865
+3 2.36031 2.34506
+5 5.09026 3.75119
+7 7.15238 4.83061
 9 29.4933 15.6309
 11 46.7438 22.4439
 13 44.097 22.4922
-15 72.972 31.0868
+15 72.9723 31.0869
 EOD
 $m3 << EOD
 0 0.95591 1.06625
 1 0.946857 1.20979
 3 0.35725 0.231982
-5 2.6485 2.50903
+5 2.64757 2.50909
 7 2.85355 3.49676
 9 2.70323 4.82625
 11 3.92295 3.14466
@@ -45,14 +45,14 @@ $m3 << EOD
 EOD
 $m4 << EOD
 0 0.95591 1.06625
-1 198.287 45.6571
-3 268.867 40.1217
-5 302.627 34.3147
-7 345.331 22.0553
-9 334.371 26.5192
-11 368.252 0.293971
-13 362.578 11.3176
-15 357.052 15.8479
+1 209.62 45.3456
+3 263.31 40.8492
+5 297.812 35.5019
+7 339.538 24.4259
+9 334.476 26.5267
+11 368.238 0.29816
+13 362.576 11.3202
+15 345.856 22.0568
 EOD
 set title 'Gridworld: ILE vs confounding elements (65 runs per point, 95% CI)'
 set xlabel 'Number of confounding elements |E|'
@@ -68,14 +68,14 @@ set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
 set terminal pngcairo size 900,600 noenhanced font 'sans,11'
-set output '/tmp/gw/gridworld.png'
+set output 'docs/results/gridworld/gridworld.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Ignore CE'
 set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
-set output '/tmp/gw/gridworld.svg'
+set output 'docs/results/gridworld/gridworld.svg'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'True Observation Function', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'Uniform eta', \

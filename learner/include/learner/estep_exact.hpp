@@ -3,10 +3,13 @@
 // summed out,
 //   p(w | s,a) = eta(0) O_{s,a}(w) + sum_e eta(e) O_e(w),
 // so a trajectory is a chain over (s, a) pairs with emission prod_n p(w_n | s_t, a_t) at
-// step t, solved exactly by forward-backward. Everything is in log space: emissions are
-// sums of logs (thousands of observations per step cannot underflow), and the messages
-// combine with log-sum-exp over the sparse transitions, so deterministic transitions,
-// occluded steps (no observations: emission 1) and long trajectories are all exact.
+// step t, solved exactly by forward-backward. Emissions are sums of logs (thousands of
+// observations per step cannot underflow). The passes run in linear space with
+// Rabiner's scaling while a bound on what that can lose stays under 1e-30 of what is
+// kept, else in log space (log-sum-exp over the sparse transitions), so deterministic
+// transitions, occluded steps (no observations: emission 1), long trajectories and
+// evidence thousands of nats apart are all exact (docs/MODEL.md "The E-step on
+// observations").
 // The posteriors of Z and the expected counts alpha_dot follow in closed form from the
 // (s, a) marginals:
 //   Pr(Z = 0 | data) = sum_r gamma_t(r) eta(0) O_r(w) / p(w | r)
@@ -96,6 +99,9 @@ class ExactEngine {
   void accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
                   const KindEmissions& emissions, EStepStatistics& out, RowMatrix& kind_gamma,
                   std::vector<char>& seen, std::vector<int>& touched, bool watch = false);
+  // Whether the last trajectory went through the scaled passes (else the log-space ones);
+  // tests check that both are covered.
+  bool last_passes_scaled() const { return scaled_; }
 
  private:
   // Fills log_emission_, log_alpha_ and (with_backward) log_beta_; returns the
@@ -106,27 +112,45 @@ class ExactEngine {
   // from the kinds' table.
   void emissions(const ObservationModel& model, const ObservedTrajectory& trajectory);
   void emissions(const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of, const KindEmissions& table);
-  // Forward and backward passes over log_emission_; returns the log-likelihood.
+  // Forward and backward passes over log_emission_; returns the log-likelihood. The
+  // scaled passes when they are exact to rounding, else the log-space ones.
   double passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
+  // Rabiner's scaled forward-backward in linear space (docs/MODEL.md "The E-step on
+  // observations"): alpha_hat_, beta_hat_, emission_, scale_, normaliser_. NaN when a
+  // message would leave the range where that is exact (then log_passes decides).
+  double scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
+  // The same in log space (log_alpha_, log_beta_): exact for any spread of emissions.
+  double log_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
+  // The logs of the transitions and the start, made on the first need for log_passes
+  // (most engines, one per E-step block, never need them).
+  void prepare_log_space();
   // For a trajectory of log-likelihood ll (counted impossible if -inf): adds ll and the
   // marginals to `out`, calling per_observation(n) for each observation with marginal_
   // holding its step's marginals.
   template <typename PerObservation>
   void add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out, bool watch,
                      PerObservation&& per_observation);
-  // gamma_t = exp(log_alpha_t + log_beta_t - ll) into marginal_.
+  // gamma_t = alpha_t beta_t / Pr(observations) into marginal_.
   void marginal(int t, double log_likelihood);
   // p(w | r) of observation n for every pair, into row n of p_.
   void mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n);
 
   const Mdp& mdp_;
   SparseRowMatrix incoming_;         // S x (S*A), T transposed
-  SparseRowMatrix log_transitions_;  // (S*A) x S, log T
-  SparseRowMatrix log_incoming_;     // S x (S*A), log T transposed
-  Eigen::VectorXd log_start_;
+  SparseRowMatrix log_transitions_;  // (S*A) x S, log T (prepare_log_space)
+  SparseRowMatrix log_incoming_;     // S x (S*A), log T transposed (prepare_log_space)
+  Eigen::VectorXd log_start_;        // (prepare_log_space)
   RowMatrix log_emission_;           // T x (S*A)
   RowMatrix log_alpha_;
   RowMatrix log_beta_;
+  bool scaled_ = false;              // the last passes were the scaled ones
+  RowMatrix alpha_hat_;              // T x (S*A): Pr(r at t | observations up to t)
+  RowMatrix beta_hat_;               // T x (S*A): the backward messages over the later scales
+  RowMatrix emission_;               // T x (S*A): exp(log_emission_ - m_t)
+  Eigen::VectorXd scale_;            // c_t
+  Eigen::VectorXd lost_;             // log of a bound on the forward mass lost by step t, in units of alpha_hat_t
+  double normaliser_ = 1.0;          // sum_r alpha_hat_{T-1} beta_hat_{T-1}
+  Eigen::VectorXd prior_;            // per pair: d_t(s) pi(a|s) (forward); pi e beta_hat (backward)
   Eigen::VectorXd marginal_;
   RowMatrix p_;                      // one row per observation: p(w | r) per pair (kept for the posteriors)
   Eigen::ArrayXd ratio_;             // gamma / p of one observation

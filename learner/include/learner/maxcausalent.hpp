@@ -50,6 +50,9 @@ class CausalLikelihood {
   // Solve the next evaluation's soft Bellman equation from V = 0 (benchmarks use this to
   // time a cold evaluation; normally each solve starts from the previous one).
   void cold_start() { solver_.forget_warm_start(); }
+  // Solve the next evaluation's soft Bellman equation from this solution (one already
+  // solved at or near the next theta, e.g. by the E-step).
+  void warm_start(const SoftSolution& solution) { solver_.warm_start(solution.value); }
   double l2() const { return l2_; }
 
  private:

@@ -50,10 +50,17 @@ class SoftBellmanSolver {
 
   const SoftSolution& solve(const Eigen::VectorXd& reward);
   const SoftSolution& solution() const { return solution_; }
-  void forget_warm_start() { has_solution_ = false; }
+  void forget_warm_start() {
+    has_solution_ = false;
+    has_adjoint_ = false;
+  }
+  // Start the next solve from these values: another solver's solution at the same or a
+  // nearby reward (HiddenDataEM's M-step starts where its E-step solved).
+  void warm_start(const Eigen::VectorXd& value);
 
   // x = (I - gamma P_pi^T)^{-1} rhs for the policy of the last solve; entries for
-  // terminal states are meaningless (they multiply zero policy rows).
+  // terminal states are meaningless (they multiply zero policy rows). Starts from the
+  // last adjoint solution (an optimiser's consecutive points are near each other).
   Eigen::VectorXd solve_adjoint(const Eigen::VectorXd& rhs);
 
  private:
@@ -65,6 +72,8 @@ class SoftBellmanSolver {
   SoftViOptions options_;
   PolicyMatrix policy_matrix_;
   bool has_solution_ = false;
+  bool has_adjoint_ = false;
+  Eigen::VectorXd adjoint_;  // the last solve_adjoint's solution
   bool policy_matrix_current_ = false;
   SoftSolution solution_;
   Eigen::VectorXd v_new_;
