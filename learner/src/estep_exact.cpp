@@ -197,16 +197,21 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
   const int A = mdp_.num_actions;
   const int P = mdp_.num_pairs();
   const Eigen::VectorXd& pi = policy.policy;  // 0 on impossible pairs and terminal states
+  // A pair is possible when log pi > -inf: pi itself may have underflowed to 0.
+  const auto possible = policy.log_policy.array() > kNegInf;
   // Forward: a_t(r) = d_t(s) pi(r) e_t(r) exp(-m_t) with d_t = T^T alpha_hat_{t-1} (the start
   // distribution at t = 0), c_t = sum_r a_t(r), alpha_hat_t = a_t / c_t; then
   // log Pr(observations up to t) = sum_u (m_u + log c_u).
   //
   // What linear space can lose: entries of a_t under kDropped (products that underflow,
-  // emissions exp_in_place flushes), each truly below kDropped. lost_[t] bounds, in units
-  // of alpha_hat_t, all the forward mass lost up to t: what was lost before grows at most
-  // by exp(reach_t - m_t) / c_t per step (reach_t: the largest log emission over every
-  // pair the policy can take, which a lost path may have reached), and P kDropped / c_t
-  // joins it at a step that has a small entry.
+  // emissions exp_in_place flushes, priors d_t pi that round to 0), each truly below
+  // kDropped times its emission over the scale, exp(log e - m_t) <= exp(reach_t - m_t)
+  // (reach_t: the largest log emission over every pair the policy can take, which a lost
+  // path may have reached). lost_[t] bounds, in units of alpha_hat_t, all the forward mass
+  // lost up to t: what was lost before grows at most by exp(reach_t - m_t) / c_t per step,
+  // and P kDropped exp(reach_t - m_t) / c_t joins it at a step that has a small entry.
+  // Whatever looks impossible (nothing reached can emit, a zero sum) is left to the
+  // log-space passes, which are exact about it.
   alpha_hat_.resize(T, P);
   emission_.resize(T, P);
   scale_.resize(T);
@@ -231,12 +236,14 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
     for (int r = 0; r < P; ++r) {
       const double x = log_e[r];
       const double if_reached = prior_[r] > 0.0 ? x : kNegInf;
-      const double if_possible = pi[r] > 0.0 ? x : kNegInf;
+      const double if_possible = possible[r] ? x : kNegInf;
       m = m < if_reached ? if_reached : m;
       reach = reach < if_possible ? if_possible : reach;
     }
     if (reach == kNegInf) return kNegInf;  // no pair can emit this step's observations
-    if (m == kNegInf) return log_lost == kNegInf ? kNegInf : kNaN;
+    // Nothing reached can emit this step's observations: impossible, unless the pairs that
+    // can were reached by an underflowed product; the log-space passes tell which.
+    if (m == kNegInf) return kNaN;
     // Emissions of pairs the message does not reach are capped: they only meet zeros
     // (unless mass was lost, which the bound below catches).
     auto emission = emission_.row(t);
@@ -245,11 +252,13 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
     auto a = alpha_hat_.row(t);
     a = prior_.transpose().cwiseProduct(emission);
     const double c = a.sum();
-    const bool small = ((pi.array() > 0.0) && (a.transpose().array() < kDropped)).any();
-    if (c == 0.0) return log_lost == kNegInf && !small ? kNegInf : kNaN;
+    const bool small = (possible && (a.transpose().array() < kDropped)).any();
+    if (c == 0.0) return kNaN;
     if (!(c >= kUnderflowFloor)) return kNaN;
     const double carried = log_lost + (reach - m);
-    const double dropped = small ? std::log(P * kDropped) : kNegInf;
+    // A small entry is truly under kDropped times its emission over the scale, at most
+    // exp(reach - m) for a pair the message reached only by an underflowed product.
+    const double dropped = small ? std::log(P * kDropped) + (reach - m) : kNegInf;
     log_lost = std::max(carried, dropped) + std::log1p(std::exp(-std::abs(carried - dropped))) - std::log(c);
     if (std::isnan(log_lost)) log_lost = kNegInf;  // both -inf
     if (!(log_lost <= kLogNegligible)) return kNaN;
@@ -268,7 +277,7 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
     beta_hat_.row(T - 1).setOnes();
   }
   normaliser_ = alpha_hat_.row(T - 1).dot(beta_hat_.row(T - 1));
-  if (normaliser_ == 0.0) return log_lost == kNegInf ? kNegInf : kNaN;
+  if (normaliser_ == 0.0) return kNaN;  // impossible, or underflowed: the log-space passes tell
   // The lost mass against the kept at the last step (beta_hat <= 1 there).
   if (!(normaliser_ >= kUnderflowFloor) || !(lost_[T - 1] - std::log(normaliser_) <= kLogNegligible)) return kNaN;
   ll += std::log(normaliser_);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <cstdlib>
 
 #include "learner/input_error.hpp"
 #include "learner/maxcausalent.hpp"
@@ -175,10 +176,12 @@ bool squarem(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Rep
       report(s3);
       x = s3.next;
       previous = s3.objective;
-      if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
+      static const double grow = std::getenv("HBIRL_GROW") ? std::atof(std::getenv("HBIRL_GROW")) : 4.0;
+      if (a == -step_max) step_max = std::min(grow * step_max, kMaxStep);
     } else {
+      static const double shrink = std::getenv("HBIRL_SHRINK") ? std::atof(std::getenv("HBIRL_SHRINK")) : 4.0;
       x = s2.next;  // the extrapolation overshot: keep the plain EM step
-      step_max = std::max(1.0, step_max / 4.0);
+      step_max = std::max(1.0, step_max / shrink);
     }
   }
   return false;

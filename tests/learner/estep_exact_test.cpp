@@ -216,6 +216,109 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
   }
 }
 
+// One-step trajectories whose forward products underflow in linear space (found by a
+// review): a start probability times a policy probability below the smallest double, a
+// policy probability that is 0 while its log is finite, a terminal exit of probability
+// 1e-330. Each against log Pr = logsumexp_r [log d(s) + log pi(r) + log e(r) + log b(r)]
+// (b: the terminal exit's probability, or 1) and its softmax for the marginals.
+struct OneStepCase {
+  Mdp mdp;
+  SoftSolution policy;
+  ObservationModel model;
+  ObservedTrajectory trajectory;
+};
+
+void expect_one_step_exact(const OneStepCase& c, const char* name) {
+  const int P = c.mdp.num_pairs();
+  const int A = c.mdp.num_actions;
+  std::vector<double> terms(static_cast<size_t>(P), -INFINITY);
+  for (int r = 0; r < P; ++r) {
+    const int s = r / A;
+    if (c.mdp.is_terminal(s) || c.policy.log_policy[r] == -INFINITY) continue;
+    double log_e = 0.0;
+    for (int n = 0; n < c.trajectory.num_observations(); ++n) {
+      log_e += c.trajectory.weight(n) * std::log(c.model.subject(r, c.trajectory.symbols[static_cast<size_t>(n)]));
+    }
+    double exit = 1.0;
+    if (c.trajectory.ends_in_terminal) {
+      exit = 0.0;
+      for (int s2 = 0; s2 < c.mdp.num_states; ++s2) {
+        if (c.mdp.is_terminal(s2)) exit += c.mdp.transitions.coeff(r, s2);
+      }
+    }
+    terms[static_cast<size_t>(r)] = std::log(c.mdp.start[s]) + c.policy.log_policy[r] + log_e + std::log(exit);
+  }
+  const double ll = reference_lse(terms);
+  ASSERT_TRUE(std::isfinite(ll)) << name;
+  ExactEngine engine(c.mdp);
+  EXPECT_NEAR(engine.log_likelihood(c.policy, c.model, c.trajectory), ll, 1e-9 * std::abs(ll)) << name;
+  const TrajectoryPosterior post = engine.posterior(c.policy, c.model, c.trajectory);
+  EXPECT_NEAR(post.log_likelihood, ll, 1e-9 * std::abs(ll)) << name;
+  for (int r = 0; r < P; ++r) {
+    EXPECT_NEAR(post.marginals(0, r), std::exp(terms[static_cast<size_t>(r)] - ll), 1e-9) << name << " pair " << r;
+  }
+}
+
+ObservedTrajectory one_observation(int symbol, double weight, bool ends_in_terminal = false) {
+  ObservedTrajectory tr;
+  if (weight > 0.0) {
+    tr.symbols = {symbol};
+    tr.weights = {weight};
+    tr.eta = RowMatrix::Ones(1, 1);
+  } else {
+    tr.eta.resize(0, 1);
+  }
+  tr.step_begin = {0, tr.num_observations()};
+  tr.ends_in_terminal = ends_in_terminal;
+  return tr;
+}
+
+TEST(ExactEngine, UnderflowingForwardProductsStayExact) {
+  {
+    // Start 1e-295 on B, pi(b1 | B) ~ 1e-30: the product 1e-325 rounds to 0, yet the
+    // observation favours (B, b1) by 1000 nats, so it is nearly all of the posterior.
+    OneStepCase c;
+    c.mdp = make_mdp(2, 2, 1, {{0, 0, 0, 1.0}, {0, 1, 0, 1.0}, {1, 0, 1, 1.0}, {1, 1, 1, 1.0}}, {{1, 1, 0, 1.0}},
+                     Eigen::Vector2d(1.0, 1e-295), {}, 0.9);
+    c.policy = soft_value_iteration(c.mdp, c.mdp.reward(Eigen::VectorXd::Constant(1, -69.0)));
+    ASSERT_LT(c.mdp.start[1] * c.policy.policy[3], 1e-320);
+    c.model.subject.resize(4, 2);
+    c.model.subject << 1e-4, 1.0 - 1e-4, 1e-4, 1.0 - 1e-4, 1e-4, 1.0 - 1e-4, 1.0, 0.0;
+    c.model.confounders.resize(0, 2);
+    c.trajectory = one_observation(0, 1000.0 / std::log(1e4));
+    expect_one_step_exact(c, "underflowing prior");
+    // The same where nothing else can emit the observation at all.
+    c.model.subject.topRows(3) << 0.0, 1.0, 0.0, 1.0, 0.0, 1.0;
+    expect_one_step_exact(c, "underflowing prior, the only possible pair");
+  }
+  {
+    // A policy probability that is 0 in linear space while its log is finite (-800).
+    OneStepCase c;
+    c.mdp = make_mdp(1, 3, 1, {{0, 0, 0, 1.0}, {0, 1, 0, 1.0}, {0, 2, 0, 1.0}}, {{0, 2, 0, 1.0}},
+                     Eigen::VectorXd::Ones(1), {}, 0.9);
+    c.policy = soft_value_iteration(c.mdp, c.mdp.reward(Eigen::VectorXd::Constant(1, -800.0)));
+    c.policy.policy[2] = 0.0;  // as an exp that flushes to 0 leaves it
+    ASSERT_GT(c.policy.log_policy[2], -INFINITY);
+    c.model.subject.resize(3, 2);
+    c.model.subject << 1e-4, 1.0 - 1e-4, 1e-4, 1.0 - 1e-4, 1.0, 0.0;
+    c.model.confounders.resize(0, 2);
+    c.trajectory = one_observation(0, 1000.0 / std::log(1e4));
+    expect_one_step_exact(c, "policy probability flushed to 0");
+  }
+  {
+    // A trajectory known to end in a terminal state, whose only way out has probability
+    // 1e-290 * 1e-40: the normaliser underflows, the trajectory is possible.
+    OneStepCase c;
+    c.mdp = make_mdp(3, 1, 1, {{0, 0, 0, 1.0}, {1, 0, 1, 1.0}, {1, 0, 2, 1e-40}}, {{0, 0, 0, 1.0}},
+                     Eigen::Vector3d(1.0, 1e-290, 0.0), {2}, 0.9);
+    c.policy = soft_value_iteration(c.mdp, c.mdp.reward(Eigen::VectorXd::Zero(1)));
+    c.model.subject = Eigen::MatrixXd::Constant(3, 2, 0.5);
+    c.model.confounders.resize(0, 2);
+    c.trajectory = one_observation(0, 0.0, true);
+    expect_one_step_exact(c, "terminal exit of 1e-330");
+  }
+}
+
 TEST(ExactEngine, ImpossibleObservationsGiveMinusInfinity) {
   Rng rng(1);
   testing::TinyProblem p = testing::tiny_problem(1, rng);

@@ -43,7 +43,7 @@ struct SoftSolution {
 // A soft Bellman solver bound to one MDP (which must outlive it). Reuses its workspace
 // and warm-starts from its previous solution, which makes repeated solves for nearby
 // rewards (an optimiser's line search) cheap. Deterministic: the result depends only
-// on the sequence of rewards it was given.
+// on the sequence of rewards (and warm_start values) it was given.
 class SoftBellmanSolver {
  public:
   explicit SoftBellmanSolver(const Mdp& mdp, SoftViOptions options = {});
