@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <cstdlib>
 
 #include "learner/input_error.hpp"
 #include "learner/maxcausalent.hpp"
@@ -176,12 +175,10 @@ bool squarem(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Rep
       report(s3);
       x = s3.next;
       previous = s3.objective;
-      static const double grow = std::getenv("HBIRL_GROW") ? std::atof(std::getenv("HBIRL_GROW")) : 4.0;
-      if (a == -step_max) step_max = std::min(grow * step_max, kMaxStep);
+      if (a == -step_max) step_max = std::min(4.0 * step_max, kMaxStep);
     } else {
-      static const double shrink = std::getenv("HBIRL_SHRINK") ? std::atof(std::getenv("HBIRL_SHRINK")) : 4.0;
       x = s2.next;  // the extrapolation overshot: keep the plain EM step
-      step_max = std::max(1.0, step_max / shrink);
+      step_max = std::max(1.0, step_max / 4.0);
     }
   }
   return false;
