@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "brute_force_posterior.hpp"
@@ -75,6 +76,87 @@ double reference_lse(const std::vector<double>& x) {
   return m + std::log(sum);
 }
 
+// A plain log-space forward-backward straight from the definitions, every sum its own
+// log-sum-exp: the log emissions, log alpha, log beta (with a terminal exit at the end
+// when the trajectory is known to have ended) and the log-likelihood.
+struct Reference {
+  std::vector<std::vector<double>> log_emission, la, lb;
+  double log_likelihood = -INFINITY;
+};
+
+Reference reference_posterior(const Mdp& mdp, const SoftSolution& policy, const ObservationModel& model,
+                              const ObservedTrajectory& tr) {
+  const int T = tr.length();
+  const int P = mdp.num_pairs();
+  const int A = mdp.num_actions;
+  const int E = model.num_confounders();
+  Reference ref;
+  auto& e = ref.log_emission;
+  e.assign(static_cast<size_t>(T), std::vector<double>(static_cast<size_t>(P), 0.0));
+  for (int t = 0; t < T; ++t) {
+    for (int r = 0; r < P; ++r) {
+      for (int n = tr.step_begin[static_cast<size_t>(t)]; n < tr.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        const int w = tr.symbols[static_cast<size_t>(n)];
+        double p = tr.eta(n, 0) * model.subject(r, w);
+        for (int z = 0; z < E; ++z) p += tr.eta(n, z + 1) * model.confounders(z, w);
+        e[static_cast<size_t>(t)][static_cast<size_t>(r)] += tr.weight(n) * std::log(p);
+      }
+    }
+  }
+  auto log_t = [&](int r, int s2) { return std::log(mdp.transitions.coeff(r, s2)); };
+  auto& la = ref.la;
+  auto& lb = ref.lb;
+  la.assign(static_cast<size_t>(T), std::vector<double>(static_cast<size_t>(P)));
+  lb.assign(static_cast<size_t>(T), std::vector<double>(static_cast<size_t>(P), 0.0));
+  for (int t = 0; t < T; ++t) {
+    for (int r = 0; r < P; ++r) {
+      const int s = r / A;
+      double d = std::log(mdp.start[s]);
+      if (t > 0) {
+        std::vector<double> in;
+        for (int q = 0; q < P; ++q) in.push_back(la[static_cast<size_t>(t) - 1][static_cast<size_t>(q)] + log_t(q, s));
+        d = reference_lse(in);
+      }
+      la[static_cast<size_t>(t)][static_cast<size_t>(r)] =
+          mdp.is_terminal(s) ? -INFINITY : d + policy.log_policy[r] + e[static_cast<size_t>(t)][static_cast<size_t>(r)];
+    }
+  }
+  if (tr.ends_in_terminal) {
+    for (int r = 0; r < P; ++r) {
+      std::vector<double> out;
+      for (int s2 = 0; s2 < mdp.num_states; ++s2) {
+        if (mdp.is_terminal(s2)) out.push_back(log_t(r, s2));
+      }
+      lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] = reference_lse(out);
+    }
+  }
+  for (int t = T - 2; t >= 0; --t) {
+    for (int r = 0; r < P; ++r) {
+      std::vector<double> out;
+      for (int q = 0; q < P; ++q) {
+        if (mdp.is_terminal(q / A)) continue;
+        out.push_back(log_t(r, q / A) + policy.log_policy[q] + e[static_cast<size_t>(t) + 1][static_cast<size_t>(q)] +
+                      lb[static_cast<size_t>(t) + 1][static_cast<size_t>(q)]);
+      }
+      lb[static_cast<size_t>(t)][static_cast<size_t>(r)] = reference_lse(out);
+    }
+  }
+  std::vector<double> last;
+  for (int r = 0; r < P; ++r) last.push_back(la[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] + lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)]);
+  ref.log_likelihood = reference_lse(last);
+  return ref;
+}
+
+void expect_marginals(const Reference& ref, const TrajectoryPosterior& post, int trial) {
+  for (size_t t = 0; t < ref.la.size(); ++t) {
+    for (size_t r = 0; r < ref.la[t].size(); ++r) {
+      const double gamma = std::exp(ref.la[t][r] + ref.lb[t][r] - ref.log_likelihood);
+      EXPECT_NEAR(post.marginals(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(r)), gamma, 1e-9)
+          << "trial " << trial << " step " << t << " pair " << r;
+    }
+  }
+}
+
 // Heavy observations (weights in the hundreds, as merged repeats give) make the steps'
 // log emissions differ by thousands between pairs, so states fall e^-1000 below others
 // and become likely again later: the engine must then leave its scaled linear-space
@@ -117,60 +199,20 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
       for (int z = 0; z <= E; ++z) tr.eta(n, z) = z == 0 ? 0.7 : 0.3 / E;
     }
     // The reference, straight from the definitions.
-    const int P = mdp.num_pairs();
-    const int A = mdp.num_actions;
-    std::vector<std::vector<double>> e(T, std::vector<double>(static_cast<size_t>(P), 0.0));
+    const Reference ref = reference_posterior(mdp, policy, model, tr);
+    const double ll = ref.log_likelihood;
     double spread = 0.0;
     for (int t = 0; t < T; ++t) {
-      for (int r = 0; r < P; ++r) {
-        for (int n = tr.step_begin[static_cast<size_t>(t)]; n < tr.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-          const int w = tr.symbols[static_cast<size_t>(n)];
-          double p = tr.eta(n, 0) * model.subject(r, w);
-          for (int z = 0; z < E; ++z) p += tr.eta(n, z + 1) * model.confounders(z, w);
-          e[t][static_cast<size_t>(r)] += tr.weight(n) * std::log(p);
-        }
-      }
-      const auto [lo, hi] = std::minmax_element(e[t].begin(), e[t].end());
+      const auto [lo, hi] = std::minmax_element(ref.log_emission[static_cast<size_t>(t)].begin(), ref.log_emission[static_cast<size_t>(t)].end());
       spread = std::max(spread, *hi - *lo);
     }
-    auto log_t = [&](int r, int s2) { return std::log(mdp.transitions.coeff(r, s2)); };
-    std::vector<std::vector<double>> la(T, std::vector<double>(static_cast<size_t>(P)));
-    std::vector<std::vector<double>> lb(T, std::vector<double>(static_cast<size_t>(P), 0.0));
-    for (int t = 0; t < T; ++t) {
-      for (int r = 0; r < P; ++r) {
-        const int s = r / A;
-        double d = std::log(mdp.start[s]);
-        if (t > 0) {
-          std::vector<double> in;
-          for (int q = 0; q < P; ++q) in.push_back(la[t - 1][static_cast<size_t>(q)] + log_t(q, s));
-          d = reference_lse(in);
-        }
-        la[t][static_cast<size_t>(r)] = mdp.is_terminal(s) ? -INFINITY : d + policy.log_policy[r] + e[t][static_cast<size_t>(r)];
-      }
-    }
-    for (int t = T - 2; t >= 0; --t) {
-      for (int r = 0; r < P; ++r) {
-        std::vector<double> out;
-        for (int q = 0; q < P; ++q) {
-          if (mdp.is_terminal(q / A)) continue;
-          out.push_back(log_t(r, q / A) + policy.log_policy[q] + e[t + 1][static_cast<size_t>(q)] + lb[t + 1][static_cast<size_t>(q)]);
-        }
-        lb[t][static_cast<size_t>(r)] = reference_lse(out);
-      }
-    }
-    const double ll = reference_lse(la[T - 1]);
     ASSERT_TRUE(std::isfinite(ll)) << "trial " << trial;
     extreme += heavy && spread > 1000.0;
     ExactEngine engine(mdp);
     const TrajectoryPosterior post = engine.posterior(policy, model, tr);
     scaled += engine.last_passes_scaled();
     EXPECT_NEAR(post.log_likelihood, ll, 1e-12 * std::abs(ll)) << "trial " << trial;
-    for (int t = 0; t < T; ++t) {
-      for (int r = 0; r < P; ++r) {
-        const double gamma = std::exp(la[t][static_cast<size_t>(r)] + lb[t][static_cast<size_t>(r)] - ll);
-        EXPECT_NEAR(post.marginals(t, r), gamma, 1e-9) << "trial " << trial << " step " << t << " pair " << r;
-      }
-    }
+    expect_marginals(ref, post, trial);
   }
   EXPECT_GE(extreme, 20);  // most heavy trials had log emissions more than 1000 apart within a step
   EXPECT_GE(scaled, 20);  // the scaled passes were exact by themselves in many
@@ -214,6 +256,78 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
     EXPECT_NEAR(post.marginals(t, 1), 1.0, 1e-12) << t;  // B, the whole way
     EXPECT_NEAR(post.marginals(t, 0), 0.0, 1e-12) << t;
   }
+}
+
+// Probabilities at the edge of the doubles, at random: start probabilities down to
+// 1e-320, policies from rewards up to 400x (log pi in the -1000s, pi flushed to 0 or
+// clamped), emission probabilities down to 1e-12 and exactly 0, observations weighing up
+// to thousands of nats, trajectories of 1-6 steps that may end in a terminal state, on random MDPs (terminal states, impossible actions, deterministic
+// transitions). Whatever the engine does -- the scaled passes or the log-space ones -- it
+// must agree with the plain log-space reference, impossible trajectories included.
+TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
+  Rng rng(4242);
+  int scaled = 0, fallback = 0, impossible = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    testing::RandomMdpOptions o = testing::varied_options(trial);
+    o.states = 3 + trial % 6;
+    o.actions = 2 + trial % 3;
+    o.successors = std::min(3, o.states);
+    o.terminal = trial % 2 == 0 ? 1 : 0;
+    Mdp mdp = testing::random_mdp(o, rng);
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (mdp.start[s] > 0.0 && rng.uniform() < 0.5) mdp.start[s] *= std::pow(10.0, -rng.uniform(0.0, 320.0));
+    }
+    mdp.start /= mdp.start.sum();
+    const double reward_scale = std::array<double, 3>{1.0, 50.0, 400.0}[static_cast<size_t>(trial % 3)];
+    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(testing::random_vector(o.features, rng, reward_scale)));
+    ObservationModel model;
+    const int symbols = 3;
+    model.subject = testing::random_distributions(mdp.num_pairs(), symbols, rng);
+    for (Eigen::Index i = 0; i < model.subject.size(); ++i) {
+      const double u = rng.uniform();
+      if (u < 0.3) model.subject.data()[i] *= std::pow(10.0, -rng.uniform(0.0, 12.0));
+      if (u > 0.95) model.subject.data()[i] = 0.0;  // a symbol this pair never shows
+    }
+    model.confounders = testing::random_distributions(trial % 2, symbols, rng);
+    const int E = model.num_confounders();
+    ObservedTrajectory tr;
+    const int T = 1 + rng.uniform_int(6);
+    const double heavy = std::array<double, 3>{1.0, 100.0, 600.0}[static_cast<size_t>((trial / 3) % 3)];
+    for (int t = 0; t < T; ++t) {
+      for (int i = rng.uniform_int(3); i > 0; --i) {
+        tr.symbols.push_back(rng.uniform_int(symbols));
+        tr.weights.push_back(1.0 + heavy * rng.uniform());
+      }
+      tr.step_begin.push_back(static_cast<int>(tr.symbols.size()));
+    }
+    tr.eta.resize(tr.num_observations(), 1 + E);
+    for (int n = 0; n < tr.num_observations(); ++n) {
+      for (int z = 0; z <= E; ++z) tr.eta(n, z) = z == 0 ? (E > 0 ? 0.9 : 1.0) : 0.1 / E;
+    }
+    tr.ends_in_terminal = o.terminal > 0 && trial % 4 == 0;
+    const Reference ref = reference_posterior(mdp, policy, model, tr);
+    ExactEngine engine(mdp);
+    const TrajectoryPosterior post = engine.posterior(policy, model, tr);
+    (engine.last_passes_scaled() ? scaled : fallback) += 1;
+    if (ref.log_likelihood == -INFINITY) {
+      ++impossible;
+      EXPECT_EQ(post.log_likelihood, -INFINITY) << "trial " << trial;
+      continue;
+    }
+    ASSERT_TRUE(std::isfinite(ref.log_likelihood)) << "trial " << trial;
+    EXPECT_NEAR(post.log_likelihood, ref.log_likelihood, 1e-12 * std::max(1.0, std::abs(ref.log_likelihood)))
+        << "trial " << trial;
+    EXPECT_NEAR(engine.log_likelihood(policy, model, tr), ref.log_likelihood,
+                1e-12 * std::max(1.0, std::abs(ref.log_likelihood)))
+        << "trial " << trial;
+    expect_marginals(ref, post, trial);
+  }
+  // Both kinds of passes were exercised.
+  EXPECT_GE(scaled, 50);
+  EXPECT_GE(fallback, 10);
+  RecordProperty("scaled", scaled);
+  RecordProperty("fallback", fallback);
+  RecordProperty("impossible", impossible);
 }
 
 // One-step trajectories whose forward products underflow in linear space (found by a
