@@ -78,6 +78,7 @@ constexpr double kDropped = 1e-300;
 constexpr double kLogNegligible = -69.0;  // ~1e-30
 constexpr double kMaxScaledSpread = 600.0;
 constexpr double kMaxScaledBackward = 1e250;
+constexpr double kSmallNormaliser = 1e-20;
 
 // out = log(M exp(x)) for a sparse non-negative M (log_m: its logs, same pattern),
 // computed as exp(x - max) -> sparse product -> log + max: vectorised. A row whose sum
@@ -282,19 +283,28 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
   if (!(normaliser_ >= kUnderflowFloor) || !(lost_[T - 1] - std::log(normaliser_) <= kLogNegligible)) return kNaN;
   ll += std::log(normaliser_);
   if (!with_backward) return ll;
+  // A small normaliser (an unlikely end in a terminal state) would take the backward
+  // products below the smallest double: a product whose share of a marginal is over
+  // 1e-30 is at least 1e-30 c_{t+1} Z >= 1e-280 Z. Below kSmallNormaliser the last
+  // backward message is divided by it, so that sum_r alpha_hat_t beta_hat_t = 1.
+  backward_total_ = normaliser_;
+  if (normaliser_ < kSmallNormaliser) {
+    beta_hat_.row(T - 1) /= normaliser_;
+    backward_total_ = 1.0;
+  }
   // Backward: beta_hat_t(r) = sum_s' T(s'|r) g(s') / c_{t+1},
   //           g(s') = sum_a' pi(a'|s') e_{t+1}(s',a') beta_hat_{t+1}(s',a'),
-  // so that alpha_hat_t beta_hat_t / normaliser_ is the marginal at every step.
+  // so that alpha_hat_t beta_hat_t / backward_total_ is the marginal at every step.
   for (int t = T - 2; t >= 0; --t) {
     prior_ = pi.cwiseProduct(emission_.row(t + 1).transpose()).cwiseProduct(beta_hat_.row(t + 1).transpose());
     scratch_ = Eigen::Map<const Eigen::MatrixXd>(prior_.data(), A, S).colwise().sum().transpose();
     sparse_times(mdp_.transitions, scratch_.data(), row_.data());
     row_ /= scale_[t + 1];
     // Lost forward mass meets these messages at step t: it must stay negligible against
-    // the marginals' total (normaliser_), and the messages within the double range.
+    // the marginals' total (backward_total_), and the messages within the double range.
     const double largest = row_.maxCoeff();
     if (!(largest <= kMaxScaledBackward) ||
-        !(lost_[t] + std::log(std::max(largest, 1.0)) - std::log(normaliser_) <= kLogNegligible)) {
+        !(lost_[t] + std::log(std::max(largest, 1.0)) - std::log(backward_total_) <= kLogNegligible)) {
       return kNaN;
     }
     beta_hat_.row(t) = row_.transpose();
@@ -374,7 +384,7 @@ double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTraject
 
 void ExactEngine::marginal(int t, double log_likelihood) {
   if (scaled_) {
-    marginal_ = (alpha_hat_.row(t).array() * beta_hat_.row(t).array()).transpose() / normaliser_;
+    marginal_ = (alpha_hat_.row(t).array() * beta_hat_.row(t).array()).transpose() / backward_total_;
     return;
   }
   // -inf (alpha or beta) gives exactly 0; beta is never +inf.

@@ -433,6 +433,32 @@ TEST(ExactEngine, UnderflowingForwardProductsStayExact) {
   }
 }
 
+// A trajectory known to have ended, whose exit has probability 1e-249 (found by a second
+// review): the backward messages start at 1e-249, and times a policy probability of 5e-131
+// they would fall below the smallest double before the scale divides them -- the
+// marginals of step 0 came out 0. The backward messages start divided by the normaliser.
+TEST(ExactEngine, SmallExitProbabilityKeepsTheMarginals) {
+  const Mdp mdp = make_mdp(2, 2, 1, {{0, 0, 0, 1 - 1e-249}, {0, 0, 1, 1e-249}, {0, 1, 0, 1 - 1e-249}, {0, 1, 1, 1e-249}},
+                           {{0, 1, 0, -300.0}}, Eigen::Vector2d(1.0, 0.0), {1}, 0.9);
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Ones(1)));
+  ObservationModel model;
+  model.subject.resize(4, 2);
+  model.subject << std::exp(-300.0), 1.0 - std::exp(-300.0), 1.0, 0.0, 0.5, 0.5, 0.5, 0.5;
+  model.confounders.resize(0, 2);
+  ObservedTrajectory tr;
+  tr.step_begin = {0, 0, 1};  // step 0 occluded
+  tr.symbols = {0};
+  tr.eta = RowMatrix::Ones(1, 1);
+  tr.ends_in_terminal = true;
+  const Reference ref = reference_posterior(mdp, policy, model, tr);
+  ASSERT_TRUE(std::isfinite(ref.log_likelihood));
+  ExactEngine engine(mdp);
+  const TrajectoryPosterior post = engine.posterior(policy, model, tr);
+  EXPECT_NEAR(post.log_likelihood, ref.log_likelihood, 1e-12 * std::abs(ref.log_likelihood));
+  EXPECT_NEAR(post.marginals.row(0).sum(), 1.0, 1e-12);
+  expect_marginals(ref, post, 0);
+}
+
 TEST(ExactEngine, ImpossibleObservationsGiveMinusInfinity) {
   Rng rng(1);
   testing::TinyProblem p = testing::tiny_problem(1, rng);

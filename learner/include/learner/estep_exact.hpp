@@ -149,7 +149,8 @@ class ExactEngine {
   RowMatrix emission_;               // T x (S*A): exp(log_emission_ - m_t)
   Eigen::VectorXd scale_;            // c_t
   Eigen::VectorXd lost_;             // log of a bound on the forward mass lost by step t, in units of alpha_hat_t
-  double normaliser_ = 1.0;          // sum_r alpha_hat_{T-1} beta_hat_{T-1}
+  double normaliser_ = 1.0;          // sum_r alpha_hat_{T-1} beta_{T-1}
+  double backward_total_ = 1.0;      // sum_r alpha_hat_t beta_hat_t (normaliser_, or 1 when that was small)
   Eigen::VectorXd prior_;            // per pair: d_t(s) pi(a|s) (forward); pi e beta_hat (backward)
   Eigen::VectorXd marginal_;
   RowMatrix p_;                      // one row per observation: p(w | r) per pair (kept for the posteriors)
