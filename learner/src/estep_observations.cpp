@@ -299,8 +299,17 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     // Its observation kinds: each strength's emissions are a log per kind, not per observation.
     const ObservationKinds kinds = *observation_kinds(one, std::numeric_limits<int>::max());
     EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
-    Rng rng = root.split(static_cast<std::uint64_t>(i));
-    engine->accumulate(policy, model, trajectory, rng, own);
+    if (engine->exact()) {  // by kinds, as the E-step's own pass: a log per kind, not per observation
+      const KindEmissions table = kind_emissions(model, kinds);
+      RowMatrix kind_gamma = RowMatrix::Zero(kinds.num_kinds(), mdp_.num_pairs());
+      std::vector<char> seen(static_cast<size_t>(kinds.num_kinds()), 0);
+      std::vector<int> touched;
+      exact.accumulate(policy, trajectory, kinds.of.front(), table, own, kind_gamma, seen, touched, false);
+      add_kind_alpha_dot(model, kinds, table, kind_gamma, touched, own.alpha_dot, own.source_counts);
+    } else {
+      Rng rng = root.split(static_cast<std::uint64_t>(i));
+      engine->accumulate(policy, model, trajectory, rng, own);
+    }
     AlphaCounts others = all;
     others.subject = (others.subject - own.alpha_dot.subject).cwiseMax(0.0);
     others.confounders = (others.confounders - own.alpha_dot.confounders).cwiseMax(0.0);
