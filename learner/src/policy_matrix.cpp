@@ -35,6 +35,16 @@ PolicyMatrix::PolicyMatrix(const Mdp& mdp) : mdp_(mdp) {
   matrix_.setFromTriplets(pattern.begin(), pattern.end());
   matrix_.makeCompressed();
 
+  // The transpose's pattern once; each solve_transposed then copies values through
+  // transposed_slot_ (what Eigen's transpose would give, without its allocation and count).
+  transposed_ = matrix_.transpose();
+  transposed_slot_.resize(static_cast<size_t>(transposed_.nonZeros()));
+  for (int col = 0; col < S; ++col) {
+    for (int j = transposed_.outerIndexPtr()[col]; j < transposed_.outerIndexPtr()[col + 1]; ++j) {
+      transposed_slot_[static_cast<size_t>(j)] = slot_of(matrix_, transposed_.innerIndexPtr()[j], col);
+    }
+  }
+
   entry_slot_.assign(static_cast<size_t>(t.nonZeros()), -1);
   diagonal_slot_.resize(static_cast<size_t>(S));
   for (int s = 0; s < S; ++s) {
@@ -98,7 +108,9 @@ bool PolicyMatrix::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double to
 
 bool PolicyMatrix::solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   if (transposed_stale_) {
-    transposed_ = matrix_.transpose();
+    const double* value = matrix_.valuePtr();
+    double* out = transposed_.valuePtr();
+    for (size_t j = 0; j < transposed_slot_.size(); ++j) out[j] = value[transposed_slot_[j]];
     transposed_stale_ = false;
   }
   return run(transposed_solver_, transposed_, b, x, kWorkingTolerance);

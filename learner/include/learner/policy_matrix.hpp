@@ -41,8 +41,9 @@ class PolicyMatrix {
 
   const Mdp& mdp_;
   SparseRowMatrix matrix_;          // S x S
-  SparseRowMatrix transposed_;      // filled on demand
+  SparseRowMatrix transposed_;      // its pattern fixed at construction, its values copied on demand
   bool transposed_stale_ = true;
+  std::vector<int> transposed_slot_;  // transposed_ entry -> index into matrix_ values
   std::vector<int> entry_slot_;     // transitions nnz -> index into matrix_ values
   std::vector<int> diagonal_slot_;  // state -> index of its diagonal entry
   Solver solver_;
