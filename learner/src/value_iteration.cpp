@@ -23,6 +23,46 @@ void q_values(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::Vector
   }
 }
 
+// One Gauss-Seidel sweep of value iteration with each action's self-loop solved exactly:
+//   v(s) <- max_a (R(s,a) + gamma sum_{s' != s} T(s'|s,a) v(s')) / (1 - gamma T(s|s,a)),
+// states in turn, each using the values already updated in this sweep; the direction
+// alternates between sweeps. V* is its fixed point (for the maximising action the
+// Bellman equation solved for v(s) is this; for any other, Bellman's inequality divided
+// by 1 - gamma T(s|s,a) > 0), and it contracts at least by gamma. Plain sweeps contract by
+// gamma exactly where a state mostly stays put (a wall, a goal held): 392 sweeps for
+// 1e-10 on the 200 x 200 gridworld at gamma = 0.95, against 71 for these
+// (docs/BENCHMARKS.md, BM_ValueIteration). Returns the largest change.
+double self_loop_gauss_seidel_sweep(const Mdp& mdp, const Eigen::VectorXd& reward, bool forward, Eigen::VectorXd& v) {
+  const int S = mdp.num_states;
+  const int A = mdp.num_actions;
+  const int* outer = mdp.transitions.outerIndexPtr();
+  const int* inner = mdp.transitions.innerIndexPtr();
+  const double* p = mdp.transitions.valuePtr();
+  double change = 0.0;
+  for (int i = 0; i < S; ++i) {
+    const int s = forward ? i : S - 1 - i;
+    if (mdp.is_terminal(s)) continue;
+    double best = kNegInf;
+    for (int a = 0; a < A; ++a) {
+      if (!mdp.available(s, a)) continue;
+      const int r = s * A + a;
+      double elsewhere = 0.0;
+      double stay = 0.0;
+      for (int j = outer[r]; j < outer[r + 1]; ++j) {
+        if (inner[j] == s) {
+          stay = p[j];
+        } else {
+          elsewhere += p[j] * v[inner[j]];
+        }
+      }
+      best = std::max(best, (reward[r] + mdp.discount * elsewhere) / (1.0 - mdp.discount * stay));
+    }
+    change = std::max(change, std::abs(best - v[s]));
+    v[s] = best;
+  }
+  return change;
+}
+
 Eigen::VectorXd solve_policy(PolicyMatrix& matrix, const Eigen::VectorXd& b, const Eigen::VectorXd* guess) {
   Eigen::VectorXd x = guess && guess->size() == b.size() ? *guess : b;
   if (!matrix.solve(b, x)) {
@@ -43,18 +83,20 @@ OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, dou
   const int S = mdp.num_states;
   const int A = mdp.num_actions;
   OptimalPolicy result;
+  // A NaN would slip through the sweeps' max unnoticed (impossible pairs are never read).
+  for (int s = 0; s < S; ++s) {
+    for (int a = 0; a < A; ++a) {
+      if (!mdp.is_terminal(s) && mdp.available(s, a) && !std::isfinite(reward[mdp.pair(s, a)])) {
+        throw std::domain_error("value_iteration: reward is not finite");
+      }
+    }
+  }
   Eigen::VectorXd v = Eigen::VectorXd::Zero(S);
-  Eigen::VectorXd v_new(S);
   Eigen::VectorXd& q = result.q;
   for (;;) {
-    q_values(mdp, reward, v, q);
-    for (int s = 0; s < S; ++s) {
-      v_new[s] = mdp.is_terminal(s) ? 0.0 : q.segment(static_cast<Eigen::Index>(s) * A, A).maxCoeff();
-    }
+    const double change = self_loop_gauss_seidel_sweep(mdp, reward, result.iterations % 2 == 0, v);
     ++result.iterations;
-    const double change = (v_new - v).lpNorm<Eigen::Infinity>();
-    v.swap(v_new);
-    if (!std::isfinite(change)) throw std::domain_error("value_iteration: reward is not finite");
+    if (!std::isfinite(change)) throw std::domain_error("value_iteration: a state has no finite value");
     if (change <= tolerance * std::max(1.0, v.lpNorm<Eigen::Infinity>())) break;
   }
   q_values(mdp, reward, v, q);

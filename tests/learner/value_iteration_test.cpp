@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "learner/metrics.hpp"
 #include "random_mdp.hpp"
 #include "sim_driver/gridworld.hpp"
@@ -70,6 +72,56 @@ TEST(ValueIteration, BeatsEveryDeterministicPolicy) {
     const Eigen::VectorXd v = policy_evaluation(mdp, reward, actions);
     EXPECT_TRUE((opt.value.array() >= v.array() - 1e-9).all()) << code;
   }
+}
+
+// Against plain value iteration written out here (Jacobi sweeps of the Bellman equation
+// to 1e-13, then the greedy policy): on random MDPs with self-loops, terminal states,
+// impossible actions, deterministic moves and discounts 0, 0.9 and 0.99, the optimal
+// values agree and each chosen action attains the maximum.
+TEST(ValueIteration, AgreesWithPlainValueIteration) {
+  Rng rng(21);
+  for (int trial = 0; trial < 60; ++trial) {
+    testing::RandomMdpOptions o = testing::varied_options(trial);
+    o.states += 10;
+    const Mdp mdp = testing::random_mdp(o, rng);
+    const Eigen::VectorXd reward = mdp.reward(testing::random_vector(o.features, rng, 5.0));
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(mdp.num_states);
+    Eigen::VectorXd q(mdp.num_pairs());
+    for (int sweep = 0; sweep < 100000; ++sweep) {
+      Eigen::VectorXd next = Eigen::VectorXd::Zero(mdp.num_states);
+      for (int s = 0; s < mdp.num_states; ++s) {
+        double best = -INFINITY;
+        for (int a = 0; a < mdp.num_actions; ++a) {
+          const int r = mdp.pair(s, a);
+          q[r] = -INFINITY;
+          if (mdp.is_terminal(s) || !mdp.available(s, a)) continue;
+          double expected = 0.0;
+          for (int s2 = 0; s2 < mdp.num_states; ++s2) expected += mdp.transitions.coeff(r, s2) * v[s2];
+          q[r] = reward[r] + mdp.discount * expected;
+          best = std::max(best, q[r]);
+        }
+        next[s] = mdp.is_terminal(s) ? 0.0 : best;
+      }
+      const double change = (next - v).lpNorm<Eigen::Infinity>();
+      v = next;
+      if (change <= 1e-13 * std::max(1.0, v.lpNorm<Eigen::Infinity>())) break;
+    }
+    const OptimalPolicy opt = value_iteration(mdp, reward);
+    const double scale = std::max(1.0, v.lpNorm<Eigen::Infinity>());
+    EXPECT_LT((opt.value - v).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << "trial " << trial;
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (mdp.is_terminal(s)) continue;
+      EXPECT_GE(q[mdp.pair(s, opt.actions[static_cast<size_t>(s)])], v[s] - 1e-9 * scale) << "trial " << trial << " state " << s;
+    }
+  }
+}
+
+TEST(ValueIteration, NonFiniteRewardIsRefused) {
+  Rng rng(4);
+  const Mdp mdp = testing::random_mdp({}, rng);
+  Eigen::VectorXd reward = Eigen::VectorXd::Zero(mdp.num_pairs());
+  reward[0] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(value_iteration(mdp, reward), std::domain_error);
 }
 
 TEST(InverseLearningError, ZeroForTheTrueRewardAndPositiveForTheWrongOne) {

@@ -11,11 +11,12 @@ struct OptimalPolicy {
   Eigen::VectorXd value;     // V*(s), 0 at terminal states
   Eigen::VectorXd q;         // Q*(s,a) per pair, -inf where impossible or terminal
   std::vector<int> actions;  // a greedy action per state (lowest index among ties); -1 at terminals
-  int iterations = 0;        // value-iteration backups
+  int iterations = 0;        // value-iteration sweeps (Gauss-Seidel, self-loops solved)
   int policy_iterations = 0; // exact evaluate-and-improve rounds after value iteration
 };
 
-// Value iteration to max|dV| <= tolerance * max(1, max|V|), then policy iteration
+// Value iteration (Gauss-Seidel sweeps that solve each action's self-loop) to
+// max|dV| <= tolerance * max(1, max|V|) in a sweep, then policy iteration
 // (exact evaluation + improvement that only switches on a strict gain) so the returned
 // policy is optimal, not merely near-optimal.
 OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward,
