@@ -50,7 +50,7 @@ double self_loop_gauss_seidel_sweep(const Mdp& mdp, const Eigen::VectorXd& rewar
       double stay = 0.0;
       for (int j = outer[r]; j < outer[r + 1]; ++j) {
         if (inner[j] == s) {
-          stay = p[j];
+          stay += p[j];
         } else {
           elsewhere += p[j] * v[inner[j]];
         }

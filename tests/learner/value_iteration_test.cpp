@@ -107,6 +107,9 @@ TEST(ValueIteration, AgreesWithPlainValueIteration) {
       if (change <= 1e-13 * std::max(1.0, v.lpNorm<Eigen::Infinity>())) break;
     }
     const OptimalPolicy opt = value_iteration(mdp, reward);
+    // The sweeps themselves must reach V*: policy iteration would repair a wrong fixed
+    // point from any greedy policy, but not in at most one step.
+    EXPECT_LE(opt.policy_iterations, 1) << "trial " << trial;
     const double scale = std::max(1.0, v.lpNorm<Eigen::Infinity>());
     EXPECT_LT((opt.value - v).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << "trial " << trial;
     for (int s = 0; s < mdp.num_states; ++s) {
