@@ -1,7 +1,5 @@
 #include "experiments/gridworld_scenario.hpp"
 
-#include <stdexcept>
-
 namespace hbirl {
 
 GridworldScenario make_gridworld_scenario(const GridworldScenarioOptions& o, int run, int confounders) {
@@ -26,18 +24,6 @@ GridworldScenario make_gridworld_scenario(const GridworldScenarioOptions& o, int
 
 namespace {
 
-// The row of step t of `merged` (merge_identical_observations of `raw`) that observation
-// n of `raw` was merged into: the same symbol, eta and context.
-int merged_row(const ObservedTrajectory& raw, int n, const ObservedTrajectory& merged, int t) {
-  for (int m = merged.step_begin[static_cast<size_t>(t)]; m < merged.step_begin[static_cast<size_t>(t) + 1]; ++m) {
-    if (merged.symbols[static_cast<size_t>(m)] == raw.symbols[static_cast<size_t>(n)] &&
-        merged.context(m) == raw.context(n) && merged.eta.row(m) == raw.eta.row(n)) {
-      return m;
-    }
-  }
-  throw std::logic_error("share_right: an observation is missing from its merged trajectory");
-}
-
 // Sums `right(posterior source row, true source)` over every observation. Identical
 // observations of a step have the same source posterior: it is computed once per
 // distinct one (as the E-step does), and each observation is scored against its own truth.
@@ -49,14 +35,12 @@ double share_right(const Mdp& mdp, const SoftSolution& policy, const Observation
   long long hits = 0;
   long long total = 0;
   for (size_t i = 0; i < trajectories.size(); ++i) {
-    const ObservedTrajectory& raw = trajectories[i];
-    const ObservedTrajectory merged = merge_identical_observations(raw);
+    std::vector<int> merged_of;
+    const ObservedTrajectory merged = merge_identical_observations(trajectories[i], &merged_of);
     const TrajectoryPosterior post = engine.posterior(policy, model, merged);
-    for (int t = 0; t < raw.length(); ++t) {
-      for (int n = raw.step_begin[static_cast<size_t>(t)]; n < raw.step_begin[static_cast<size_t>(t) + 1]; ++n) {
-        hits += right(post.sources.row(merged_row(raw, n, merged, t)), true_sources[i][static_cast<size_t>(n)]) ? 1 : 0;
-        ++total;
-      }
+    for (size_t n = 0; n < merged_of.size(); ++n) {
+      hits += right(post.sources.row(merged_of[n]), true_sources[i][n]) ? 1 : 0;
+      ++total;
     }
   }
   return total == 0 ? -1.0 : static_cast<double>(hits) / static_cast<double>(total);

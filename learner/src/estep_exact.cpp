@@ -513,4 +513,17 @@ void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& k
   }
 }
 
+void accumulate_by_kind(ExactEngine& exact, const SoftSolution& policy, const ObservationModel& model,
+                        const std::vector<ObservedTrajectory>& trajectories, int begin, int end,
+                        const ObservationKinds& kinds, const KindEmissions& table, int watch, EStepStatistics& out) {
+  RowMatrix kind_gamma = RowMatrix::Zero(kinds.num_kinds(), table.p.cols());
+  std::vector<char> seen(static_cast<size_t>(kinds.num_kinds()), 0);
+  std::vector<int> touched;
+  for (int k = begin; k < end; ++k) {
+    exact.accumulate(policy, trajectories[static_cast<size_t>(k)], kinds.of[static_cast<size_t>(k)], table, out,
+                     kind_gamma, seen, touched, k == watch);
+  }
+  add_kind_alpha_dot(model, kinds, table, kind_gamma, touched, out.alpha_dot, out.source_counts);
+}
+
 }  // namespace hbirl

@@ -155,14 +155,8 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
     out = EStepStatistics::zero(P, E, W, num_contexts());
     ExactEngine* exact = table ? engine->exact() : nullptr;
     if (exact) {
-      RowMatrix kind_gamma = RowMatrix::Zero(kinds_->num_kinds(), P);
-      std::vector<char> seen(static_cast<size_t>(kinds_->num_kinds()), 0);
-      std::vector<int> touched;
-      for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
-        exact->accumulate(policy, trajectories_[static_cast<size_t>(i)], kinds->of[static_cast<size_t>(i)], *table, out,
-                          kind_gamma, seen, touched, i == options_.watch);
-      }
-      add_kind_alpha_dot(model, *kinds, *table, kind_gamma, touched, out.alpha_dot, out.source_counts);
+      accumulate_by_kind(*exact, policy, model, trajectories_, b * kBlockSize, std::min(n, (b + 1) * kBlockSize), *kinds,
+                         *table, options_.watch, out);
       return;
     }
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
@@ -300,12 +294,7 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     const ObservationKinds kinds = *observation_kinds(one, std::numeric_limits<int>::max());
     EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
     if (engine->exact()) {  // by kinds, as the E-step's own pass: a log per kind, not per observation
-      const KindEmissions table = kind_emissions(model, kinds);
-      RowMatrix kind_gamma = RowMatrix::Zero(kinds.num_kinds(), mdp_.num_pairs());
-      std::vector<char> seen(static_cast<size_t>(kinds.num_kinds()), 0);
-      std::vector<int> touched;
-      exact.accumulate(policy, trajectory, kinds.of.front(), table, own, kind_gamma, seen, touched, false);
-      add_kind_alpha_dot(model, kinds, table, kind_gamma, touched, own.alpha_dot, own.source_counts);
+      accumulate_by_kind(exact, policy, model, one, 0, 1, kinds, kind_emissions(model, kinds), -1, own);
     } else {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectory, rng, own);

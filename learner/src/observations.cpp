@@ -49,7 +49,7 @@ std::string normalise_eta(double* eta, int n, double tolerance) {
   return "";
 }
 
-ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory) {
+ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory, std::vector<int>* merged_of) {
   ObservedTrajectory out;
   out.ends_in_terminal = trajectory.ends_in_terminal;
   const Eigen::Index sources = trajectory.eta.cols();
@@ -67,6 +67,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
     // holding a share of the merged data relies on.
     return trajectory.context(x) < trajectory.context(y);
   };
+  if (merged_of) merged_of->assign(static_cast<size_t>(trajectory.num_observations()), -1);
   for (int t = 0; t < trajectory.length(); ++t) {
     std::vector<int> step(static_cast<size_t>(trajectory.observations_at(t)));
     std::iota(step.begin(), step.end(), trajectory.step_begin[static_cast<size_t>(t)]);
@@ -78,6 +79,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
         rows.push_back(step[i]);
         weights.push_back(trajectory.weight(step[i]));
       }
+      if (merged_of) (*merged_of)[static_cast<size_t>(step[i])] = static_cast<int>(rows.size()) - 1;
     }
     out.step_begin.push_back(static_cast<int>(rows.size()));
   }

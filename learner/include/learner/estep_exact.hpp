@@ -68,6 +68,14 @@ void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& k
                         const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out,
                         RowMatrix& source_counts);
 
+class ExactEngine;
+// ExactEngine::accumulate by kinds for trajectories[k], k in [begin, end), whose kinds are
+// kinds.of[k], then add_kind_alpha_dot: their expected visits, log-likelihoods and alpha_dot
+// added to `out` (trajectory `watch`'s marginals kept, as accumulate does).
+void accumulate_by_kind(ExactEngine& exact, const SoftSolution& policy, const ObservationModel& model,
+                        const std::vector<ObservedTrajectory>& trajectories, int begin, int end,
+                        const ObservationKinds& kinds, const KindEmissions& table, int watch, EStepStatistics& out);
+
 // Forward-backward workspace bound to one MDP (which must outlive it).
 class ExactEngine {
  public:

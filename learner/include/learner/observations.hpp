@@ -53,7 +53,10 @@ std::string normalise_eta(double* eta, int n, double tolerance = 1e-6);
 // The same trajectory with identical (symbol, eta) observations of a step merged into
 // one with a multiplicity: an exact rewrite of the emission product that makes the
 // E-step's cost grow with the number of distinct observations, not all of them.
-ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory);
+// `merged_of`, when given, receives for each observation row of `trajectory` the row of
+// the result it was merged into.
+ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory,
+                                                std::vector<int>* merged_of = nullptr);
 
 // The distinct (symbol, eta) observations of a data set ("kinds"), and the kind of every
 // observation row. When eta takes few values (a labeller's rules, uniform eta) a data set
