@@ -126,7 +126,7 @@ std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTraj
 
 void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory>& trajectories) {
   const double epsilon = prior.unlisted_eta;
-  if (epsilon == 0.0 || prior.unlisted_added) return;
+  if (!adds_unlisted_source(prior)) return;
   if (!(epsilon > 0.0 && epsilon < 1.0)) throw InputError("observation_model.unlisted_source.eta", "must be in (0, 1)");
   const Eigen::Index sources = 1 + prior.num_confounders;
   for (auto& t : trajectories) {

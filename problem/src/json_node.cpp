@@ -32,6 +32,12 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 
 }  // namespace
 
+std::string JsonNode::path() const {
+  std::string p = *base_;
+  for (int d = 0; d < depth_; ++d) p += "[" + std::to_string(index_[static_cast<size_t>(d)]) + "]";
+  return p;
+}
+
 std::string JsonNode::describe() const {
   const auto& v = *value_;
   if (v.is_number()) return "the number " + format_number(v.get<double>());
@@ -47,9 +53,10 @@ bool JsonNode::has(const std::string& key) const { return value_->is_object() &&
 JsonNode JsonNode::at(const std::string& key) const {
   if (!value_->is_object()) fail("expected an object, got " + describe());
   const auto it = value_->find(key);
-  const std::string child = path_.empty() ? key : path_ + "." + key;
+  const std::string here = path();
+  std::string child = here.empty() ? key : here + "." + key;
   if (it == value_->end()) throw InputError(child, "missing");
-  return JsonNode(*it, child);
+  return JsonNode(*it, std::make_shared<const std::string>(std::move(child)));
 }
 
 std::optional<JsonNode> JsonNode::find(const std::string& key) const {
@@ -66,7 +73,8 @@ void JsonNode::check_keys(const std::vector<std::string>& known,
     if (key == "comment" || (!key.empty() && key[0] == '_')) continue;
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
     if (warnings == nullptr) continue;
-    std::string line = (path_.empty() ? key : path_ + "." + key) + ": unknown key, ignored";
+    const std::string here = path();
+    std::string line = (here.empty() ? key : here + "." + key) + ": unknown key, ignored";
     std::string closest;
     size_t best = 3;  // suggest only close misspellings
     for (const auto& k : known) {
@@ -87,7 +95,17 @@ size_t JsonNode::size() const {
 }
 
 JsonNode JsonNode::operator[](size_t i) const {
-  return JsonNode((*value_)[i], path_ + "[" + std::to_string(i) + "]");
+  if (depth_ == kHeldIndices) {  // write the path out, and hold the new index below it
+    JsonNode child((*value_)[i], std::make_shared<const std::string>(path()));
+    child.index_[0] = i;
+    child.depth_ = 1;
+    return child;
+  }
+  JsonNode child((*value_)[i], base_);
+  child.index_ = index_;
+  child.index_[static_cast<size_t>(depth_)] = i;
+  child.depth_ = depth_ + 1;
+  return child;
 }
 
 void JsonNode::expect_tuple(size_t n, const char* shape) const {
@@ -98,25 +116,23 @@ void JsonNode::expect_tuple(size_t n, const char* shape) const {
 
 long long JsonNode::as_int(long long lo, long long hi) const {
   const auto& v = *value_;
-  const std::string range = " in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-  if (!v.is_number()) fail("expected an integer" + range + ", got " + describe());
+  const auto expected = [lo, hi] { return "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got "; };
+  if (!v.is_number()) fail(expected() + describe());
   if (v.is_number_float()) {
     const double x = v.get<double>();
-    if (!std::isfinite(x) || x != std::floor(x) || x < -9e15 || x > 9e15) {
-      fail("expected an integer" + range + ", got " + describe());
-    }
+    if (!std::isfinite(x) || x != std::floor(x) || x < -9e15 || x > 9e15) fail(expected() + describe());
   }
   long long x = 0;
   if (v.is_number_unsigned()) {
     const auto u = v.get<unsigned long long>();
-    if (u > static_cast<unsigned long long>(hi)) fail("expected an integer" + range + ", got " + std::to_string(u));
+    if (u > static_cast<unsigned long long>(hi)) fail(expected() + std::to_string(u));
     x = static_cast<long long>(u);
   } else if (v.is_number_integer()) {
     x = v.get<long long>();
   } else {
     x = static_cast<long long>(v.get<double>());
   }
-  if (x < lo || x > hi) fail("expected an integer" + range + ", got " + std::to_string(x));
+  if (x < lo || x > hi) fail(expected() + std::to_string(x));
   return x;
 }
 

@@ -380,7 +380,10 @@ std::string read_text_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
   // Read in blocks up to a bound: a device (/dev/zero) or a pipe has no size to check first.
+  // A regular file's size (within the bound) is reserved, so its text is copied once.
   std::string text;
+  const std::uintmax_t size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : 0;
+  if (!ec && size <= kMaxFileBytes) text.reserve(static_cast<size_t>(size));
   std::vector<char> block(1 << 16);
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));

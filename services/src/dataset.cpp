@@ -35,7 +35,28 @@ void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_
 
 DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
   if (id < 0) throw InputError("episode", "is negative");
-  return episodes_[id];
+  const auto [it, fresh] = episodes_.try_emplace(id);
+  if (fresh && !in_run(id)) ++outside_run_;
+  return it->second;
+}
+
+// What an episode adds to the run's counts (sign -1 takes it out): the frames and, for a
+// controlled episode, the ground-truth steps it lacks, once it has ended and if it belongs
+// to the run. The counts are kept as messages come, so that complete() -- asked after
+// every message -- does not scan every frame of the run.
+void DatasetBuilder::count(const Episode& e, int id, int sign) {
+  if (!e.ended || !in_run(id)) return;
+  ended_in_run_ += sign;
+  missing_frames_ += sign * (static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - e.have_frames);
+  if (e.controlled) missing_truth_ += sign * (static_cast<std::int64_t>(e.num_steps) - e.have_truth);
+}
+
+// The frames and truth steps an ended episode has within its stated steps and frames.
+void DatasetBuilder::recount(Episode& e) {
+  e.have_frames = 0;
+  for (const auto& [key, f] : e.frames) e.have_frames += key.first < e.num_steps && key.second < e.frames_per_step;
+  e.have_truth = 0;
+  for (const auto& [step, t] : e.truth) e.have_truth += step < e.num_steps;
 }
 
 // Whether an episode belongs to the controlled run is said by its first marker; a later
@@ -68,7 +89,12 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
-      e.frames_per_step = m.frames_per_step;
+      if (e.frames_per_step != m.frames_per_step) {  // (a repeat changes nothing)
+        count(e, m.episode, -1);
+        e.frames_per_step = m.frames_per_step;
+        if (e.ended) recount(e);
+        count(e, m.episode, +1);
+      }
       break;
     }
     case hbirl::episode_marker_t::END_EPISODE: {
@@ -80,10 +106,16 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
       mark_controlled(e, m);
+      e.ends_in_terminal = m.ends_in_terminal;
+      // The simulator repeats every end marker each second until the reward comes: a
+      // repeat leaves the counts as they are, without a walk over the episode's frames.
+      if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) break;
+      count(e, m.episode, -1);
       e.ended = true;
       e.num_steps = m.num_steps;
       e.frames_per_step = m.frames_per_step;
-      e.ends_in_terminal = m.ends_in_terminal;
+      recount(e);
+      count(e, m.episode, +1);
       break;
     }
     case hbirl::episode_marker_t::END_RUN: {
@@ -98,6 +130,13 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
         if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
           throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " +
                                                            std::to_string(run_episodes_));
+        }
+        if (run_episodes_ == 0) {  // episodes from here on are out of the run: out of its counts too
+          for (const auto& [id, e] : episodes_) {
+            if (id < m.num_steps) continue;
+            count(e, id, -1);
+            ++outside_run_;
+          }
         }
         run_episodes_ = m.num_steps;
       }
@@ -158,6 +197,10 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   bytes_ += bytes;
   e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f));
   ++frames_;
+  if (e.ended && m.step < e.num_steps && m.frame < e.frames_per_step) {
+    ++e.have_frames;
+    if (in_run(m.episode)) --missing_frames_;
+  }
   last_utime_ = std::max(last_utime_, m.utime);
 }
 
@@ -176,7 +219,12 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
   }
-  episode(m.episode).truth[m.step] = {m.state, m.action};
+  Episode& e = episode(m.episode);
+  const bool fresh = e.truth.insert_or_assign(m.step, StateAction{m.state, m.action}).second;
+  if (fresh && e.ended && m.step < e.num_steps) {
+    ++e.have_truth;
+    if (e.controlled && in_run(m.episode)) --missing_truth_;
+  }
   // The expert's weights are for the ILE only: weights that disagree with earlier ones
   // leave the ILE unknown; the steps above are kept either way.
   if (m.num_features > 0 && !weights_conflict_) {
@@ -192,31 +240,13 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   }
 }
 
-std::int64_t DatasetBuilder::missing_frames() const {
-  std::int64_t missing = 0;
-  for (const auto& [id, e] : episodes_) {
-    if (!e.ended || !in_run(id)) continue;
-    std::int64_t have = 0;
-    for (const auto& [key, f] : e.frames) have += key.first < e.num_steps && key.second < e.frames_per_step;
-    missing += static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - have;
-  }
-  return missing;
-}
+std::int64_t DatasetBuilder::missing_frames() const { return missing_frames_; }
 
 int DatasetBuilder::unfinished_episodes() const {
-  int n = 0;
-  for (const auto& [id, e] : episodes_) n += !e.ended && in_run(id);
-  return n;
+  return static_cast<int>(static_cast<std::int64_t>(episodes_.size()) - outside_run_) - ended_in_run_;
 }
 
-std::int64_t DatasetBuilder::missing_truth() const {
-  std::int64_t missing = 0;
-  for (const auto& [id, e] : episodes_) {
-    if (!e.ended || !e.controlled || !in_run(id)) continue;
-    for (int t = 0; t < e.num_steps; ++t) missing += !e.truth.count(t);
-  }
-  return missing;
-}
+std::int64_t DatasetBuilder::missing_truth() const { return missing_truth_; }
 
 std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t limit) const {
   std::vector<std::tuple<int, int, int>> out;
@@ -235,13 +265,10 @@ std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t
 
 bool DatasetBuilder::complete() const {
   if (!run_ended_) return false;
-  for (int id = 0; id < run_episodes_; ++id) {
-    if (!episodes_.count(id)) return false;
-  }
-  for (const auto& [id, e] : episodes_) {
-    if (!e.ended && in_run(id)) return false;
-  }
-  return missing_frames() == 0 && missing_truth() == 0;
+  // Every episode of the run has ended: when END_RUN said how many there are, all of them
+  // (0 .. n-1: ids are distinct), else every episode begun.
+  const bool all_ended = run_episodes_ > 0 ? ended_in_run_ == run_episodes_ : unfinished_episodes() == 0;
+  return all_ended && missing_frames_ == 0 && missing_truth_ == 0;
 }
 
 namespace {
@@ -263,51 +290,76 @@ void keep_contexts_if_all_given(std::vector<ObservedTrajectory>& set, const std:
 
 }  // namespace
 
-Dataset DatasetBuilder::build() const {
+Dataset DatasetBuilder::empty_dataset() const {
   Dataset d;
   d.domain = domain_;
   d.num_symbols = num_symbols_;
   d.num_sources = num_sources_;
   d.last_utime = last_utime_;
   d.true_weights = true_weights_;
-  for (const auto& [id, e] : episodes_) {
-    if (!e.ended || !in_run(id)) continue;
-    ObservedTrajectory t;
-    t.ends_in_terminal = e.ends_in_terminal;
-    std::vector<double> eta;
-    for (int step = 0; step < e.num_steps; ++step) {
-      for (auto it = e.frames.lower_bound({step, 0});
-           it != e.frames.end() && it->first.first == step && it->first.second < e.frames_per_step; ++it) {
-        t.symbols.insert(t.symbols.end(), it->second.symbols.begin(), it->second.symbols.end());
-        eta.insert(eta.end(), it->second.eta.begin(), it->second.eta.end());
-        t.contexts.insert(t.contexts.end(), it->second.contexts.begin(), it->second.contexts.end());
-      }
-      t.step_begin.push_back(static_cast<int>(t.symbols.size()));
+  return d;
+}
+
+void DatasetBuilder::add_episode(Dataset& d, int id, const Episode& e) const {
+  if (!e.ended || !in_run(id)) return;
+  ObservedTrajectory t;
+  t.ends_in_terminal = e.ends_in_terminal;
+  std::vector<double> eta;
+  for (int step = 0; step < e.num_steps; ++step) {
+    for (auto it = e.frames.lower_bound({step, 0});
+         it != e.frames.end() && it->first.first == step && it->first.second < e.frames_per_step; ++it) {
+      t.symbols.insert(t.symbols.end(), it->second.symbols.begin(), it->second.symbols.end());
+      eta.insert(eta.end(), it->second.eta.begin(), it->second.eta.end());
+      t.contexts.insert(t.contexts.end(), it->second.contexts.begin(), it->second.contexts.end());
     }
-    t.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), std::max(1, num_sources_));
-    Trajectory truth;
-    for (int step = 0; step < e.num_steps; ++step) {
-      const auto it = e.truth.find(step);
-      if (it == e.truth.end()) break;
-      truth.push_back(it->second);
-    }
-    const bool truth_complete = static_cast<int>(truth.size()) == e.num_steps;
-    if (e.controlled) {
-      if (!truth_complete) {  // a lost GROUND_TRUTH message: leave the episode out of the prior
-        ++d.skipped_controlled;
-        continue;
-      }
-      d.controlled_observed.push_back(std::move(t));
-      d.controlled_truth.push_back(std::move(truth));
-    } else {
-      d.episodes.push_back(id);
-      d.observed.push_back(std::move(t));
-      if (truth_complete) d.truth.push_back(std::move(truth));
-    }
+    t.step_begin.push_back(static_cast<int>(t.symbols.size()));
   }
+  t.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), std::max(1, num_sources_));
+  Trajectory truth;
+  for (int step = 0; step < e.num_steps; ++step) {
+    const auto it = e.truth.find(step);
+    if (it == e.truth.end()) break;
+    truth.push_back(it->second);
+  }
+  const bool truth_complete = static_cast<int>(truth.size()) == e.num_steps;
+  if (e.controlled) {
+    if (!truth_complete) {  // a lost GROUND_TRUTH message: leave the episode out of the prior
+      ++d.skipped_controlled;
+      return;
+    }
+    d.controlled_observed.push_back(std::move(t));
+    d.controlled_truth.push_back(std::move(truth));
+  } else {
+    d.episodes.push_back(id);
+    d.observed.push_back(std::move(t));
+    if (truth_complete) d.truth.push_back(std::move(truth));
+  }
+}
+
+void DatasetBuilder::finish_dataset(Dataset& d) {
   keep_contexts_if_all_given(d.observed, "demonstrations", d.contexts_note);
   keep_contexts_if_all_given(d.controlled_observed, "controlled run", d.contexts_note);
   if (d.truth.size() != d.observed.size()) d.truth.clear();  // ground truth only when complete
+}
+
+Dataset DatasetBuilder::build() const {
+  Dataset d = empty_dataset();
+  for (const auto& [id, e] : episodes_) add_episode(d, id, e);
+  finish_dataset(d);
+  return d;
+}
+
+Dataset DatasetBuilder::take() {
+  Dataset d = empty_dataset();
+  for (auto& [id, e] : episodes_) {
+    add_episode(d, id, e);
+    e.frames.clear();  // assembled: each observation is held once, here or in d
+    e.truth.clear();
+  }
+  episodes_.clear();
+  missing_frames_ = missing_truth_ = outside_run_ = 0;
+  ended_in_run_ = 0;
+  finish_dataset(d);
   return d;
 }
 

@@ -2,6 +2,7 @@
 #include "services/optimiser.hpp"
 
 #include <chrono>
+#include <memory>
 
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
@@ -65,15 +66,15 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                              const std::function<bool()>& stop,
                                              const std::function<void(const std::string&)>& log,
                                              const std::function<void()>& ready) {
-  DatasetBuilder builder;
+  auto builder = std::make_unique<DatasetBuilder>();
   if (options.domain) {
     const std::optional<ObservationPrior> stated = options.domain->stated_prior();
     const Mdp& mdp = options.domain->mdp();
-    builder.expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0, mdp.num_states,
+    builder->expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0, mdp.num_states,
                    mdp.num_actions);
   }
-  builder.limit(options.max_dataset_bytes);
-  builder.subscribe(bus, counters);
+  builder->limit(options.max_dataset_bytes);
+  builder->subscribe(bus, counters);
   if (ready) ready();
   const auto say = [&log](const std::string& s) {
     if (log) log(s);
@@ -83,25 +84,25 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   auto last_request = Clock::now();
   int result_requests = 0;
   bool announced_end = false;
-  while (!builder.complete()) {
+  while (!builder->complete()) {
     if (stop && stop()) return std::nullopt;
     if (options.beat) options.beat("collecting");
     if (bus.handle(100) < 0) break;  // a log at its end
-    if (builder.frames() != frames) {
-      frames = builder.frames();
+    if (builder->frames() != frames) {
+      frames = builder->frames();
       last_frame = Clock::now();
     }
-    if (builder.run_ended() && !announced_end) {
-      say("end of the run announced; " + std::to_string(builder.frames()) + " frames observed so far");
+    if (builder->run_ended() && !announced_end) {
+      say("end of the run announced; " + std::to_string(builder->frames()) + " frames observed so far");
       announced_end = true;
     }
     // Frames lost on the way: ask for them again (a few hundred per request), once a second.
-    if (builder.run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
+    if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
         Clock::now() - last_request > std::chrono::milliseconds(options.resend_after_ms)) {
-      const auto missing = builder.missing_frame_keys(500);
+      const auto missing = builder->missing_frame_keys(500);
       if (!missing.empty()) {
         hbirl::frame_request_t r{};
-        r.utime = builder.build_utime();
+        r.utime = builder->build_utime();
         r.requester = "optimiser";
         r.n = static_cast<std::int32_t>(missing.size());
         for (const auto& [episode, step, frame] : missing) {
@@ -115,16 +116,18 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
       }
       last_request = Clock::now();
     }
-    if (builder.run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.quiet_ms)) {
+    if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.quiet_ms)) {
       say("no frames for " + std::to_string(options.quiet_ms) + " ms after the end of the run: learning from what came (" +
-          std::to_string(builder.missing_frames()) + " frames missing)");
+          std::to_string(builder->missing_frames()) + " frames missing)");
       break;
     }
   }
   if (stop && stop()) return std::nullopt;
   OptimiserResult result;
-  result.data = builder.build();
-  result.missing_frames = builder.missing_frames();
+  result.missing_frames = builder->missing_frames();
+  const std::int64_t frames_observed = builder->frames();
+  result.data = builder->take();
+  builder.reset();  // frames that still come are no longer needed, and no longer read
   result.frame_requests = result_requests;
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
   const Mdp& mdp = domain->mdp();
@@ -135,7 +138,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), counters, executor_options);
   if (!result.data.contexts_note.empty()) say(result.data.contexts_note);
   say("data: " + std::to_string(result.data.controlled_observed.size()) + " controlled episodes, " +
-      std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(builder.frames()) + " frames");
+      std::to_string(result.data.observed.size()) + " demonstrations, " + std::to_string(frames_observed) + " frames");
   if (options.workers > 0) {
     result.workers = executor->wait_for_workers(options.workers, options.wait_workers_ms);
     say(std::to_string(result.workers) + " of " + std::to_string(options.workers) + " sampler workers ready");
@@ -213,7 +216,6 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
   while (!builder.complete() && bus->handle(0) >= 0) {
   }
   OptimiserResult result;
-  result.data = builder.build();
   result.missing_frames = builder.missing_frames();
   if (!builder.complete()) {
     result.incomplete = std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
@@ -224,6 +226,7 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
                                     "; --allow-incomplete learns from the finished episodes");
     }
   }
+  result.data = builder.take();
   return result;
 }
 

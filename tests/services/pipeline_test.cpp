@@ -12,6 +12,8 @@
 #include <fstream>
 #include <future>
 #include <limits>
+#include <map>
+#include <set>
 #include <cmath>
 #include "perception/image_codec.hpp"
 #include <thread>
@@ -537,6 +539,165 @@ TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
   EXPECT_EQ(b.build().observed.size(), 1u);
   end_run.num_steps = 2;
   EXPECT_THROW(b.on_marker(end_run), InputError);  // contradicts the first
+}
+
+// take() hands over the data set that build() assembles, letting each episode's frames
+// go as it is assembled (so the optimiser never holds the observations twice), and
+// leaves the builder empty.
+TEST(DatasetBuilder, TakeGivesWhatBuildGives) {
+  DatasetBuilder b;
+  hbirl::episode_marker_t marker{};
+  marker.domain = "gridworld";
+  marker.num_steps = 3;
+  marker.frames_per_step = 2;
+  for (int episode = 0; episode < 4; ++episode) {
+    marker.episode = episode;
+    marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+    marker.controlled = episode == 0;
+    b.on_marker(marker);
+    for (int step = 0; step < 3; ++step) {
+      hbirl::ground_truth_t t{};
+      t.domain = "gridworld";
+      t.episode = episode;
+      t.step = step;
+      t.state = episode + step;
+      t.action = step % 4;
+      if (episode != 2 || step != 1) b.on_truth(t);  // episode 2 lost a GROUND_TRUTH
+      for (int frame = 0; frame < 2; ++frame) {
+        if (episode == 3 && step == 2 && frame == 1) continue;  // and episode 3 a frame
+        hbirl::observations_t o{};
+        o.episode = episode;
+        o.step = step;
+        o.frame = frame;
+        o.num_symbols = 4;
+        o.num_sources = 2;
+        o.n = 1 + frame;
+        for (int n = 0; n < o.n; ++n) {
+          o.symbol.push_back(static_cast<std::int16_t>((episode + step + n) % 4));
+          const double p = 0.1 * (1 + (episode + frame + n) % 9);
+          o.eta.push_back({p, 1.0 - p});
+        }
+        b.on_observations(o);
+      }
+    }
+    marker.kind = hbirl::episode_marker_t::END_EPISODE;
+    b.on_marker(marker);
+  }
+  const std::int64_t frames = b.frames();
+  const Dataset built = b.build();
+  const Dataset taken = b.take();
+  ASSERT_EQ(built.observed.size(), 3u);
+  ASSERT_EQ(taken.observed.size(), built.observed.size());
+  for (size_t i = 0; i < built.observed.size(); ++i) {
+    EXPECT_EQ(taken.observed[i].symbols, built.observed[i].symbols);
+    EXPECT_EQ(taken.observed[i].eta, built.observed[i].eta);
+    EXPECT_EQ(taken.observed[i].step_begin, built.observed[i].step_begin);
+  }
+  EXPECT_EQ(taken.episodes, built.episodes);
+  EXPECT_EQ(taken.truth.size(), built.truth.size());  // none: episode 2's is incomplete
+  ASSERT_EQ(taken.controlled_truth.size(), 1u);
+  EXPECT_EQ(taken.controlled_truth, built.controlled_truth);
+  EXPECT_EQ(taken.controlled_observed[0].symbols, built.controlled_observed[0].symbols);
+  EXPECT_EQ(taken.domain, built.domain);
+  EXPECT_EQ(b.episodes(), 0);
+  EXPECT_EQ(b.frames(), frames);
+  EXPECT_TRUE(b.build().observed.empty());
+}
+
+// The builder keeps its counts of what is missing as messages come (complete() is asked
+// after every message, and a scan of every frame each time made a 5,000-episode log take
+// 90 s to read). Against a scan of what the test itself sent, after every message of
+// random runs: frames and truth in any order, repeats, frames beyond the stated steps,
+// markers that restate the frames per step, episodes past END_RUN's count.
+TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
+  struct Sent {
+    bool ended = false, controlled = false;
+    int steps = 0, per_step = 1;
+    std::set<std::pair<int, int>> frames;
+    std::set<int> truth;
+  };
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(seed);
+    DatasetBuilder b;
+    std::map<int, Sent> sent;
+    bool run_ended = false;
+    const int run_episodes = static_cast<int>(rng.uniform_int(7));  // 0: END_RUN does not say
+    const auto in_run = [&](int id) { return !run_ended || run_episodes == 0 || id < run_episodes; };
+    for (int message = 0; message < 300; ++message) {
+      const int id = static_cast<int>(rng.uniform_int(8));
+      const bool known = sent.count(id) > 0;
+      Sent& e = sent[id];
+      e.controlled = id % 3 == 0;
+      const int kind = static_cast<int>(rng.uniform_int(10));
+      if (kind <= 4) {
+        hbirl::observations_t o{};
+        o.episode = id;
+        o.step = static_cast<int>(rng.uniform_int(5));
+        o.frame = static_cast<int>(rng.uniform_int(3));
+        o.num_symbols = 2;
+        o.num_sources = 1;
+        o.n = 1;
+        o.symbol = {1};
+        o.eta = {{1.0}};
+        b.on_observations(o);
+        e.frames.insert({o.step, o.frame});
+      } else if (kind <= 6) {
+        hbirl::ground_truth_t t{};
+        t.domain = "gridworld";
+        t.episode = id;
+        t.step = static_cast<int>(rng.uniform_int(5));
+        b.on_truth(t);
+        e.truth.insert(t.step);
+      } else {
+        hbirl::episode_marker_t m{};
+        m.domain = "gridworld";
+        m.episode = id;
+        m.controlled = e.controlled;
+        m.frames_per_step = static_cast<int>(1 + rng.uniform_int(2));
+        const bool any_ended = std::any_of(sent.begin(), sent.end(), [](const auto& x) { return x.second.ended; });
+        if (kind == 9 && any_ended) {
+          m.kind = hbirl::episode_marker_t::END_RUN;
+          m.num_steps = run_episodes;
+          b.on_marker(m);
+          run_ended = true;
+          if (!known) sent.erase(id);  // END_RUN names no episode
+        } else if (kind == 8) {
+          m.kind = hbirl::episode_marker_t::END_EPISODE;
+          m.num_steps = static_cast<int>(1 + rng.uniform_int(4));
+          b.on_marker(m);
+          e.ended = true;
+          e.steps = m.num_steps;
+          e.per_step = m.frames_per_step;
+        } else {
+          m.kind = hbirl::episode_marker_t::BEGIN_STEP;
+          b.on_marker(m);
+          e.per_step = m.frames_per_step;
+        }
+      }
+      // The scan: what the builder's counts must say.
+      std::int64_t missing_frames = 0, missing_truth = 0;
+      int unfinished = 0;
+      bool all_there = true;
+      for (int i = 0; i < run_episodes; ++i) all_there = all_there && sent.count(i);
+      for (const auto& [i, x] : sent) {
+        if (!in_run(i)) continue;
+        if (!x.ended) {
+          ++unfinished;
+          continue;
+        }
+        std::int64_t have = 0;
+        for (const auto& [step, frame] : x.frames) have += step < x.steps && frame < x.per_step;
+        missing_frames += static_cast<std::int64_t>(x.steps) * x.per_step - have;
+        for (int step = 0; x.controlled && step < x.steps; ++step) missing_truth += !x.truth.count(step);
+      }
+      ASSERT_EQ(b.missing_frames(), missing_frames) << "message " << message;
+      ASSERT_EQ(b.missing_truth(), missing_truth) << "message " << message;
+      ASSERT_EQ(b.unfinished_episodes(), unfinished) << "message " << message;
+      ASSERT_EQ(b.complete(), run_ended && all_there && unfinished == 0 && missing_frames == 0 && missing_truth == 0)
+          << "message " << message;
+    }
+  }
 }
 
 TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {

@@ -137,8 +137,12 @@ constexpr int kMaxContexts = 1 << 16;
 // Adds the catch-all source for confounders nobody listed (docs/MODEL.md "Unlisted
 // confounders"): one more confounding element with a flat Dirichlet(1) prior, and every
 // observation's eta scaled by (1 - prior.unlisted_eta) with prior.unlisted_eta going to it.
-// Nothing when prior.unlisted_eta is 0 or the source was added already.
+// Nothing when prior.unlisted_eta is 0 or the source was added already (see
+// adds_unlisted_source).
 void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory>& trajectories);
+// Whether add_unlisted_source would change anything: a caller that holds the data need
+// copy them only then.
+inline bool adds_unlisted_source(const ObservationPrior& prior) { return prior.unlisted_eta != 0.0 && !prior.unlisted_added; }
 
 // Sets the update and its companion default: eta is learned with the posterior update,
 // taken as given with the paper's.

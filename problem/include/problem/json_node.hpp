@@ -2,6 +2,13 @@
 // A read-only view of a JSON value that knows where it sits in the document
 // ("demonstration[3].steps[2].observations[0]"), so every validation failure can name
 // the field and position in one line.
+//
+// The path is written out only when it is asked for (a failure): a reader walks every
+// element of a file with millions of numbers and names at most one of them. A node holds
+// the path of its nearest ancestor reached by a key, shared, and the array indices below
+// it.
+#include <array>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -13,12 +20,13 @@ namespace hbirl {
 
 class JsonNode {
  public:
-  JsonNode(const nlohmann::json& value, std::string path) : value_(&value), path_(std::move(path)) {}
+  JsonNode(const nlohmann::json& value, std::string path)
+      : value_(&value), base_(std::make_shared<const std::string>(std::move(path))) {}
 
-  const std::string& path() const { return path_; }
+  std::string path() const;
   const nlohmann::json& raw() const { return *value_; }
 
-  [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, message); }
+  [[noreturn]] void fail(const std::string& message) const { throw InputError(path(), message); }
 
   // Objects.
   bool has(const std::string& key) const;
@@ -43,9 +51,14 @@ class JsonNode {
   bool is_string() const { return value_->is_string(); }
 
  private:
+  static constexpr int kHeldIndices = 4;  // deeper nesting writes the path out once
+  JsonNode(const nlohmann::json& value, std::shared_ptr<const std::string> base) : value_(&value), base_(std::move(base)) {}
+
   std::string describe() const;  // "a string", "the number 3.5", ...
   const nlohmann::json* value_;
-  std::string path_;
+  std::shared_ptr<const std::string> base_;  // the path down to the last key
+  std::array<size_t, kHeldIndices> index_{};  // then these array indices
+  int depth_ = 0;                             // how many of them
 };
 
 }  // namespace hbirl

@@ -71,6 +71,10 @@ class DatasetBuilder {
   // The data of the episodes that ended, in episode order (controlled episodes whose
   // ground truth is incomplete are left out and counted).
   Dataset build() const;
+  // The same data set, taken out: each episode's frames are let go as soon as they are
+  // assembled, so that the observations are never held twice. The builder is left
+  // empty: read frames(), missing_frames(), complete() and the like first.
+  Dataset take();
 
  private:
   struct Frame {
@@ -87,8 +91,15 @@ class DatasetBuilder {
     int frames_per_step = 0;
     std::map<std::pair<int, int>, Frame> frames;  // (step, frame)
     std::map<int, StateAction> truth;             // step -> (s, a)
+    std::int64_t have_frames = 0;  // once ended: frames within num_steps x frames_per_step
+    std::int64_t have_truth = 0;   // once ended: truth steps within num_steps
   };
   Episode& episode(int id);
+  void count(const Episode& e, int id, int sign);
+  static void recount(Episode& e);
+  Dataset empty_dataset() const;  // the run's facts, no episodes yet
+  void add_episode(Dataset& d, int id, const Episode& e) const;  // if it ended and belongs to the run
+  static void finish_dataset(Dataset& d);
   static void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
   // Episode `id` belongs to the run: any, until END_RUN states how many it had.
   bool in_run(int id) const { return run_episodes_ == 0 || id < run_episodes_; }
@@ -102,6 +113,11 @@ class DatasetBuilder {
   int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
   std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept
   std::int64_t frames_ = 0;
+  // Kept as messages come (count): of the ended episodes of the run, the frames and the
+  // controlled episodes' truth steps they lack, and how many they are; episodes begun
+  // outside the run (ids past END_RUN's count).
+  std::int64_t missing_frames_ = 0, missing_truth_ = 0, outside_run_ = 0;
+  int ended_in_run_ = 0;
   std::int64_t last_utime_ = 0;
   std::optional<Eigen::VectorXd> true_weights_;
   bool weights_conflict_ = false;

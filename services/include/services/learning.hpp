@@ -57,10 +57,12 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data, co
 // What is learned from: the observation prior above and the demonstrations, with the
 // catch-all source for unlisted confounders added to both when the domain's
 // observation_model asks for one (add_unlisted_source). The optimiser sends the workers
-// these demonstrations, so that both sides hold the data the E-step computes on.
+// these demonstrations, so that both sides hold the data the E-step computes on. They
+// are the data set's own unless the catch-all widens their eta: only then is there a copy.
 struct LearningInput {
   ObservationPrior prior;
-  std::vector<ObservedTrajectory> observed;
+  std::optional<std::vector<ObservedTrajectory>> widened;  // with the catch-all's share of eta
+  const std::vector<ObservedTrajectory>& observed(const Dataset& data) const { return widened ? *widened : data.observed; }
 };
 LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options);
 
