@@ -357,6 +357,7 @@ Dataset DatasetBuilder::take() {
     e.truth.clear();
   }
   episodes_.clear();
+  bytes_ = 0;
   missing_frames_ = missing_truth_ = outside_run_ = 0;
   ended_in_run_ = 0;
   finish_dataset(d);

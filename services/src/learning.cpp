@@ -40,7 +40,7 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data, co
 
 LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options) {
   if (data.observed.empty()) throw InputError("demonstrations", "none received");
-  LearningInput in{observation_prior(domain, data, options), std::nullopt};
+  LearningInput in{observation_prior(domain, data, options), &data.observed, std::nullopt};
   if (adds_unlisted_source(in.prior)) {
     in.widened = data.observed;
     add_unlisted_source(in.prior, *in.widened);
@@ -56,7 +56,7 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const Lear
   ObservationEStepOptions estep_options;
   estep_options.executor = std::move(executor);
   if (progress) estep_options.watch = static_cast<int>(data.observed.size()) - 1;  // the newest demonstration, for display
-  const ObservationEStep estep(mdp, in.observed(data), prior, estep_options);
+  const ObservationEStep estep(mdp, in.observed(), prior, estep_options);
   in.widened.reset();  // the E-step holds its own (merged) copy
   LearnOptions learn;
   learn.seed = options.seed;

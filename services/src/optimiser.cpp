@@ -127,7 +127,9 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   result.missing_frames = builder->missing_frames();
   const std::int64_t frames_observed = builder->frames();
   result.data = builder->take();
-  builder.reset();  // frames that still come are no longer needed, and no longer read
+  // Frames that still come are no longer needed: they are not read (nor counted in the
+  // gaps and bad messages) while learning.
+  builder.reset();
   result.frame_requests = result_requests;
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
   const Mdp& mdp = domain->mdp();

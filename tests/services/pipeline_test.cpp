@@ -592,7 +592,13 @@ TEST(DatasetBuilder, TakeGivesWhatBuildGives) {
     EXPECT_EQ(taken.observed[i].symbols, built.observed[i].symbols);
     EXPECT_EQ(taken.observed[i].eta, built.observed[i].eta);
     EXPECT_EQ(taken.observed[i].step_begin, built.observed[i].step_begin);
+    EXPECT_EQ(taken.observed[i].contexts, built.observed[i].contexts);
+    EXPECT_EQ(taken.observed[i].ends_in_terminal, built.observed[i].ends_in_terminal);
   }
+  EXPECT_EQ(taken.skipped_controlled, built.skipped_controlled);
+  EXPECT_EQ(taken.contexts_note, built.contexts_note);
+  EXPECT_EQ(taken.last_utime, built.last_utime);
+  EXPECT_EQ(taken.num_sources, built.num_sources);
   EXPECT_EQ(taken.episodes, built.episodes);
   EXPECT_EQ(taken.truth.size(), built.truth.size());  // none: episode 2's is incomplete
   ASSERT_EQ(taken.controlled_truth.size(), 1u);
@@ -611,25 +617,26 @@ TEST(DatasetBuilder, TakeGivesWhatBuildGives) {
 // markers that restate the frames per step, episodes past END_RUN's count.
 TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
   struct Sent {
-    bool ended = false, controlled = false;
+    bool marked = false, ended = false, controlled = false;
     int steps = 0, per_step = 1;
     std::set<std::pair<int, int>> frames;
     std::set<int> truth;
   };
-  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+  for (std::uint64_t seed = 1; seed <= 60; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     Rng rng(seed);
     DatasetBuilder b;
     std::map<int, Sent> sent;
     bool run_ended = false;
-    const int run_episodes = static_cast<int>(rng.uniform_int(7));  // 0: END_RUN does not say
+    const int stated = static_cast<int>(1 + rng.uniform_int(6));  // what an END_RUN that says states
+    int run_episodes = 0;  // 0: no END_RUN has said
     const auto in_run = [&](int id) { return !run_ended || run_episodes == 0 || id < run_episodes; };
     for (int message = 0; message < 300; ++message) {
       const int id = static_cast<int>(rng.uniform_int(8));
       const bool known = sent.count(id) > 0;
       Sent& e = sent[id];
       e.controlled = id % 3 == 0;
-      const int kind = static_cast<int>(rng.uniform_int(10));
+      const int kind = static_cast<int>(rng.uniform_int(12));
       if (kind <= 4) {
         hbirl::observations_t o{};
         o.episode = id;
@@ -656,22 +663,38 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
         m.controlled = e.controlled;
         m.frames_per_step = static_cast<int>(1 + rng.uniform_int(2));
         const bool any_ended = std::any_of(sent.begin(), sent.end(), [](const auto& x) { return x.second.ended; });
-        if (kind == 9 && any_ended) {
+        if (kind == 9) {  // END_RUN, saying how many episodes or not; before any ended it is refused
           m.kind = hbirl::episode_marker_t::END_RUN;
-          m.num_steps = run_episodes;
-          b.on_marker(m);
-          run_ended = true;
+          m.num_steps = rng.uniform_int(2) ? stated : 0;
           if (!known) sent.erase(id);  // END_RUN names no episode
+          if (!any_ended) {
+            EXPECT_THROW(b.on_marker(m), InputError);
+          } else {
+            b.on_marker(m);
+            run_ended = true;
+            if (m.num_steps > 0) run_episodes = m.num_steps;
+          }
+        } else if (kind == 10 && e.marked) {  // a marker that contradicts the episode's kind: refused
+          m.kind = hbirl::episode_marker_t::END_EPISODE;
+          m.controlled = !e.controlled;
+          m.num_steps = 1;
+          EXPECT_THROW(b.on_marker(m), InputError);
+        } else if (kind == 10) {  // frames per step out of range: refused (the episode is begun)
+          m.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+          m.frames_per_step = 0;
+          EXPECT_THROW(b.on_marker(m), InputError);
+          e.marked = true;  // (it was marked before the check)
         } else if (kind == 8) {
           m.kind = hbirl::episode_marker_t::END_EPISODE;
           m.num_steps = static_cast<int>(1 + rng.uniform_int(4));
           b.on_marker(m);
-          e.ended = true;
+          e.marked = e.ended = true;
           e.steps = m.num_steps;
           e.per_step = m.frames_per_step;
         } else {
-          m.kind = hbirl::episode_marker_t::BEGIN_STEP;
+          m.kind = kind == 7 ? hbirl::episode_marker_t::BEGIN_EPISODE : hbirl::episode_marker_t::BEGIN_STEP;
           b.on_marker(m);
+          e.marked = true;
           e.per_step = m.frames_per_step;
         }
       }

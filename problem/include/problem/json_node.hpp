@@ -3,10 +3,10 @@
 // ("demonstration[3].steps[2].observations[0]"), so every validation failure can name
 // the field and position in one line.
 //
-// The path is written out only when it is asked for (a failure): a reader walks every
-// element of a file with millions of numbers and names at most one of them. A node holds
-// the path of its nearest ancestor reached by a key, shared, and the array indices below
-// it.
+// An array element's path is written out only when it is asked for (a failure): a reader
+// walks every element of a file with millions of numbers and names at most one of them.
+// A node holds the path of its nearest ancestor reached by a key, shared, and the array
+// indices below it; a key lookup (objects are few) writes its path once.
 #include <array>
 #include <memory>
 #include <nlohmann/json.hpp>

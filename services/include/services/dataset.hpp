@@ -72,8 +72,9 @@ class DatasetBuilder {
   // ground truth is incomplete are left out and counted).
   Dataset build() const;
   // The same data set, taken out: each episode's frames are let go as soon as they are
-  // assembled, so that the observations are never held twice. The builder is left
-  // empty: read frames(), missing_frames(), complete() and the like first.
+  // assembled, so that the observations are never held twice. The builder's episodes are
+  // gone afterwards (what it knows of the run as a whole stays): read missing_frames(),
+  // complete() and the like first; it is not meant to collect again.
   Dataset take();
 
  private:

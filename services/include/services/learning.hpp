@@ -61,8 +61,9 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data, co
 // are the data set's own unless the catch-all widens their eta: only then is there a copy.
 struct LearningInput {
   ObservationPrior prior;
+  const std::vector<ObservedTrajectory>* given = nullptr;  // the data set's (it outlives this)
   std::optional<std::vector<ObservedTrajectory>> widened;  // with the catch-all's share of eta
-  const std::vector<ObservedTrajectory>& observed(const Dataset& data) const { return widened ? *widened : data.observed; }
+  const std::vector<ObservedTrajectory>& observed() const { return widened ? *widened : *given; }
 };
 LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options);
 
