@@ -51,7 +51,9 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 
 namespace hbirl::cli {
 // Read a problem file; warnings go to stderr, errors are rethrown as InputError whose
-// field starts with the file name ("examples/x.json: mdp.start: ...").
+// field starts with the file name ("examples/x.json: mdp.start: ..."), or -- for a path
+// that is not a file it can read (a FIFO, a directory) -- with the option
+// ("--problem PATH: is a FIFO ...").
 Problem load_problem(const std::string& path);
 // An InputError about the content of the file at `path`, with the file name prefixed.
 InputError in_file(const std::string& path, const InputError& e);

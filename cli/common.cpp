@@ -37,6 +37,8 @@ Problem load_problem(const std::string& path) {
     Problem problem = read_problem_file(path, &warnings);
     warn_all(path, warnings);
     return problem;
+  } catch (const FileError& e) {
+    throw InputError("--problem " + path, e.message());  // not a file it can read: say which option gave it
   } catch (const InputError& e) {
     throw in_file(path, e);
   }
@@ -129,7 +131,8 @@ void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what
 void add_key_option(CLI::App* cmd, std::string& key_file) {
   cmd->add_option("--key", key_file,
                   "The run's key file (services/launch.sh writes OUT/run.key): check every recorded message against it\n"
-                  "and drop, counting them, those it did not sign (docs/RELIABILITY.md)");
+                  "and drop, counting them, those it did not sign for its run (docs/RELIABILITY.md). A key file for\n"
+                  "many runs (hbirl keygen FILE) reads the recording's run, and refuses a recording of several");
 }
 
 

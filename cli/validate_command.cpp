@@ -59,6 +59,8 @@ int run_validate_domain(const std::string& path) {
   DomainSpec d;
   try {
     d = read_domain_file(path, &warnings);
+  } catch (const FileError& e) {
+    throw InputError("--domain " + path, e.message());
   } catch (const InputError& e) {
     throw in_file(path, e);
   }

@@ -30,15 +30,16 @@ std::string read_name(const JsonNode& node) {
 // Rows of probabilities given as tuples (key..., symbol, p); listed rows must sum to 1,
 // unlisted rows stay uniform. `key_of` maps a tuple to its row, validating the key.
 template <typename KeyOf>
-Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, int symbols, size_t tuple, const char* shape,
+Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, int symbols, const detail::TupleList& shape,
                                       KeyOf key_of) {
+  const size_t tuple = shape.size;
   Eigen::MatrixXd o = Eigen::MatrixXd::Constant(rows, symbols, 1.0 / symbols);
   std::vector<double> sum(static_cast<size_t>(rows), -1.0);  // -1: not listed
   std::vector<size_t> first(static_cast<size_t>(rows), 0);
   std::set<std::pair<Eigen::Index, int>> seen;
   for (size_t i = 0; i < list.size(); ++i) {
     const JsonNode e = list[i];
-    e.expect_tuple(tuple, shape);
+    detail::expect_tuple(e, shape);
     const Eigen::Index r = key_of(e);
     const int w = static_cast<int>(e[tuple - 2].as_int(0, symbols - 1));
     const double p = e[tuple - 1].as_number(0.0, 1.0);
@@ -63,10 +64,40 @@ Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, i
   return o;
 }
 
+// What the parser builds of a domain file (json_document.hpp), and the keys its readers know.
+const detail::JsonShape& sensor_shape() {
+  using detail::JsonShape;
+  static const JsonShape subject = JsonShape::list(detail::kSubjectObservationTuple),
+                         confounder = JsonShape::list(detail::kConfounderObservationTuple);
+  static const JsonShape shape = JsonShape::object({{"subject_observation", &subject},
+                                                    {"confounder_observation", &confounder},
+                                                    {"observations_per_step", nullptr},
+                                                    {"eta", nullptr},
+                                                    {"occlusion", nullptr},
+                                                    {"trajectories", nullptr},
+                                                    {"length", nullptr},
+                                                    {"controlled_trajectories", nullptr},
+                                                    {"step_seconds", nullptr}});
+  return shape;
+}
+
+const detail::JsonShape& domain_shape() {
+  using detail::JsonShape;
+  // "demonstration": a problem file is a domain too; its data are not the domain's, and not built.
+  static const JsonShape unread = JsonShape::unread();
+  static const JsonShape shape = JsonShape::object({{"name", nullptr},
+                                                    {"mdp", &detail::mdp_shape()},
+                                                    {"observation_model", &detail::observation_model_shape()},
+                                                    {"symbol_names", nullptr},
+                                                    {"source_names", nullptr},
+                                                    {"true_weights", nullptr},
+                                                    {"sensor", &sensor_shape()},
+                                                    {"demonstration", &unread}});
+  return shape;
+}
+
 SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vector<std::string>* warnings) {
-  node.check_keys({"subject_observation", "confounder_observation", "observations_per_step", "eta", "occlusion", "trajectories",
-                   "length", "controlled_trajectories", "step_seconds"},
-                  warnings);
+  node.check_keys(sensor_shape().keys(), warnings);
   if (!domain.observation_model) node.fail("needs observation_model (num_symbols and num_confounders) in the domain");
   if (!domain.true_weights) node.fail("needs true_weights in the domain (the simulated expert's reward)");
   const Mdp& mdp = domain.mdp;
@@ -75,7 +106,7 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
   SensorSpec s;
   s.subject_o = Eigen::MatrixXd::Constant(mdp.num_pairs(), symbols, 1.0 / symbols);
   if (auto list = node.find("subject_observation")) {
-    s.subject_o = read_probability_rows(*list, mdp.num_pairs(), symbols, 4, "[state, action, symbol, probability]",
+    s.subject_o = read_probability_rows(*list, mdp.num_pairs(), symbols, detail::kSubjectObservationTuple,
                                         [&mdp](const JsonNode& e) {
                                           const int st = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
                                           const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
@@ -85,7 +116,7 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
   s.confounder_o = Eigen::MatrixXd::Constant(elements, symbols, 1.0 / symbols);
   if (auto list = node.find("confounder_observation")) {
     if (elements == 0 && list->size() > 0) (*list)[0].fail("observation_model.num_confounders is 0");
-    s.confounder_o = read_probability_rows(*list, elements, symbols, 3, "[element, symbol, probability]",
+    s.confounder_o = read_probability_rows(*list, elements, symbols, detail::kConfounderObservationTuple,
                                            [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
   }
   if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(1, kMaxCount));
@@ -117,9 +148,7 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
 DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& default_name, std::vector<std::string>* warnings) {
   const JsonNode root(doc, "");
   if (!doc.is_object()) root.fail("the domain file must be a JSON object");
-  // "demonstration": a problem file is a domain too; its data are not the domain's.
-  root.check_keys({"name", "mdp", "observation_model", "symbol_names", "source_names", "true_weights", "sensor", "demonstration"},
-                  warnings);
+  root.check_keys(domain_shape().keys(), warnings);
   DomainSpec d;
   Problem names;
   d.mdp = detail::read_mdp(root.at("mdp"), names, warnings);
@@ -158,11 +187,13 @@ std::string stem_name(const std::string& path) {
 }  // namespace
 
 DomainSpec parse_domain(const std::string& text, const std::string& default_name, std::vector<std::string>* warnings) {
-  return parse_domain_document(detail::parse_json_text(text), default_name, warnings);
+  return parse_domain_document(detail::parse_json_text(text, domain_shape()), default_name, warnings);
 }
 
 DomainSpec read_domain_file(const std::string& path, std::vector<std::string>* warnings) {
-  return parse_domain(detail::read_text_file(path), stem_name(path), warnings);
+  // The text is let go once its document is built.
+  const nlohmann::json doc = detail::parse_json_text(detail::read_text_file(path), domain_shape());
+  return parse_domain_document(doc, stem_name(path), warnings);
 }
 
 }  // namespace hbirl

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <iterator>
-#include <fstream>
+#include <fcntl.h>
 #include <limits>
-#include <set>
 #include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include "json_document.hpp"
 #include "problem/json_node.hpp"
 #include "readers.hpp"
 
@@ -46,16 +46,23 @@ std::string pair_name(int s, int a) {
 }
 
 
-// Fails on the first repeated key, naming both entries.
+// Fails on the first entry, in the file's order, that repeats an earlier one, naming both
+// (as the parser does when it reads the list, json_document.hpp).
 template <typename Key>
 void reject_duplicates(std::vector<std::pair<Key, size_t>> keys, const JsonNode& list,
                        const char* what) {
   std::sort(keys.begin(), keys.end());
+  size_t repeat = std::numeric_limits<size_t>::max(), first = 0;
   for (size_t i = 1; i < keys.size(); ++i) {
-    if (keys[i].first == keys[i - 1].first) {
-      list[keys[i].second].fail(std::string("duplicate ") + what + " (also given at index " +
-                                std::to_string(keys[i - 1].second) + ")");
+    if (keys[i].first == keys[i - 1].first && keys[i].second < repeat) {
+      repeat = keys[i].second;
+      size_t j = i - 1;
+      while (j > 0 && keys[j - 1].first == keys[i].first) --j;
+      first = keys[j].second;
     }
+  }
+  if (repeat != std::numeric_limits<size_t>::max()) {
+    list[repeat].fail(std::string("duplicate ") + what + " (also given at index " + std::to_string(first) + ")");
   }
 }
 
@@ -69,6 +76,72 @@ struct Sizes {
 
 namespace detail {
 
+// The parts of a problem (and domain) file as the parser builds them: the keys each reader
+// knows, so that its warnings and what the parser builds come from one list.
+const JsonShape& mdp_shape() {
+  static const JsonShape transitions = JsonShape::list(kTransitionTuple), start = JsonShape::list(kStartTuple),
+                         features = JsonShape::list(kFeatureTuple), impossible = JsonShape::list(kImpossibleTuple);
+  static const JsonShape shape = JsonShape::object({{"num_states", nullptr},
+                                                    {"num_actions", nullptr},
+                                                    {"num_features", nullptr},
+                                                    {"transitions", &transitions},
+                                                    {"start", &start},
+                                                    {"features", &features},
+                                                    {"discount", nullptr},
+                                                    {"terminal", nullptr},
+                                                    {"impossible_actions", &impossible},
+                                                    {"state_names", nullptr},
+                                                    {"action_names", nullptr},
+                                                    {"feature_names", nullptr}});
+  return shape;
+}
+
+const JsonShape& observation_model_shape() {
+  static const JsonShape subject = JsonShape::list(kSubjectAlphaTuple), confounder = JsonShape::list(kConfounderAlphaTuple),
+                         unlisted = JsonShape::object({{"eta", nullptr}});
+  static const JsonShape shape = JsonShape::object({{"num_symbols", nullptr},
+                                                    {"num_confounders", nullptr},
+                                                    {"subject_alpha", &subject},
+                                                    {"subject_alpha_default", nullptr},
+                                                    {"confounder_alpha", &confounder},
+                                                    {"confounder_alpha_default", nullptr},
+                                                    {"learn", nullptr},
+                                                    {"c", nullptr},
+                                                    {"update", nullptr},
+                                                    {"prior_strength", nullptr},
+                                                    {"learn_eta", nullptr},
+                                                    {"eta_prior_strength", nullptr},
+                                                    {"unlisted_source", &unlisted}});
+  return shape;
+}
+
+namespace {
+
+const JsonShape& step_shape() {
+  static const JsonShape shape = JsonShape::object({{"observations", nullptr}});
+  return shape;
+}
+
+const JsonShape& trajectory_shape() {
+  static const JsonShape steps = JsonShape::list(step_shape()), truth = JsonShape::list(kTruthTuple);
+  static const JsonShape shape =
+      JsonShape::object({{"steps", &steps}, {"truth", &truth}, {"ends_in_terminal", nullptr}, {"controlled", nullptr}});
+  return shape;
+}
+
+const JsonShape& problem_shape() {
+  static const JsonShape demonstration = JsonShape::list(trajectory_shape());
+  static const JsonShape shape = JsonShape::object({{"mdp", &mdp_shape()},
+                                                    {"observation_model", &observation_model_shape()},
+                                                    {"demonstration", &demonstration},
+                                                    {"true_weights", nullptr}});
+  return shape;
+}
+
+}  // namespace
+
+void expect_tuple(const JsonNode& node, const TupleList& tuple) { node.expect_tuple(tuple.size, tuple.shape); }
+
 std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what) {
   const size_t n = node.size();
   if (static_cast<long long>(n) != expected) {
@@ -80,10 +153,7 @@ std::vector<std::string> read_names(const JsonNode& node, long long expected, co
 }
 
 Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
-  node.check_keys({"num_states", "num_actions", "num_features", "transitions", "start", "features",
-                   "discount", "terminal", "impossible_actions", "state_names", "action_names",
-                   "feature_names"},
-                  warnings);
+  node.check_keys(mdp_shape().keys(), warnings);
   Sizes n;
   n.states = static_cast<int>(node.at("num_states").as_int(1, std::numeric_limits<int>::max()));
   n.actions = static_cast<int>(node.at("num_actions").as_int(1, std::numeric_limits<int>::max()));
@@ -134,7 +204,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   if (auto list = node.find("impossible_actions")) {
     for (size_t i = 0; i < list->size(); ++i) {
       const JsonNode e = (*list)[i];
-      e.expect_tuple(2, "[state, action]");
+      expect_tuple(e, kImpossibleTuple);
       const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
       const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
       impossible[static_cast<size_t>(s) * n.actions + a] = 1;
@@ -152,7 +222,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   keys.reserve(count);
   for (size_t i = 0; i < count; ++i) {
     const JsonNode e = list[i];
-    e.expect_tuple(4, "[state, action, next_state, probability]");
+    expect_tuple(e, kTransitionTuple);
     const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
     const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
     const int s2 = static_cast<int>(e[2].as_int(0, n.states - 1));
@@ -166,7 +236,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     row_sum[static_cast<size_t>(r)] += p;
     row_first[static_cast<size_t>(r)] = std::min(row_first[static_cast<size_t>(r)], i);
   }
-  reject_duplicates(std::move(keys), list, "transition");
+  reject_duplicates(std::move(keys), list, kTransitionTuple.what);
   for (long long r = 0; r < pairs; ++r) {
     const int s = static_cast<int>(r / n.actions);
     const int a = static_cast<int>(r % n.actions);
@@ -193,7 +263,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     double sum = 0.0;
     for (size_t i = 0; i < st->size(); ++i) {
       const JsonNode e = (*st)[i];
-      e.expect_tuple(2, "[state, probability]");
+      expect_tuple(e, kStartTuple);
       const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
       const double p = e[1].as_number(0.0, 1.0);
       if (p > 0.0 && is_terminal[static_cast<size_t>(s)]) e.fail("start state " + std::to_string(s) + " is terminal");
@@ -201,7 +271,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       sum += p;
       seen.push_back({s, i});
     }
-    reject_duplicates(std::move(seen), *st, "start state");
+    reject_duplicates(std::move(seen), *st, kStartTuple.what);
     if (std::abs(sum - 1.0) > kFileSumTolerance) st->fail("probabilities sum to " + fmt(sum) + ", expected 1");
     // A sum off by rounding only is kept as given (as eta's, normalise_eta), so that a
     // file written from an MDP reads back bit for bit: 25 x 0.04 is not 1 in doubles, and
@@ -222,7 +292,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     std::vector<std::pair<std::pair<long long, int>, size_t>> seen;
     for (size_t i = 0; i < fl->size(); ++i) {
       const JsonNode e = (*fl)[i];
-      e.expect_tuple(4, "[state, action, feature, value]");
+      expect_tuple(e, kFeatureTuple);
       const int s = static_cast<int>(e[0].as_int(0, n.states - 1));
       const int a = static_cast<int>(e[1].as_int(0, n.actions - 1));
       if (n.features == 0) e[2].fail("mdp.num_features is 0, so there is no feature to set");
@@ -231,7 +301,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       features.push_back({s, a, k, v});
       seen.push_back({{static_cast<long long>(s) * n.actions + a, k}, i});
     }
-    reject_duplicates(std::move(seen), *fl, "feature entry");
+    reject_duplicates(std::move(seen), *fl, kFeatureTuple.what);
   }
 
   if (auto names = node.find("state_names")) problem.state_names = read_names(*names, n.states, "state");
@@ -245,10 +315,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
 
 ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
                                         std::vector<std::string>* warnings) {
-  node.check_keys({"num_symbols", "num_confounders", "subject_alpha", "subject_alpha_default",
-                   "confounder_alpha", "confounder_alpha_default", "learn", "c", "update", "prior_strength",
-                   "learn_eta", "eta_prior_strength", "unlisted_source"},
-                  warnings);
+  node.check_keys(observation_model_shape().keys(), warnings);
   ObservationPrior prior;
   prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
   prior.num_confounders = static_cast<int>(node.at("num_confounders").as_int(0, 1 << 16));
@@ -270,7 +337,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   if (auto list = node.find("subject_alpha")) {
     for (size_t i = 0; i < list->size(); ++i) {
       const JsonNode e = (*list)[i];
-      e.expect_tuple(4, "[state, action, symbol, alpha]");
+      expect_tuple(e, kSubjectAlphaTuple);
       const int s = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
       const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
       const int w = static_cast<int>(e[2].as_int(0, prior.num_symbols - 1));
@@ -280,7 +347,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   if (auto list = node.find("confounder_alpha")) {
     for (size_t i = 0; i < list->size(); ++i) {
       const JsonNode e = (*list)[i];
-      e.expect_tuple(3, "[confounder, symbol, alpha]");
+      expect_tuple(e, kConfounderAlphaTuple);
       if (prior.num_confounders == 0) e[0].fail("observation_model.num_confounders is 0");
       const int c = static_cast<int>(e[0].as_int(0, prior.num_confounders - 1));
       const int w = static_cast<int>(e[1].as_int(0, prior.num_symbols - 1));
@@ -318,7 +385,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
     if (!(prior.eta_strength > 0.0 && prior.eta_strength <= 1e12)) k->fail("expected a number in (0, 1e12], got " + fmt(prior.eta_strength));
   }
   if (auto u = node.find("unlisted_source")) {
-    u->check_keys({"eta"}, warnings);
+    u->check_keys({"eta"}, warnings);  // as observation_model_shape()
     const JsonNode eta = u->at("eta");
     prior.unlisted_eta = eta.as_number();
     if (!(prior.unlisted_eta > 0.0 && prior.unlisted_eta < 1.0)) eta.fail("expected a number in (0, 1), got " + fmt(prior.unlisted_eta));
@@ -345,54 +412,56 @@ Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp) {
   return w;
 }
 
-nlohmann::json parse_json_text(const std::string& text) {
-  // JSON leaves duplicate keys to the reader (nlohmann keeps the last): a file that says
-  // one thing twice is refused, naming the key, rather than silently half-ignored.
-  std::vector<std::set<std::string>> keys;  // of each object being read, innermost last
-  const auto check = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
-    using E = nlohmann::json::parse_event_t;
-    if (event == E::object_start) {
-      keys.emplace_back();
-    } else if (event == E::object_end) {
-      keys.pop_back();
-    } else if (event == E::key) {
-      const std::string key = parsed.get<std::string>();
-      if (!keys.empty() && !keys.back().insert(key).second) throw InputError(key, "appears twice in the same object");
-    }
-    return true;
-  };
-  try {
-    return nlohmann::json::parse(text, check);
-  } catch (const nlohmann::json::exception& e) {
-    // "[json.exception.parse_error.101] parse error at line 2, column 5: ..." -> drop the tag.
-    std::string what = e.what();
-    const auto tag_end = what.find("] ");
-    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
-    if (e.id == 406) what += " (NaN and infinity are not JSON numbers)";  // number overflow
-    throw InputError("", "malformed JSON: " + what);
-  }
+namespace {
+
+const char* kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
 }
 
+std::string too_large() {
+  return "more than " + std::to_string(kMaxFileBytes >> 20) + " MB: not a problem file (or too large for one)";
+}
+
+struct Descriptor {
+  int fd;
+  ~Descriptor() { ::close(fd); }
+};
+
+}  // namespace
+
 std::string read_text_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError("", "cannot read: it is a directory");
-  errno = 0;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("", "cannot open: " + std::string(std::strerror(errno ? errno : ENOENT)));
-  // Read in blocks up to a bound: a device (/dev/zero) or a pipe has no size to check first.
-  // A regular file's size (within the bound) is reserved, so its text is copied once.
-  std::string text;
-  const std::uintmax_t size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : 0;
-  if (!ec && size <= kMaxFileBytes) text.reserve(static_cast<size_t>(size));
-  std::vector<char> block(1 << 16);
-  while (in) {
-    in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    text.append(block.data(), static_cast<size_t>(in.gcount()));
-    if (text.size() > kMaxFileBytes) {
-      throw InputError("", "more than " + std::to_string(kMaxFileBytes >> 20) + " MB: not a problem file (or too large for one)");
-    }
+  // Only a regular file is read: opened without waiting (a FIFO's open would block until
+  // a writer came) and checked before a byte is read (a device such as /dev/zero never ends).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int error = errno;
+    struct stat st {};
+    if (error == ENXIO && ::stat(path.c_str(), &st) == 0) throw FileError(std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
+    throw FileError("cannot open: " + std::string(std::strerror(error)));
   }
-  if (in.bad()) throw InputError("", "cannot read: " + std::string(std::strerror(errno ? errno : EIO)));
+  const Descriptor closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw FileError("cannot read: " + std::string(std::strerror(errno)));
+  if (!S_ISREG(st.st_mode)) throw FileError(std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
+  if (static_cast<std::uintmax_t>(st.st_size) > kMaxFileBytes) throw FileError(too_large());
+  // The bound holds while reading too (the file may grow); its size is reserved, so the
+  // text is copied once.
+  std::string text;
+  text.reserve(static_cast<size_t>(st.st_size));
+  std::vector<char> block(1 << 16);
+  for (;;) {
+    const ssize_t n = ::read(fd, block.data(), block.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw FileError("cannot read: " + std::string(std::strerror(errno)));
+    if (n == 0) break;
+    text.append(block.data(), static_cast<size_t>(n));
+    if (text.size() > kMaxFileBytes) throw FileError(too_large());
+  }
   return text;
 }
 
@@ -428,7 +497,7 @@ ObservedTrajectory read_steps(const JsonNode& steps, const std::optional<Observa
   size_t total = 0;
   for (size_t t = 0; t < length; ++t) {
     const JsonNode step = steps[t];
-    step.check_keys({"observations"}, warnings);
+    step.check_keys(detail::step_shape().keys(), warnings);
     total += step.at("observations").size();
   }
   if (total > 0 && !prior) {
@@ -475,7 +544,7 @@ Trajectory read_truth(const JsonNode& node, const Mdp& mdp) {
   if (length == 0) node.fail("is empty; a trajectory needs at least one step");
   for (size_t t = 0; t < length; ++t) {
     const JsonNode e = node[t];
-    e.expect_tuple(2, "[state, action]");
+    detail::expect_tuple(e, detail::kTruthTuple);
     const int s = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
     const int a = static_cast<int>(e[1].as_int(0, mdp.num_actions - 1));
     if (mdp.is_terminal(s)) {
@@ -496,7 +565,7 @@ Trajectory read_truth(const JsonNode& node, const Mdp& mdp) {
 Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warnings) {
   const JsonNode root(doc, "");
   if (!doc.is_object()) root.fail("the problem file must be a JSON object");
-  root.check_keys({"mdp", "observation_model", "demonstration", "true_weights"}, warnings);
+  root.check_keys(detail::problem_shape().keys(), warnings);
   Problem problem;
   problem.mdp = read_mdp(root.at("mdp"), problem, warnings);
   if (auto om = root.find("observation_model")) {
@@ -509,7 +578,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
   if (count == 0) demo.fail("is empty; give at least one trajectory");
   for (size_t i = 0; i < count; ++i) {
     const JsonNode item = demo[i];
-    item.check_keys({"steps", "truth", "ends_in_terminal", "controlled"}, warnings);
+    item.check_keys(detail::trajectory_shape().keys(), warnings);
     DemonstratedTrajectory trajectory;
     trajectory.ends_in_terminal = has_terminal;
     if (auto e = item.find("ends_in_terminal")) {
@@ -568,11 +637,13 @@ std::vector<Trajectory> Problem::truth_trajectories() const {
 }
 
 Problem parse_problem(const std::string& text, std::vector<std::string>* warnings) {
-  return parse_document(detail::parse_json_text(text), warnings);
+  return parse_document(detail::parse_json_text(text, detail::problem_shape()), warnings);
 }
 
 Problem read_problem_file(const std::string& path, std::vector<std::string>* warnings) {
-  return parse_problem(detail::read_text_file(path), warnings);
+  // The text is let go once its document is built.
+  const nlohmann::json doc = detail::parse_json_text(detail::read_text_file(path), detail::problem_shape());
+  return parse_document(doc, warnings);
 }
 
 nlohmann::ordered_json problem_to_json(const Problem& problem) {

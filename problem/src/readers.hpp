@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "json_document.hpp"
 #include "problem/json_node.hpp"
 #include "problem/problem_file.hpp"
 
@@ -18,13 +19,18 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
 ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, std::vector<std::string>* warnings);
 // "true_weights": one per feature.
 Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp);
-// The JSON document of `text`; malformed JSON is InputError("", "malformed JSON: ...").
-nlohmann::json parse_json_text(const std::string& text);
+// What the parser builds of "mdp" and "observation_model" (json_document.hpp), and the
+// keys their readers know.
+const JsonShape& mdp_shape();
+const JsonShape& observation_model_shape();
+// A tuple of the list `tuple` describes, or fail naming its shape.
+void expect_tuple(const JsonNode& node, const TupleList& tuple);
 // The largest problem or domain file read (256 MiB; a 200 x 200 Gridworld's is 15 MB): a
-// bigger one, or an endless device such as /dev/zero, is refused before it fills memory
-// (its JSON tree takes several times the bytes).
+// bigger one is refused before it is read (its JSON tree takes several times the bytes).
 constexpr size_t kMaxFileBytes = size_t{256} << 20;
-// The whole file; unreadable files are InputError("", ...).
+// The whole of a regular file; anything else (a FIFO, a device such as /dev/zero, a
+// directory, a socket), a file that cannot be read or one over kMaxFileBytes is a
+// FileError, refused before a byte is read.
 std::string read_text_file(const std::string& path);
 
 }  // namespace hbirl::detail

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "learner/input_error.hpp"
 #include "learner/mdp.hpp"
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
@@ -43,7 +44,15 @@ struct Problem {
 // Parse and validate. `source` names the document in messages only. Unknown keys add a
 // line to *warnings (when not null) and are otherwise ignored.
 Problem parse_problem(const std::string& text, std::vector<std::string>* warnings = nullptr);
-// Read a file; a missing or unreadable file is an InputError with an empty field.
+// A file that cannot be read as a problem or domain file at all: missing, unreadable, not
+// a regular file (a FIFO, a device, a directory, a socket) or over 256 MB. An InputError
+// with an empty field, so that a caller can name the option that gave the path.
+class FileError : public InputError {
+ public:
+  explicit FileError(std::string message) : InputError("", std::move(message)) {}
+};
+
+// Read a file; one that cannot be read is a FileError (refused before it is read).
 Problem read_problem_file(const std::string& path, std::vector<std::string>* warnings = nullptr);
 
 // The problem as a JSON document in the same format (round-trips through parse_problem).
