@@ -14,6 +14,12 @@ stage "installing what is missing"
 scripts/install-deps.sh
 jobs="$(nproc)"
 
+# The scripts a user runs and the tests' own: quoting (a path with a space once broke
+# launch.sh), unused and unquoted variables. Every finding fails the run.
+stage "shellcheck"
+shellcheck services/launch.sh demo.sh test.sh .ci/run scripts/*.sh bench/*.sh tests/in_private_netns.sh \
+  tests/services/netns_test.sh tests/dashboard/browser_test.sh
+
 # Ninja when there is one: it compiles a library's sources while the libraries it links
 # are still being built, and so keeps both cores busy (the Makefiles wait per target).
 # A build folder made before keeps the generator it was made with.

@@ -46,9 +46,12 @@ inline constexpr FullCommand kExport{
     "for bit, and `hbirl posterior` shows what the optimiser inferred."};
 inline constexpr FullCommand kKeygen{
     "keygen",
-    "Write a fresh run key (32 random bytes as 64 hexadecimal digits) to a new file with mode 0600.\n"
-    "Services, `hbirl publish`, the dashboard and readers of a recording given the same --key FILE\n"
-    "sign every message and drop those not signed with it. services/launch.sh makes one per run."};
+    "Write a fresh key (32 random bytes as 64 hexadecimal digits) to a new file with mode 0600: a key\n"
+    "for many runs (e.g. shared with sampler workers on other machines, which then serve any run of\n"
+    "it), or with --run / --run-of a key file for one run, which also names a fresh run identity.\n"
+    "Services, `hbirl publish`, the dashboard and readers of a recording given a run's key file sign\n"
+    "every message for that run and drop those not signed with the key for it: a key shared by many\n"
+    "runs does not let one run's messages into another. services/launch.sh writes one per run."};
 inline constexpr FullCommand kFullCommands[] = {kValidate, kExperiment, kRender, kReport, kPublish, kExport, kKeygen};
 
 }  // namespace hbirl::cli

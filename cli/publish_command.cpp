@@ -80,8 +80,8 @@ Command add_publish(CLI::App& app) {
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
   cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");
   cmd->add_option("--key", args->key_file,
-                  "The run's key file: sign every message with it, as the services started with the same --key\n"
-                  "expect (hbirl keygen FILE makes one; docs/RELIABILITY.md)");
+                  "The run's key file (services/launch.sh --key writes OUT/run.key): sign every message for its run,\n"
+                  "as the services started with the same --key expect (docs/RELIABILITY.md)");
   cmd->add_option("--rate", args->rate, "Steps per second, wall clock (0: as fast as the bus takes them)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();

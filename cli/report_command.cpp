@@ -25,6 +25,10 @@ Command add_report(CLI::App& app) {
     std::cout << r.page << "\n";
     std::cerr << "hbirl: report of " << r.messages << " messages (" << r.bad_messages << " bad), " << r.figures.size()
               << " figures: " << r.page << "\n";
+    if (!r.finished) {  // a report, but not of a learned run: not a success
+      std::cerr << "hbirl: the run in " << args->log << " never finished learning (no final REWARD): the report shows what was recorded\n";
+      return 1;
+    }
     return 0;
   };
 }

@@ -54,6 +54,7 @@ for t in "${targets[@]}"; do
   # (with its stack) before the whole process would be. Leaks are checked (-detect_leaks
   # is libFuzzer's default with ASan).
   status=0
+  # shellcheck disable=SC2086  # FUZZ_ARGS: words on purpose
   ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=1:allocator_may_return_null=0" \
   UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
     "$build/tests/fuzz/$t" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \

@@ -2,7 +2,7 @@
 # Starts hbirl's service set -- simulator, perception and labeller (a camera's domain),
 # sampler workers, optimiser -- and the dashboard, waits for the optimiser to learn, prints the
 # learned reward, writes the report and shuts everything down (also on Ctrl-C). Exits
-# non-zero if any service failed.
+# non-zero if any service failed, or if the run is incomplete (unless --allow-incomplete).
 #
 # LCM talks UDP multicast. Where multicast to loopback is not routed (the usual case in
 # containers), the set runs in a private network namespace of its own (unshare -rn, lo
@@ -39,6 +39,9 @@ keep_dashboard=0
 report=1
 key=""
 key_mode=auto
+stall=20
+allow_incomplete=0
+incomplete_after=60
 orig_args=("$@")
 
 usage() {
@@ -88,13 +91,25 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          udpm://239.255.76.67:7667?ttl=1 to include workers on other
                          machines (they run: hbirl-sampler --url URL)
   --timeout S            give up (and fail) when there is no result after S seconds (default $timeout)
-  --key FILE             the run's key (hbirl keygen FILE). By default a fresh one is written to
-                         OUT/run.key (mode 0600) for every run whose sensor is the set's own
-                         simulator (or --sensor-key): every service, the recording's readers and
-                         the dashboard then believe only messages signed with it
-                         (docs/RELIABILITY.md). A run waiting for an outside sensor is
-                         unauthenticated unless --key is given (the sensor must sign with it)
+  --key FILE             a key for many runs (hbirl keygen FILE; e.g. shared with sampler workers
+                         on other machines, started with --key FILE: they serve any run of it).
+                         Every run gets its own key file OUT/run.key (mode 0600): the key and a
+                         fresh run identity; every service, the recording's readers and the
+                         dashboard believe only messages signed with the key for this run, so
+                         one run's messages (a replayed recording) never enter another. Without
+                         --key a fresh key is made for the run whose sensor is the set's own
+                         simulator (or --sensor-key) (docs/RELIABILITY.md). A run waiting for an
+                         outside sensor is unauthenticated unless --key is given (the sensor
+                         must then sign with OUT/run.key)
   --no-key               no key: the bus is unauthenticated (every service says so)
+  --stall-timeout S      a service whose heartbeat has not been heard for S seconds (stopped or
+                         hung: alive, but silent) is killed and restarted, like one that died
+                         (default $stall; 0: only deaths are noticed)
+  --allow-incomplete     learn from what came when a run's frames stop coming before it is
+                         complete, and exit 0 (the result says what is missing under
+                         "incomplete"); by default such a run fails, after
+  --incomplete-after S   seconds without a frame since the end of the run, while asking for
+                         the missing ones again (default $incomplete_after)
   --kill-worker-after-blocks N
                          (testing) the first worker SIGKILLs itself after computing N blocks
 USAGE
@@ -129,6 +144,9 @@ while [ $# -gt 0 ]; do
     --no-report) report=0; shift ;;
     --key) key="$2"; key_mode=given; shift 2 ;;
     --no-key) key_mode=none; shift ;;
+    --stall-timeout) stall="$2"; shift 2 ;;
+    --allow-incomplete) allow_incomplete=1; shift ;;
+    --incomplete-after) incomplete_after="$2"; shift 2 ;;
     --sensor-key) sensor_key=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "launch.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
@@ -155,24 +173,29 @@ fi
 mkdir -p "$out/logs"
 out="$(cd "$out" && pwd)"
 
-# The run's key: made once, by the outer launch.sh, and handed to the copy in the namespace.
+# The run's key file, OUT/run.key: the key (a fresh one, or --key's) and a fresh run
+# identity. Made once, by the outer launch.sh; the copy in the namespace is handed it.
 inner="${HBIRL_LAUNCH_INNER:-}"
-if [ "$key_mode" = auto ]; then
-  if [ "$no_sim" = 1 ] && [ "${sensor_key:-0}" = 0 ]; then
-    key_mode=none
-    echo "launch.sh: the sensor is outside the set: the bus is unauthenticated (--key FILE, with a sensor that signs, makes it authenticated)"
-  elif [ -z "$inner" ]; then
-    key="$out/run.key"
-    rm -f "$key"
-    "$build/hbirl" keygen "$key" 2>/dev/null || { echo "launch.sh: could not write the run key $key" >&2; exit 2; }
-    key_mode=given
+if [ "$key_mode" = auto ] && [ "$no_sim" = 1 ] && [ "${sensor_key:-0}" = 0 ]; then
+  key_mode=none
+  echo "launch.sh: the sensor is outside the set: the bus is unauthenticated (--key FILE, with a sensor that signs, makes it authenticated)"
+fi
+run_key="$out/run.key"
+if [ "$key_mode" != none ] && [ -z "$inner" ]; then
+  keygen=(--run)
+  if [ "$key_mode" = given ]; then
+    [ -f "$key" ] || { echo "launch.sh: --key: $key not found" >&2; exit 2; }
+    keygen=(--run-of "$key")
   fi
+  rm -f "$run_key"
+  "$build/hbirl" keygen "${keygen[@]}" "$run_key" 2>"$out/logs/keygen.log" ||
+    { echo "launch.sh: could not write the run's key file $run_key: $(cat "$out/logs/keygen.log")" >&2; exit 2; }
 fi
 key_args=()
-if [ "$key_mode" = given ]; then
-  [ -f "$key" ] || { echo "launch.sh: --key: $key not found" >&2; exit 2; }
-  key="$(cd "$(dirname "$key")" && pwd)/$(basename "$key")"
-  key_args=(--key "$key")
+if [ "$key_mode" != none ]; then
+  [ -f "$run_key" ] || { echo "launch.sh: the run's key file $run_key is missing" >&2; exit 2; }
+  key_args=(--key "$run_key")
+  [ -n "$inner" ] || echo "launch.sh: run $(sed -n 's/^run //p' "$run_key"): every message signed with the key for it ($run_key)"
 fi
 
 # The outer launch.sh (not the copy run inside a namespace) owns the dashboard and the report.
@@ -195,8 +218,18 @@ if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
     echo "launch.sh: $build/hbirl-dashboard not built: no dashboard" >&2
   fi
 fi
+# Stops a process and waits for it, whatever its state: SIGTERM, SIGCONT (a stopped process
+# acts on SIGTERM only once continued), and SIGKILL if it is still there after 5 s.
+stop_process() {
+  local pid="$1" _
+  kill -TERM "$pid" 2>/dev/null || return 0
+  kill -CONT "$pid" 2>/dev/null || true
+  for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  kill -KILL "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+}
 stop_dashboard() {
-  if [ -n "$dashboard_pid" ]; then kill -TERM "$dashboard_pid" 2>/dev/null || true; wait "$dashboard_pid" 2>/dev/null || true; fi
+  if [ -n "$dashboard_pid" ]; then stop_process "$dashboard_pid"; fi
   dashboard_pid=""
 }
 # After the run (outer launch.sh): the report, and the dashboard kept up or stopped.
@@ -204,12 +237,14 @@ finish() {
   local status="$1"
   trap 'stop_dashboard; exit 130' INT TERM
   if [ -z "$inner" ] && [ "$report" = 1 ] && [ "$record" = 1 ] && [ -f "$out/run.lcmlog" ] && [ -x "$build/hbirl" ]; then
-    if "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" "${domain_args[@]}" "${key_args[@]}" \
-      >/dev/null 2>"$out/logs/report.log"; then
-      echo "launch.sh: report: $out/report/index.html"
-    else
-      echo "launch.sh: the report could not be written (see $out/logs/report.log)" >&2
-    fi
+    local report_status=0
+    "$build/hbirl" report --log "$out/run.lcmlog" --out "$out/report" "${domain_args[@]}" "${key_args[@]}" \
+      >/dev/null 2>"$out/logs/report.log" || report_status=$?
+    case "$report_status" in
+      0) echo "launch.sh: report: $out/report/index.html" ;;
+      1) echo "launch.sh: report of the unfinished run: $out/report/index.html" ;;
+      *) echo "launch.sh: the report could not be written (see $out/logs/report.log)" >&2 ;;
+    esac
   fi
   if [ -n "$dashboard_pid" ] && [ "$keep_dashboard" = 1 ]; then
     echo "launch.sh: the dashboard stays up at http://127.0.0.1:$dashboard_port/ -- Ctrl-C to stop it"
@@ -229,10 +264,14 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     echo "           (unshare -rn; lo up; ip route add 224.0.0.0/4 dev lo)"
     # In the background, so that a signal to this script reaches its trap at once, which
     # passes it on (the set's own launch.sh then stops its services).
+    inner_args=("${orig_args[@]}" --out "$out" --build "$build")
+    [ "$record" = 0 ] || inner_args+=(--record)
+    [ "$key_mode" != none ] || inner_args+=(--no-key)
+    [ "$key_mode" = none ] || inner_args+=(--key "$run_key")  # the run's key file, as it is
+    # shellcheck disable=SC2016  # $0 and $@ are the inner shell's
     HBIRL_IN_NETNS=1 HBIRL_LAUNCH_INNER=1 unshare -rn -- bash -c \
       'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
-      "${BASH_SOURCE[0]}" "${orig_args[@]}" --out "$out" --build "$build" $([ "$record" = 1 ] && echo --record) \
-      $([ "$key_mode" = given ] && echo --key "$key") $([ "$key_mode" = none ] && echo --no-key) &
+      "${BASH_SOURCE[0]}" "${inner_args[@]}" &
     set_pid=$!
     trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; stop_dashboard; exit 130' INT TERM
     set +e
@@ -257,9 +296,13 @@ fi
 # exit status other than 0, or a signal) is started again with the same command, after a
 # back-off of 0.5, 1, 2 s, at most $max_restarts times; the protocol asks again for what it
 # lost (frames, end markers, E-step blocks), so the run still completes with the same
-# result. lcm-logger is not restarted (what it missed cannot be recorded again: the
-# recording is then incomplete, and `hbirl learn --log` says so). logs/pids lists every
-# process started, restarts included.
+# result. A service alive but silent -- no heartbeat for --stall-timeout seconds: stopped
+# (SIGSTOP) or hung -- is killed and restarted the same way (each touches logs/NAME.alive
+# with every heartbeat, hbirl-services --alive-file). Exit 2 (bad input) and 3 (the run
+# cannot be learned: incomplete, or contradicting itself) are not restarted: they fail the
+# run. lcm-logger is not restarted (what it missed cannot be recorded again: the recording
+# is then incomplete, and `hbirl learn --log` says so). logs/pids lists every process
+# started, restarts included.
 pids=()
 names=()
 cmds=()
@@ -268,32 +311,43 @@ max_restarts=3
 supervised() { case "$1" in perception|labeller|sampler-*|optimiser|sim-driver) return 0 ;; *) return 1 ;; esac; }
 run_service() {  # run_service INDEX: (re)start it in the background
   local i="$1" name="${names[$1]}" extra=""
-  supervised "$name" && [ "${restarts[$i]}" -gt 0 ] && extra="--restarts ${restarts[$i]}"
+  if supervised "$name"; then
+    [ "${restarts[$i]}" = 0 ] || extra="--restarts ${restarts[$i]}"
+    touch "$out/logs/$name.alive"  # its silence is counted from now
+    extra+=" --alive-file $(printf '%q' "$out/logs/$name.alive")"
+  fi
   if [ "$name" = optimiser ]; then  # stdout is its result, stderr its log
     eval "exec ${cmds[$i]} $extra" >>"$out/logs/optimiser.log" 2>>"$out/logs/optimiser.err" &
   else
     eval "exec ${cmds[$i]} $extra" >>"$out/logs/$name.log" 2>&1 &
   fi
-  pids[$i]=$!
+  pids[i]=$!
   echo "$name ${pids[$i]}" >>"$out/logs/pids"
 }
 start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log
   local name="$1"; shift
   local i="${#names[@]}"
-  names[$i]="$name"
-  cmds[$i]="$(printf '%q ' "$@")"
-  restarts[$i]=0
+  names[i]="$name"
+  cmds[i]="$(printf '%q ' "$@")"
+  restarts[i]=0
   run_service "$i"
 }
 : >"$out/logs/pids"
 logger=""
-stop_all() {  # the services, then the logger (it records their last heartbeats)
-  for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -TERM "$pid" 2>/dev/null || true; done
+stop_all() {  # the services, then the logger (it records their last heartbeats); never waits on a stopped one
+  local pid _
+  for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || { kill -TERM "$pid" 2>/dev/null && kill -CONT "$pid" 2>/dev/null; } || true; done
+  for _ in $(seq 1 50); do
+    local left=0
+    for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || ! kill -0 "$pid" 2>/dev/null || left=1; done
+    [ "$left" = 1 ] || break
+    sleep 0.1
+  done
+  for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -KILL "$pid" 2>/dev/null || true; done
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || wait "$pid" 2>/dev/null || true; done
   if [ -n "$logger" ]; then
     sleep 0.2
-    kill -TERM "$logger" 2>/dev/null || true
-    wait "$logger" 2>/dev/null || true
+    stop_process "$logger"
   fi
 }
 trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; stop_dashboard; exit 130' INT TERM
@@ -308,7 +362,7 @@ for i in $(seq 1 "$workers"); do
   sampler=("$build/hbirl-sampler" --url "$url" --id "sampler-$i" "${key_args[@]}")  # the MDP comes over the bus
   if [ "$i" = 1 ] && [ -n "$kill_worker_after_blocks" ]; then
     start "sampler-$i" "${sampler[@]}" --kill-self-after-blocks "$kill_worker_after_blocks"
-    cmds[$((${#names[@]} - 1))]="$(printf '%q ' "${sampler[@]}")"  # (testing) restarted, it does not kill itself again
+    cmds[${#names[@]} - 1]="$(printf '%q ' "${sampler[@]}")"  # (testing) restarted, it does not kill itself again
   else
     start "sampler-$i" "${sampler[@]}"
   fi
@@ -322,7 +376,10 @@ if [ "$no_sim" = 0 ]; then
 fi
 : >"$out/logs/optimiser.log"
 : >"$out/logs/optimiser.err"
-start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" --out "$out/result.json"
+optimiser_args=(--incomplete-after-ms "$((incomplete_after * 1000))")
+[ "$allow_incomplete" = 0 ] || optimiser_args+=(--allow-incomplete)
+start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" \
+  "${optimiser_args[@]}" --out "$out/result.json"
 optimiser_index=$((${#names[@]} - 1))
 if [ "$no_sim" = 0 ]; then
   # Each domain's simulator reads the options that concern it.
@@ -330,13 +387,13 @@ if [ "$no_sim" = 0 ]; then
     --controlled-sorts "$controlled_sorts" --fps "$fps" --confounders "$confounders" --trajectories "$trajectories" \
     --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
 elif [ -n "$sensor" ]; then
-  if [ "${sensor_key:-0}" = 1 ] && [ "$key_mode" = given ]; then
-    start sensor bash -c "$sensor --url \"\$0\" --key \"\$1\"" "$url" "$key"
+  if [ "${sensor_key:-0}" = 1 ] && [ "$key_mode" != none ]; then
+    start sensor bash -c "$sensor --url \"\$0\" --key \"\$1\"" "$url" "$run_key"
   else
     start sensor bash -c "$sensor --url \"\$0\"" "$url"
   fi
 else
-  echo "launch.sh: no simulator (--no-sim): waiting for a sensor on $url (hbirl publish --problem F --url '$url')"
+  echo "launch.sh: no simulator (--no-sim): waiting for a sensor on $url (hbirl publish --problem F --url '$url'$([ "$key_mode" = none ] || printf ' --key %q' "$run_key"))"
 fi
 
 
@@ -347,34 +404,50 @@ describe() { if [ "$1" -gt 128 ]; then echo "killed by signal $(($1 - 128))"; el
 # Watch everything until the optimiser is done: a service that dies is restarted (above);
 # one that dies more than $max_restarts times, or anything else that fails, fails the run
 # at once; so does running past --timeout.
+# Silent: running, but no heartbeat (its alive file untouched) for $stall seconds.
+silent() {
+  [ "$stall" != 0 ] && supervised "${names[$1]}" && [ "$out/logs/${names[$1]}.alive" -ot "$out/logs/.stall" ]
+}
 check_services() {
+  [ "$stall" = 0 ] || touch -d "@$(($(date +%s) - stall))" "$out/logs/.stall"
   for i in "${!pids[@]}"; do
     [ -n "${finished[$i]:-}" ] && continue
-    kill -0 "${pids[$i]}" 2>/dev/null && continue
-    set +e; wait "${pids[$i]}"; s=$?; set -e
     name="${names[$i]}"
+    if kill -0 "${pids[$i]}" 2>/dev/null; then
+      silent "$i" || continue
+      # Alive but silent: stopped or hung. SIGKILL works on a stopped process too.
+      kill -KILL "${pids[$i]}" 2>/dev/null || true
+      set +e; wait "${pids[$i]}"; set -e
+      s=137
+      why="silent for over $stall s: stopped or hung; killed"
+    else
+      set +e; wait "${pids[$i]}"; s=$?; set -e
+      why="$(describe "$s")"
+    fi
     if [ "$s" = 0 ]; then
-      finished[$i]=1
+      finished[i]=1
       [ "$i" = "$optimiser_index" ] && optimiser_done=1
       continue
     fi
-    if supervised "$name" && [ "${restarts[$i]}" -lt "$max_restarts" ]; then
-      restarts[$i]=$((restarts[$i] + 1))
+    if supervised "$name" && [ "$s" != 2 ] && [ "$s" != 3 ] && [ "${restarts[$i]}" -lt "$max_restarts" ]; then
+      restarts[i]=$((restarts[i] + 1))
       delay="$(awk -v k="${restarts[$i]}" 'BEGIN { print 0.5 * 2 ^ (k - 1) }')"
-      echo "launch.sh: $name died ($(describe "$s")); restarting it in $delay s (restart ${restarts[$i]} of $max_restarts)" >&2
+      echo "launch.sh: $name died ($why); restarting it in $delay s (restart ${restarts[$i]} of $max_restarts)" >&2
       sleep "$delay"
       run_service "$i"
       continue
     fi
-    finished[$i]=1
+    finished[i]=1
     if [ "$name" = lcm-logger ]; then
-      echo "launch.sh: lcm-logger died ($(describe "$s")): the recording $out/run.lcmlog is incomplete" >&2
+      echo "launch.sh: lcm-logger died ($why): the recording $out/run.lcmlog is incomplete" >&2
       continue
     fi
-    if supervised "$name"; then
-      echo "launch.sh: $name died $((max_restarts + 1)) times (last: $(describe "$s")); giving up: see $out/logs/$name.log" >&2
+    if [ "$name" = optimiser ] && [ "$s" = 3 ]; then
+      echo "launch.sh: $(tail -n 1 "$out/logs/optimiser.err")" >&2
+    elif supervised "$name" && [ "$s" != 2 ] && [ "$s" != 3 ]; then
+      echo "launch.sh: $name died $((max_restarts + 1)) times (last: $why); giving up: see $out/logs/$name.log" >&2
     else
-      echo "launch.sh: $name failed ($(describe "$s")); see $out/logs/$name.log" >&2
+      echo "launch.sh: $name failed ($why); see $out/logs/$name.log" >&2
     fi
     failed=1
   done
@@ -400,6 +473,17 @@ trap - INT TERM EXIT
 if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
   echo "launch.sh: learned (also in $out/result.json):"
   cat "$out/result.json"
-  [ "$record" = 1 ] && echo "launch.sh: recorded $out/run.lcmlog; replay: $build/hbirl learn --log $out/run.lcmlog ${key_args[*]}"
+  if grep -q '"incomplete":' "$out/result.json"; then
+    missing="$(sed -n 's/^ *"incomplete": "\(.*\)",*$/\1/p' "$out/result.json")"
+    if [ "$allow_incomplete" = 1 ]; then
+      echo "launch.sh: learned from an incomplete run, as --allow-incomplete allows: $missing" >&2
+    else
+      echo "launch.sh: the run is incomplete ($missing): not a success" >&2
+      failed=1
+    fi
+  fi
+  if [ "$record" = 1 ]; then
+    echo "launch.sh: recorded $out/run.lcmlog; replay: $(printf '%q ' "$build/hbirl" learn --log "$out/run.lcmlog" "${key_args[@]}")"
+  fi
 fi
 finish "$failed"

@@ -92,9 +92,9 @@ int run(int argc, char** argv) {
     if (services::stop_requested()) return 0;
     auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("bus", ...) if it cannot
     follow->follow(true);
-    bus = services::with_key(std::move(follow), key_file, counters, false);
+    bus = services::with_key(std::move(follow), key_file, counters, services::KeyUse::kReader);
   } else {
-    bus = services::with_key(std::make_unique<services::LcmBus>(url), key_file, counters);
+    bus = services::with_key(std::make_unique<services::LcmBus>(url), key_file, counters, services::KeyUse::kReader);
   }
   state.subscribe(*bus, counters);
   std::unique_ptr<services::Heartbeat> heartbeat;

@@ -227,13 +227,23 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   services::Counters counters;
   counters.service = "hbirl report";
   counters.quiet = true;
-  // throws InputError("bus", ...) / ("--key", ...)
-  services::require_key_if_signed(log_path, key_file);
-  std::unique_ptr<services::Bus> signed_or_not = services::with_key(std::make_unique<services::LogBus>(log_path), key_file, counters, false);
+  // throws InputError("--log", ...) / ("--key", ...)
+  services::check_recording_key(log_path, key_file);
+  std::unique_ptr<services::Bus> signed_or_not =
+      services::with_key(std::make_unique<services::LogBus>(log_path), key_file, counters, services::KeyUse::kReader);
   services::Bus& bus = *signed_or_not;
   DashboardState state(std::move(domain));
   state.subscribe(bus, counters);
   while (bus.handle(0) >= 0) {
+  }
+  if (counters.messages_in == 0) {
+    throw InputError("--log", "nothing in '" + log_path + "' could be read (" + std::to_string(counters.bad_messages) + " bad messages" +
+                                  (counters.last_problem.empty() ? "" : "; the last: " + counters.last_problem) + ")");
+  }
+  if (counters.other_run > 0 && !services::RunKey::read(key_file).run()) {
+    throw InputError("--log", "'" + log_path + "' holds messages of more than one run signed with this key (" +
+                                  std::to_string(counters.other_run) +
+                                  " not of the first; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
   }
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
@@ -243,6 +253,7 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   report.messages = counters.messages_in;
   report.bad_messages = counters.bad_messages;
   const json s = state.json(services::wall_utime());
+  report.finished = !s["reward"].is_null();
   {
     std::ofstream out(dir / "state.json");
     out << s.dump(1, ' ', false, json::error_handler_t::replace) << "\n";

@@ -1,8 +1,8 @@
 // The service processes of the set (README.md "Services and channels"), one executable: it runs as the service it is
 // called by -- hbirl-sim-driver, hbirl-perception, hbirl-labeller, hbirl-sampler,
 // hbirl-optimiser are links to it -- or as `hbirl-services SERVICE ...`. Each process only
-// wires a library service (services/pipeline.hpp, estep_service.hpp) to the bus and to
-// its command line.
+// wires a library service (services/*_service.hpp, sim_driver.hpp, optimiser.hpp) to the
+// bus and to its command line.
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
@@ -31,6 +31,7 @@ struct Common {
   std::string url;
   std::string id;
   std::string key_file;
+  std::string alive_file;
   int restarts = 0;
 };
 
@@ -41,9 +42,18 @@ void add_common(CLI::App& app, Common& c) {
   app.add_option("--restarts", c.restarts, "How many times the supervisor restarted this service before (shown in STATUS)")
       ->check(CLI::Range(0, 1000000));
   app.add_option("--key", c.key_file,
-                 "The run's key file (services/launch.sh makes one per run; hbirl keygen FILE): sign every message\n"
-                 "and drop, counting them, those not signed with it. Without it the bus is unauthenticated\n"
-                 "(docs/RELIABILITY.md)");
+                 "The run's key file (services/launch.sh writes OUT/run.key for every run): sign every message for\n"
+                 "the run it names and drop, counting them, those not signed with it for that run. Without it the\n"
+                 "bus is unauthenticated (docs/RELIABILITY.md)");
+  app.add_option("--alive-file", c.alive_file,
+                 "Touch this file with every heartbeat (about once a second), so a supervisor (services/launch.sh)\n"
+                 "sees a service that is alive but silent -- stopped or hung -- and restarts it");
+}
+
+// The bus of a service, signed when it has a key; its heartbeats touch --alive-file.
+std::unique_ptr<Bus> service_bus(const Common& c, Counters& counters, KeyUse use = KeyUse::kService) {
+  if (!c.alive_file.empty()) set_alive_file(c.alive_file);
+  return with_key(open_bus(c.url), c.key_file, counters, use);
 }
 
 // Handles the bus and beats the heart until asked to stop; then says what it did.
@@ -143,7 +153,7 @@ int sim_driver(int argc, char** argv) {
   Counters counters;
   counters.service = "sim_driver";
   counters.restarts = c.restarts;
-  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
+  std::unique_ptr<Bus> bus = service_bus(c, counters);
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
   SimDriver driver(*bus, *domain, o, counters);
@@ -164,7 +174,7 @@ int perception(int argc, char** argv) {
   Counters counters;
   counters.service = "perception";
   counters.restarts = c.restarts;
-  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
+  std::unique_ptr<Bus> bus = service_bus(c, counters);
   PerceptionService service(*bus, counters);
   Heartbeat heartbeat(*bus, counters, "perception", c.id.empty() ? default_id("perception") : c.id);
   return serve(*bus, heartbeat, counters);
@@ -180,7 +190,7 @@ int labeller(int argc, char** argv) {
   Counters counters;
   counters.service = "labeller";
   counters.restarts = c.restarts;
-  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
+  std::unique_ptr<Bus> bus = service_bus(c, counters);
   LabellerService service(*bus, counters, uniform);
   Heartbeat heartbeat(*bus, counters, "labeller", c.id.empty() ? default_id("labeller") : c.id);
   return serve(*bus, heartbeat, counters);
@@ -190,7 +200,10 @@ int sampler(int argc, char** argv) {
   CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and, on a channel of its\n"
                "own (TRAJECTORY_<tag of its --id>), the trajectories of the blocks it is assigned -- its share\n"
                "only, once -- and answers ESTEP_REQUEST for those blocks (ESTEP_RESULT). It needs no domain:\n"
-               "one worker serves any run. Run any number, on any number of machines (same LCM URL with ttl=1).");
+               "one worker serves any run. Run any number, on any number of machines (same LCM URL with ttl=1).\n"
+               "With --key: a run's key file (OUT/run.key) serves that run only; a key for many runs (hbirl keygen\n"
+               "FILE, the one given to services/launch.sh --key) serves every run of it, each answer signed for the\n"
+               "run of its request.");
   Common c;
   add_common(app, c);
   std::int64_t die_after = -1;
@@ -209,7 +222,7 @@ int sampler(int argc, char** argv) {
   Counters counters;
   counters.service = "sampler";
   counters.restarts = c.restarts;
-  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
+  std::unique_ptr<Bus> bus = service_bus(c, counters, KeyUse::kWorker);  // a key file without a run: any run of the key
   SamplerWorker worker(*bus, c.id.empty() ? default_id("sampler") : c.id, counters, max_dataset_mb << 20);
   if (lie) worker.lie_for_testing();
   while (!stop_requested()) {
@@ -249,8 +262,17 @@ int optimiser(int argc, char** argv) {
                  "After the end of the run, ask for lost frames again once none has come for this long")
       ->check(CLI::Range(1, 3600000))
       ->capture_default_str();
-  app.add_option("--quiet-ms", o.quiet_ms, "After the end of the run, learn anyway once no frame has come for this long")
+  app.add_flag("--allow-incomplete", o.allow_incomplete,
+               "Learn from what came when frames stop coming before the run is complete (after --quiet-ms), and say\n"
+               "what is missing in the result (\"incomplete\"). Without it such a run fails (exit 3) after\n"
+               "--incomplete-after-ms without a frame, asking for the missing ones again all the while");
+  app.add_option("--quiet-ms", o.quiet_ms, "With --allow-incomplete: learn from what came once no frame has come for this long\n"
+                                           "after the end of the run")
       ->check(CLI::Range(1, 3600000))
+      ->capture_default_str();
+  app.add_option("--incomplete-after-ms", o.incomplete_after_ms,
+                 "Without --allow-incomplete: fail the run once no frame has come for this long after its end")
+      ->check(CLI::Range(1, 86400000))
       ->capture_default_str();
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
@@ -295,12 +317,20 @@ int optimiser(int argc, char** argv) {
   Counters counters;
   counters.service = "optimiser";
   counters.restarts = c.restarts;
-  std::unique_ptr<Bus> bus = with_key(open_bus(c.url), c.key_file, counters);
+  std::unique_ptr<Bus> bus = service_bus(c, counters);
   Heartbeat heartbeat(*bus, counters, "optimiser", c.id.empty() ? default_id("optimiser") : c.id);
   o.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };
-  const auto result = run_optimiser(
-      *bus, o, counters, stop_requested, [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
-      [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start
+  std::optional<OptimiserResult> result;
+  try {
+    result = run_optimiser(
+        *bus, o, counters, stop_requested, [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
+        [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start
+  } catch (const RunFailed& e) {
+    // Not restarted by the supervisor (exit 3): collecting the run again would end the same way.
+    heartbeat.tick("failed", true);
+    std::fprintf(stderr, "hbirl-optimiser: the run failed: %s\n", e.what());
+    return 3;
+  }
   if (!result) {
     heartbeat.tick("stopped", true);
     std::fprintf(stderr, "hbirl-optimiser: stopped before the end of learning; %lld messages in, %lld bad, %lld gaps\n",
@@ -321,6 +351,7 @@ int optimiser(int argc, char** argv) {
   j["controlled_episodes"] = result->data.controlled_observed.size();
   j["dataset_digest"] = result->learned.digest;
   j["missing_frames"] = result->missing_frames;
+  if (!result->incomplete.empty()) j["incomplete"] = result->incomplete;
   j["frame_requests"] = result->frame_requests;
   j["workers"] = result->workers;
   j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
@@ -330,8 +361,10 @@ int optimiser(int argc, char** argv) {
                 {"spot_checks", result->estep.spot_checks},   {"workers_caught_lying", result->estep.liars},
                 {"conflicting_answers", result->estep.conflicts},
                 {"workers_with_other_numerics", result->estep.other_numerics},
+                {"trial_passes", result->estep.trial_passes},
                 {"round_trip_seconds", result->estep.round_trip_s}};
   j["bad_messages"] = counters.bad_messages;
+  j["other_run_messages"] = counters.other_run;
   j["authenticated"] = counters.authenticated;
   j["gaps"] = counters.gaps;
   std::cout << j.dump(2) << std::endl;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "learner/digest.hpp"
 #include "learner/input_error.hpp"
 
 namespace hbirl::services {
@@ -33,8 +34,21 @@ void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_
   expected_actions_ = num_actions;
 }
 
+void DatasetBuilder::contradicted(const std::string& why) {
+  if (contradiction_.empty()) contradiction_ = why;
+}
+
+void DatasetBuilder::saw_episode(int id) {
+  last_episode_ = std::max(last_episode_, id);
+  if (run_episodes_ > 0 && id >= run_episodes_) {
+    contradicted("a message about episode " + std::to_string(id) + " after END_RUN said the run had " + std::to_string(run_episodes_) +
+                 " episodes");
+  }
+}
+
 DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
   if (id < 0) throw InputError("episode", "is negative");
+  saw_episode(id);
   const auto [it, fresh] = episodes_.try_emplace(id);
   if (fresh && !in_run(id)) ++outside_run_;
   return it->second;
@@ -60,14 +74,16 @@ void DatasetBuilder::recount(Episode& e) {
 }
 
 // Whether an episode belongs to the controlled run is said by its first marker; a later
-// one that says otherwise (a stray or forged marker) is refused, not obeyed: relabelling
-// a controlled episode as a demonstration would change what is learned without a word.
+// one that says otherwise (a stray or forged marker, before or after the sensor's own) is
+// refused, not obeyed -- relabelling a controlled episode as a demonstration would change
+// what is learned without a word -- and the run contradicts itself.
 void DatasetBuilder::mark_controlled(Episode& e, const hbirl::episode_marker_t& m) {
   const bool controlled = m.controlled != 0;
   if (e.marked && e.controlled != controlled) {
-    throw InputError("episode_marker.controlled", "episode " + std::to_string(m.episode) + " was marked " +
-                                                      (e.controlled ? "controlled" : "a demonstration") +
-                                                      " before: this marker contradicts it");
+    const std::string why = "episode " + std::to_string(m.episode) + " was marked " +
+                            (e.controlled ? "controlled" : "a demonstration") + " before: this marker contradicts it";
+    contradicted(why);
+    throw InputError("episode_marker.controlled", why);
   }
   e.controlled = controlled;
   e.marked = true;
@@ -80,7 +96,14 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
   }
   if (!domain_.empty() && m.domain != domain_) throw InputError("episode_marker.domain", "changed from " + domain_ + " to " + m.domain);
   domain_ = m.domain;
-  last_utime_ = std::max(last_utime_, m.utime);
+  if (watching_) {  // taken: the markers are checked against the run, not kept
+    if (m.kind != hbirl::episode_marker_t::END_RUN) {
+      watch_marker(m);
+      return;
+    }
+  } else {
+    last_utime_ = std::max(last_utime_, m.utime);
+  }
   switch (m.kind) {
     case hbirl::episode_marker_t::BEGIN_EPISODE:
     case hbirl::episode_marker_t::BEGIN_STEP: {
@@ -88,6 +111,10 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       mark_controlled(e, m);
       if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+      }
+      if (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) {
+        contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) + " frames a step, then " +
+                     std::to_string(m.frames_per_step));
       }
       if (e.frames_per_step != m.frames_per_step) {  // (a repeat changes nothing)
         count(e, m.episode, -1);
@@ -106,9 +133,15 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
       mark_controlled(e, m);
-      e.ends_in_terminal = m.ends_in_terminal;
       // The simulator repeats every end marker each second until the reward comes: a
-      // repeat leaves the counts as they are, without a walk over the episode's frames.
+      // repeat leaves the counts as they are, without a walk over the episode's frames. An
+      // end marker that says otherwise than an earlier one contradicts the run.
+      if (e.ended && (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
+                      e.ends_in_terminal != m.ends_in_terminal)) {
+        contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) + " then " +
+                     std::to_string(m.num_steps) + " steps)");
+      }
+      e.ends_in_terminal = m.ends_in_terminal;
       if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) break;
       count(e, m.episode, -1);
       e.ended = true;
@@ -119,19 +152,25 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       break;
     }
     case hbirl::episode_marker_t::END_RUN: {
-      // A run ends after its episodes: an END_RUN before any ended, or one whose stated
-      // number of episodes (num_steps; 0: not stated) contradicts an earlier END_RUN, is
-      // not this run's. Once stated, episodes 0 .. n-1 are the run: others (a stray
-      // sender's) are neither waited for nor learned from (docs/RELIABILITY.md).
-      const bool any_ended = std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
+      // A run ends after its episodes: an END_RUN before any ended is not this run's. Once
+      // one states the run's number of episodes (num_steps; 0: not stated), episodes 0 .. n-1
+      // are the run; a second END_RUN stating another number, or an episode at or past n
+      // (begun before or after), contradicts it (docs/RELIABILITY.md).
+      const bool any_ended = watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
       if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
       if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+      ++end_runs_heard_;
       if (m.num_steps > 0) {
         if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
-          throw InputError("episode_marker.num_steps", "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " +
-                                                           std::to_string(run_episodes_));
+          const std::string why = "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " + std::to_string(run_episodes_);
+          contradicted(why);
+          throw InputError("episode_marker.num_steps", why);
         }
-        if (run_episodes_ == 0) {  // episodes from here on are out of the run: out of its counts too
+        if (m.num_steps <= last_episode_) {
+          contradicted("END_RUN of " + std::to_string(m.num_steps) + " episodes after a message about episode " +
+                       std::to_string(last_episode_));
+        }
+        if (run_episodes_ == 0 && !watching_) {  // episodes from here on are out of the run: out of its counts too
           for (const auto& [id, e] : episodes_) {
             if (id < m.num_steps) continue;
             count(e, id, -1);
@@ -186,8 +225,22 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   }
   num_symbols_ = m.num_symbols;
   num_sources_ = m.num_sources;
+  if (watching_) {
+    watch_frame(m, f);
+    return;
+  }
   Episode& e = episode(m.episode);
-  if (e.frames.count({m.step, m.frame})) return;  // a repeat is ignored
+  // A repeat is ignored: the first copy is kept. A frame's observations are the same every
+  // time its sensor sends them (perception and the labeller are deterministic): another
+  // copy that differs means one of the two is not the sensor's.
+  if (const auto seen = e.frames.find({m.step, m.frame}); seen != e.frames.end()) {
+    const Frame& first = seen->second;
+    if (first.symbols != f.symbols || first.eta != f.eta || first.contexts != f.contexts) {
+      contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step) +
+                   ", frame " + std::to_string(m.frame));
+    }
+    return;
+  }
   const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
                              8 * static_cast<std::int64_t>(f.eta.size());
   if (bytes_ + bytes > max_bytes_) {
@@ -219,8 +272,17 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
   }
+  if (watching_) {
+    watch_truth(m);
+    return;
+  }
   Episode& e = episode(m.episode);
-  const bool fresh = e.truth.insert_or_assign(m.step, StateAction{m.state, m.action}).second;
+  // The first copy of a step's truth is kept, as a frame's is: a later one (a repeat, or
+  // a forgery) changes nothing.
+  const auto [kept, fresh] = e.truth.try_emplace(m.step, StateAction{m.state, m.action});
+  if (!fresh && (kept->second.state != m.state || kept->second.action != m.action)) {
+    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step));
+  }
   if (fresh && e.ended && m.step < e.num_steps) {
     ++e.have_truth;
     if (e.controlled && in_run(m.episode)) --missing_truth_;
@@ -349,19 +411,72 @@ Dataset DatasetBuilder::build() const {
   return d;
 }
 
+std::uint64_t DatasetBuilder::frame_digest(const Frame& f) {
+  Fnv1a h;
+  h.add(f.symbols.data(), f.symbols.size() * sizeof(int));
+  h.add(f.eta.data(), f.eta.size() * sizeof(double));
+  h.add(f.contexts.data(), f.contexts.size() * sizeof(int));
+  return h.value();
+}
+
 Dataset DatasetBuilder::take() {
   Dataset d = empty_dataset();
+  // (In order: episodes_ is ordered by episode, each one's frames by step and frame.)
   for (auto& [id, e] : episodes_) {
     add_episode(d, id, e);
+    for (const auto& [key, f] : e.frames) taken_frames_.emplace_back(std::tuple(id, key.first, key.second), frame_digest(f));
+    for (const auto& [step, t] : e.truth) taken_truth_.emplace_back(std::pair(id, step), t);
     e.frames.clear();  // assembled: each observation is held once, here or in d
     e.truth.clear();
   }
+  taken_episodes_ = std::move(episodes_);  // their markers, to check later ones against
   episodes_.clear();
   bytes_ = 0;
   missing_frames_ = missing_truth_ = outside_run_ = 0;
   ended_in_run_ = 0;
+  watching_ = true;
   finish_dataset(d);
   return d;
+}
+
+// A marker once the data set is taken: about an episode heard of before, it must say what
+// that episode's markers said (they are kept, without their frames).
+void DatasetBuilder::watch_marker(const hbirl::episode_marker_t& m) {
+  if (m.episode < 0) throw InputError("episode", "is negative");
+  saw_episode(m.episode);
+  const auto it = taken_episodes_.find(m.episode);
+  if (it == taken_episodes_.end()) return;  // never heard of before: saw_episode judged it
+  Episode& e = it->second;
+  mark_controlled(e, m);
+  if (e.frames_per_step != 0 && m.frames_per_step != e.frames_per_step) {
+    contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) + " frames a step, then " +
+                 std::to_string(m.frames_per_step));
+  }
+  if (m.kind == hbirl::episode_marker_t::END_EPISODE && e.ended &&
+      (e.num_steps != m.num_steps || e.ends_in_terminal != m.ends_in_terminal)) {
+    contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) + " then " +
+                 std::to_string(m.num_steps) + " steps)");
+  }
+}
+
+void DatasetBuilder::watch_frame(const hbirl::observations_t& m, const Frame& f) {
+  saw_episode(m.episode);
+  const auto key = std::tuple(static_cast<int>(m.episode), static_cast<int>(m.step), static_cast<int>(m.frame));
+  const auto it = std::lower_bound(taken_frames_.begin(), taken_frames_.end(), key, [](const auto& x, const auto& k) { return x.first < k; });
+  if (it != taken_frames_.end() && it->first == key && it->second != frame_digest(f)) {
+    contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step) +
+                 ", frame " + std::to_string(m.frame));
+  }
+}
+
+void DatasetBuilder::watch_truth(const hbirl::ground_truth_t& m) {
+  if (m.episode < 0) throw InputError("episode", "is negative");
+  saw_episode(m.episode);
+  const auto key = std::pair(static_cast<int>(m.episode), static_cast<int>(m.step));
+  const auto it = std::lower_bound(taken_truth_.begin(), taken_truth_.end(), key, [](const auto& x, const auto& k) { return x.first < k; });
+  if (it != taken_truth_.end() && it->first == key && !(it->second == StateAction{m.state, m.action})) {
+    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step));
+  }
 }
 
 }  // namespace hbirl::services

@@ -376,6 +376,7 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
   answered_by_[static_cast<size_t>(m.block)] = m.worker;
   Worker& w = workers_[m.worker];
   w.suspect = false;  // it does answer
+  w.ever_answered = true;
   ++w.answers;
   ++stats_.remote_blocks;
 }
@@ -383,8 +384,12 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
 std::vector<std::string> BusBlockExecutor::live_workers() const {
   std::vector<std::string> out;
   const auto now = Clock::now();
+  // Workers that never answered get a trial block each (assignment()) only while the run's
+  // budget of passes that waited on such trials lasts.
+  const bool trials = stats_.trial_passes < kMaxTrialPasses;
   for (const auto& [id, w] : workers_) {
-    if (w.mdp_digest == mdp_digest_ && !w.suspect && !w.distrusted && (!options_.same_numerics_only || w.numerics == numerics_) &&
+    if (w.mdp_digest == mdp_digest_ && !w.suspect && !w.distrusted && (trials || w.ever_answered) &&
+        (!options_.same_numerics_only || w.numerics == numerics_) &&
         std::chrono::duration<double>(now - w.last_seen).count() <= options_.worker_silence_s) {
       out.push_back(id);
     }
@@ -398,6 +403,7 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) const {
   const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
   while (static_cast<int>(live_workers().size()) < count && Clock::now() < deadline) {
     if (options_.stop && options_.stop()) break;
+    if (options_.idle) options_.idle();
     if (bus_.handle(20) < 0) break;
   }
   return static_cast<int>(live_workers().size());
@@ -674,6 +680,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
     };
     while (!missing().empty() && awaited() && Clock::now() < deadline) {
       if (options_.stop && options_.stop()) throw Stopped();
+      if (options_.idle) options_.idle();
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
       if (bus_.handle(static_cast<int>(std::clamp<long long>(left, 0, 50))) < 0) break;
       pump_blocks(estep);
@@ -683,6 +690,7 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
       }
     }
     // Workers with blocks still queued were not given the chance to answer: not their fault.
+    bool trial_failed = false;
     std::set<std::string> queued;
     for (const auto& [b, id] : to_send_) queued.insert(id);
     to_send_.clear();  // what is still queued goes with the next attempt, to whoever gets it
@@ -700,13 +708,19 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
         x.last_unheld = Clock::now();
         ++x.unheld[digest];
       }
-      // Workers that left blocks unanswered get no more work until they are heard from again.
+      // Workers that left blocks unanswered get no more work until they are heard from again
+      // (a worker that missed a request works again). A pass that waited on one that never
+      // answered at all counts against the run's budget of such passes: made-up workers,
+      // whatever their number and the rate of their heartbeats, cost at most
+      // kMaxTrialPasses timeouts in all.
       if (answered_.count(w)) continue;
+      trial_failed = trial_failed || !x.ever_answered;
       Worker& silent = x;
       silent.suspect = true;
       silent.suspect_since = Clock::now();
       silent.answers = 0;  // once heard from again it gets one block until it answers
     }
+    stats_.trial_passes += trial_failed;
   }
   for (size_t k = 0; k < spots.size(); ++k) {
     auto& slot = received_[static_cast<size_t>(spots[k])];

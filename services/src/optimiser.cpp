@@ -84,10 +84,18 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   auto last_request = Clock::now();
   int result_requests = 0;
   bool announced_end = false;
+  std::string incomplete;
+  const auto check_contradiction = [&builder] {
+    if (!builder->contradiction().empty()) {
+      throw RunFailed("the run contradicts itself: " + builder->contradiction() +
+                      " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
+    }
+  };
   while (!builder->complete()) {
     if (stop && stop()) return std::nullopt;
     if (options.beat) options.beat("collecting");
     if (bus.handle(100) < 0) break;  // a log at its end
+    check_contradiction();
     if (builder->frames() != frames) {
       frames = builder->frames();
       last_frame = Clock::now();
@@ -116,25 +124,44 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
       }
       last_request = Clock::now();
     }
-    if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.quiet_ms)) {
-      say("no frames for " + std::to_string(options.quiet_ms) + " ms after the end of the run: learning from what came (" +
-          std::to_string(builder->missing_frames()) + " frames missing)");
+    const auto quiet = Clock::now() - last_frame;
+    if (builder->run_ended() && quiet > std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
+      incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " + std::to_string(builder->missing_truth()) +
+                   " ground-truth step(s) missing, " + std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
+      const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
+      if (!options.allow_incomplete) {
+        throw RunFailed("the run is incomplete: " + incomplete + ", and nothing came for " + waited +
+                        " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
+      }
+      say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete + "), as allowed");
       break;
     }
   }
   if (stop && stop()) return std::nullopt;
+  // Complete: until END_RUN is heard again (or confirm_ms passes), what comes may still
+  // contradict the run (an END_RUN forged early, then the sensor's next episode).
+  if (incomplete.empty()) {
+    const std::int64_t heard = builder->end_runs_heard();
+    const auto until = Clock::now() + std::chrono::milliseconds(options.confirm_ms);
+    while (builder->end_runs_heard() == heard && Clock::now() < until && !(stop && stop())) {
+      if (options.beat) options.beat("collecting");
+      if (bus.handle(50) < 0) break;
+      check_contradiction();
+    }
+  }
   OptimiserResult result;
   result.missing_frames = builder->missing_frames();
+  result.incomplete = incomplete;
   const std::int64_t frames_observed = builder->frames();
   result.data = builder->take();
-  // Frames that still come are no longer needed: they are not read (nor counted in the
-  // gaps and bad messages) while learning.
-  builder.reset();
+  // From here the builder keeps nothing: it watches what still comes for a contradiction
+  // (checked before the reward is published); frames are not read while learning.
   result.frame_requests = result_requests;
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
   const Mdp& mdp = domain->mdp();
   BusExecutorOptions executor_options = options.executor;
   if (!executor_options.stop) executor_options.stop = stop;
+  if (!executor_options.idle && options.beat) executor_options.idle = [beat = options.beat] { beat("learning"); };
   // The workers are sent the demonstrations as the E-step holds them (with an unlisted
   // catch-all's share of eta, if any), each only its blocks'.
   auto executor = std::make_shared<BusBlockExecutor>(bus, mdp, domain->name(), counters, executor_options);
@@ -176,6 +203,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
     return std::nullopt;
   }
   result.estep = executor->stats();
+  // What came while learning (and is waiting now) may contradict the run: then no reward.
+  for (int k = 0; k < 1000000 && bus.handle(0) > 0; ++k) {
+  }
+  check_contradiction();
   hbirl::reward_t r{};
   r.utime = utime;
   r.domain = result.data.domain;
@@ -210,8 +241,8 @@ std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<con
 }
 
 OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
-  require_key_if_signed(run.path, run.key_file);
-  std::unique_ptr<Bus> bus = with_key(std::make_unique<LogBus>(run.path), run.key_file, counters, false);
+  check_recording_key(run.path, run.key_file);
+  std::unique_ptr<Bus> bus = with_key(std::make_unique<LogBus>(run.path), run.key_file, counters, KeyUse::kReader);
   DatasetBuilder builder;
   builder.subscribe(*bus, counters);
   // As the live optimiser does: up to the moment the run is complete.
@@ -223,12 +254,26 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
     result.incomplete = std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
                         ", " + std::to_string(builder.unfinished_episodes()) + " episode(s) without their end, " +
                         std::to_string(builder.missing_frames()) + " frame(s) missing";
-    if (!run.allow_incomplete) {
+    if (!run.allow_incomplete && builder.contradiction().empty()) {
       throw InputError("--log", "'" + run.path + "' is not a complete run: " + result.incomplete +
                                     "; --allow-incomplete learns from the finished episodes");
     }
   }
   result.data = builder.take();
+  // The rest of the recording (what the live optimiser heard while it learned) is read for
+  // contradictions, and for messages of another run.
+  while (bus->handle(0) >= 0) {
+  }
+  if (!builder.contradiction().empty()) {
+    throw InputError("--log", "'" + run.path + "': the run contradicts itself: " + builder.contradiction() +
+                                  " (a forged or stray message? docs/RELIABILITY.md)");
+  }
+  if (counters.other_run > 0 && !RunKey::read(run.key_file).run()) {
+    throw InputError("--log", "'" + run.path + "' holds messages of more than one run signed with this key (" +
+                                  std::to_string(counters.other_run) + " not of the first run " +
+                                  run_id_text(static_cast<const KeyedBus&>(*bus).run()) +
+                                  "; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
+  }
   return result;
 }
 

@@ -1,5 +1,7 @@
 #include "services/process.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -23,6 +25,20 @@ void install_stop_handlers() {
 }
 
 bool stop_requested() { return g_stop.load(); }
+
+namespace {
+int g_alive_fd = -1;
+}  // namespace
+
+void set_alive_file(const std::string& path) {
+  if (g_alive_fd >= 0) ::close(g_alive_fd);
+  g_alive_fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0600);
+  touch_alive_file();
+}
+
+void touch_alive_file() {
+  if (g_alive_fd >= 0) ::futimens(g_alive_fd, nullptr);  // now
+}
 
 std::string default_id(const std::string& service) {
   char host[256] = {0};
@@ -53,6 +69,7 @@ void Heartbeat::tick(const std::string& state, bool now, int trajectories, std::
   s.authenticated = counters_.authenticated;
   s.restarts = counters_.restarts;
   publish(bus_, channels::kStatus, s, counters_);
+  touch_alive_file();
 }
 
 }  // namespace hbirl::services

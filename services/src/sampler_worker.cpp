@@ -5,6 +5,7 @@
 
 #include "learner/input_error.hpp"
 #include "services/lcm_arrays.hpp"
+#include "services/process.hpp"
 
 namespace hbirl::services {
 
@@ -31,13 +32,24 @@ constexpr auto kQuietBeforeServing = std::chrono::milliseconds(200);
 SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
     : bus_(bus), id_(std::move(id)), counters_(counters), max_dataset_bytes_(max_dataset_bytes) {
   subs_.add(bus_, subscribe<hbirl::mdp_t>(bus_, channels::kMdp, counters_,
-                                          [this](const hbirl::mdp_t& m, const Message&) { on_mdp(m); }, 10000));
+                                          [this](const hbirl::mdp_t& m, const Message& raw) {
+                                            bus_.sign_for_run(raw.run);  // a worker of any run answers each in its own
+                                            on_mdp(m);
+                                          },
+                                          10000));
   // A whole share may arrive between two handle() calls; only the newest requests matter.
   subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::trajectory_channel(id_), counters_,
-                                                 [this](const hbirl::trajectory_t& m, const Message& raw) { on_trajectory(m, raw.size); },
+                                                 [this](const hbirl::trajectory_t& m, const Message& raw) {
+                                                   bus_.sign_for_run(raw.run);
+                                                   on_trajectory(m, raw.size);
+                                                 },
                                                  100000));
   subs_.add(bus_, subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
-                                                    [this](const hbirl::estep_request_t& m, const Message&) { on_request(m); }, 8));
+                                                    [this](const hbirl::estep_request_t& m, const Message& raw) {
+                                                      bus_.sign_for_run(raw.run);
+                                                      on_request(m, raw.run);
+                                                    },
+                                                    8));
 }
 
 int SamplerWorker::handle(int timeout_ms) {
@@ -83,6 +95,7 @@ void SamplerWorker::publish_status(const std::string& state) {
   s.authenticated = counters_.authenticated;
   s.restarts = counters_.restarts;
   publish(bus_, channels::kStatus, s, counters_);
+  touch_alive_file();
 }
 
 void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
@@ -205,7 +218,7 @@ void SamplerWorker::check_request(const hbirl::estep_request_t& m) const {
   }
 }
 
-void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
+void SamplerWorker::on_request(const hbirl::estep_request_t& m, std::uint64_t run) {
   if (!answered_.insert({m.request_id, m.attempt}).second) return;  // a repeat: answered already
   while (answered_.size() > 256) answered_.erase(answered_.begin());
   if (static_cast<std::uint64_t>(m.mdp_digest) != mdp_digest_ || !mdp_) {
@@ -230,6 +243,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
   if (mine.empty()) return;
   last_dataset_digest_ = static_cast<std::uint64_t>(m.dataset_digest);
   request_ = m;
+  request_run_ = run;
   pending_.insert(mine.begin(), mine.end());
   serve(true);
 }
@@ -237,6 +251,7 @@ void SamplerWorker::on_request(const hbirl::estep_request_t& m) {
 void SamplerWorker::serve(bool all_here_only) {
   if (!request_ || pending_.empty()) return;
   const hbirl::estep_request_t& m = *request_;
+  bus_.sign_for_run(request_run_);  // the answers are the request's run's
   std::vector<int> ready;
   for (int b : pending_) {
     if (held_.count(static_cast<std::uint64_t>(m.block_digest[static_cast<size_t>(b)]))) ready.push_back(b);

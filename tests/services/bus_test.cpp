@@ -4,6 +4,7 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -345,6 +346,87 @@ TEST(LogBus, FollowsALogAsItGrows) {
   EXPECT_EQ(bus.handle(0), 0);
   EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 3}));
   EXPECT_EQ(c.bad_messages, 0);
+  std::filesystem::remove_all(dir);
+}
+
+// lcm-logger's event as bytes, its header stating what the caller says (a hostile file).
+std::string raw_event(const std::string& channel, const std::string& data, std::int64_t channel_len, std::int64_t data_len,
+                      std::uint32_t sync = 0xEDA1DA01) {
+  std::string out;
+  const auto be = [&out](std::uint64_t v, int bytes) {
+    for (int k = bytes - 1; k >= 0; --k) out.push_back(static_cast<char>((v >> (8 * k)) & 0xFF));
+  };
+  be(sync, 4);
+  be(7, 8);     // event number
+  be(1000, 8);  // time
+  be(static_cast<std::uint32_t>(channel_len), 4);
+  be(static_cast<std::uint32_t>(data_len), 4);
+  return out + channel + data;
+}
+
+std::string good_event(std::int64_t seq) {
+  const std::vector<std::uint8_t> bytes = encode(observations(seq, 2));
+  return raw_event("OBSERVATIONS", std::string(bytes.begin(), bytes.end()), 12, static_cast<std::int64_t>(bytes.size()));
+}
+
+// A recording is hostile input too. After a good event, an event whose header states a data
+// length LCM's reader would allocate and write through (2^31 - 1: SIGSEGV in every reader,
+// from a 54-byte file), or a length below zero, an empty or overlong channel name, or no sync
+// word: reading a finished recording stops with one InputError naming --log and the byte;
+// following one skips to the next event and reads on. An event the file ends inside is the
+// end of the recording.
+TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_damaged_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "damaged.lcmlog").string();
+  const std::string first = good_event(1);
+  const std::vector<std::pair<std::string, std::string>> damage = {
+      {raw_event("OBSERVATIONS", std::string(14, 'x'), 12, 0x7FFFFFFF), "2147483647 bytes of data"},
+      {raw_event("OBSERVATIONS", std::string(10, 'x'), 12, 0x7FFFFFF0), "2147483632 bytes of data"},
+      {raw_event("OBSERVATIONS", "", 12, -1), "-1 bytes of data"},
+      {raw_event("", "abc", 0, 3), "channel name of 0 bytes"},
+      {raw_event(std::string(300, 'C'), "", 300, 0), "channel name of 300 bytes"},
+      {raw_event("OBSERVATIONS", "", 0x7FFFFFFF, 0), "channel name of 2147483647 bytes"},
+      {raw_event("OBSERVATIONS", "abc", 12, 3, 0x12345678), "no sync word"},
+  };
+  ASSERT_EQ(damage.front().first.size(), 54u);  // as the report's recording: one event, 54 bytes
+  for (const auto& [bad, says] : damage) {
+    { std::ofstream(path, std::ios::binary) << first << bad << good_event(2); }
+    LogBus bus(path);
+    Counters c = quiet_counters();
+    std::vector<std::int64_t> seen;
+    subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    EXPECT_EQ(bus.handle(0), 1);
+    try {
+      bus.handle(0);
+      ADD_FAILURE() << "read past: " << says;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "--log");
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(first.size())), std::string::npos) << e.what();
+    }
+    // Following it (the dashboard): the damage is skipped, the next event read.
+    LogBus following(path);
+    following.follow(true);
+    seen.clear();
+    subscribe<hbirl::observations_t>(following, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    for (int k = 0; k < 4; ++k) following.handle(0);
+    EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2})) << says;
+    EXPECT_GE(following.damaged(), 1) << says;
+  }
+  // Cut short in its last event (data stated, not all there): the end, not damage.
+  { std::ofstream(path, std::ios::binary) << first << good_event(2).substr(0, 40); }
+  LogBus cut(path);
+  Counters c = quiet_counters();
+  int seen = 0;
+  subscribe<hbirl::observations_t>(cut, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++seen; });
+  EXPECT_EQ(cut.handle(0), 1);
+  EXPECT_EQ(cut.handle(0), -1);
+  EXPECT_EQ(seen, 1);
+  // Not a regular file: refused before it is opened for reading (a FIFO would block).
+  const std::string fifo = (dir / "fifo.lcmlog").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THROW(LogBus{fifo}, InputError);
   std::filesystem::remove_all(dir);
 }
 

@@ -708,6 +708,47 @@ TEST(EStepService, FakeWorkerHeartbeatsCostNothingWithAKey) {
   }
 }
 
+// Without a key, 300 made-up workers whose heartbeats copy a real worker's -- its MDP, its
+// numerics, the blocks it holds -- ten times a second each: each name gets one trial block,
+// and once kMaxTrialPasses passes have waited on trials none does; theta is the one-process
+// run's. (Before the budget, a name heard from again after leaving its block unanswered
+// got another block: every pass waited a timeout, for as long as the forger kept at it.)
+TEST(EStepService, FakeWorkersWithoutAKeyCostABoundedNumberOfPasses) {
+  auto hub = std::make_shared<MemoryHub>();
+  WorkerThread worker(hub, "sampler-a");
+  BusExecutorOptions options;
+  options.timeout_ms = 200;
+  Optimiser opt(hub, options);
+  ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
+  std::atomic<bool> stop{false};
+  std::thread forging([&] {
+    MemoryBus forger(hub);
+    Counters fc = quiet("forger");
+    hbirl::service_status_t real{};
+    forger.subscribe(channels::kStatus, [&](const Message& m) {
+      hbirl::service_status_t s{};
+      if (!decode(m, s) && s.id == "sampler-a") real = s;
+    });
+    for (std::int64_t seq = 1; !stop; ++seq) {
+      forger.handle(100);
+      for (int k = 0; k < 300 && real.num_held_blocks > 0; ++k) {
+        hbirl::service_status_t ghost = real;
+        ghost.id = "ghost-" + std::to_string(k);
+        ghost.seq = seq;
+        publish(forger, channels::kStatus, ghost, fc);
+      }
+    }
+  });
+  const LearnResult result = learn(opt.executor);
+  stop = true;
+  forging.join();
+  expect_identical(result, local());
+  const auto stats = opt.executor->stats();
+  EXPECT_GT(stats.trial_passes, 0) << "the ghosts were never given work: the test tests nothing";
+  EXPECT_LE(stats.trial_passes, BusBlockExecutor::kMaxTrialPasses);
+  EXPECT_GT(stats.remote_blocks, 0);
+}
+
 // A worker whose build computes other bits (another numerics fingerprint) is heard from,
 // counted, and -- with same_numerics_only -- given no work: theta stays bit-identical to
 // the one-process run. (It never answers: had it been given blocks, they would have been

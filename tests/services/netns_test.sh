@@ -57,7 +57,7 @@ case "$case" in
     # recording is refused in one line; with it, read as the optimiser read it.
     [ "$(stat -c %a "$tmp/live/run.key")" = 600 ] || fail "run.key is not mode 600"
     status=0; "$build/hbirl" learn --log "$tmp/live/run.lcmlog" >/dev/null 2>"$tmp/nokey.err" || status=$?
-    [ "$status" = 2 ] && grep -q -- "--key" "$tmp/nokey.err" || { cat "$tmp/nokey.err"; fail "a signed recording read without --key: exit $status"; }
+    if [ "$status" != 2 ] || ! grep -q -- "--key" "$tmp/nokey.err"; then cat "$tmp/nokey.err"; fail "a signed recording read without --key: exit $status"; fi
     grep -q '"authenticated": true' "$tmp/live/result.json" || fail "the optimiser did not check the messages against the key"
     "$build/hbirl" learn --log "$tmp/live/run.lcmlog" --key "$tmp/live/run.key" --out "$tmp/offline.json"
     [ "$(theta "$tmp/offline.json")" = "$live_theta" ] ||
@@ -103,8 +103,9 @@ with open(sys.argv[2], "wb") as f:
         f.write(raw)
 PY
     status=0; "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" >/dev/null 2>"$tmp/cut.err" || status=$?
-    [ "$status" = 2 ] && [ "$(wc -l <"$tmp/cut.err")" = 1 ] && grep -q "not a complete run" "$tmp/cut.err" ||
-      { cat "$tmp/cut.err"; fail "a recording cut short: exit $status"; }
+    if [ "$status" != 2 ] || [ "$(wc -l <"$tmp/cut.err")" != 1 ] || ! grep -q "not a complete run" "$tmp/cut.err"; then
+      cat "$tmp/cut.err"; fail "a recording cut short: exit $status"
+    fi
     "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" --allow-incomplete --out "$tmp/cut.json" 2>/dev/null
     grep -q '"incomplete": "the recording has no END_RUN' "$tmp/cut.json" || fail "--allow-incomplete did not say what is missing"
     echo "cut recording: $(cat "$tmp/cut.err")"
@@ -254,7 +255,7 @@ PY
       >"$tmp/killed.out" 2>&1 &
     set_pid=$!
     pid_of() { awk -v n="$1" '$1 == n { p = $2 } END { print p }' "$tmp/killed/logs/pids" 2>/dev/null; }
-    for i in $(seq 1 100); do [ -n "$(pid_of sim-driver)" ] && break; sleep 0.1; done
+    for _ in $(seq 1 100); do [ -n "$(pid_of sim-driver)" ] && break; sleep 0.1; done
     for victim in perception labeller sampler-1 sim-driver optimiser; do
       sleep 0.7
       pid="$(pid_of "$victim")"
@@ -271,7 +272,10 @@ PY
   bad_input)
     # Garbage, wrong-type messages and every channel's own type with each 4 bytes in turn set
     # to INT_MIN (a hostile string or array length) on every channel: each service counts
-    # them and runs on; a recording full of them is read by report and the dashboard.
+    # them and runs on -- the optimiser too, unless the well-formed ones among them
+    # contradict each other (markers relabelling an episode): then it fails the run, loudly
+    # (exit 3, "the run contradicts itself"), as it must; a recording full of them is read by
+    # report and the dashboard.
     for s in perception labeller sampler; do
       "$build/hbirl-$s" --url "$url" --id "$s-netns" >"$tmp/$s.log" 2>&1 &
       eval "pid_$s=$!"
@@ -284,14 +288,23 @@ PY
     "$build/hbirl-sim-driver" --url "$url" --domain gridworld >"$tmp/sim.log" 2>&1 &
     pid_sim=$!
     "$build/hbirl-dashboard" --url "$url" --port 0 >"$tmp/dashboard.log" 2>&1 &
+    # shellcheck disable=SC2034  # read as ${!pid} below
     pid_dashboard=$!
-    for i in 1 2 3; do  # again and again: a slow service may subscribe late
+    for _ in 1 2 3; do  # again and again: a slow service may subscribe late
       sleep 1
       "$inject" "$url" CAMERA DETECTIONS OBSERVATIONS EPISODE GROUND_TRUTH MDP TRAJECTORY:sampler-netns ESTEP_REQUEST ESTEP_RESULT STATUS \
         EM_PROGRESS REWARD OBSERVATION_MODEL POSTERIOR FRAME_REQUEST >/dev/null
     done
     sleep 1
+    optimiser_status=running
+    if ! kill -0 "$pid_optimiser" 2>/dev/null; then
+      optimiser_status=0; wait "$pid_optimiser" || optimiser_status=$?
+      if [ "$optimiser_status" != 3 ] || ! grep -q "the run failed: the run contradicts itself" "$tmp/optimiser.log"; then
+        cat "$tmp/optimiser.log"; fail "the optimiser ended on bad input with status $optimiser_status"
+      fi
+    fi
     for s in perception labeller sampler optimiser dashboard sim; do
+      [ "$s" != optimiser ] || [ "$optimiser_status" = running ] || continue
       pid="pid_$s"
       kill -0 "${!pid}" 2>/dev/null || { cat "$tmp/$s.log"; fail "$s died on bad input"; }
       kill -TERM "${!pid}"
@@ -300,13 +313,13 @@ PY
       pid="pid_$s"
       wait "${!pid}" || { cat "$tmp/$s.log"; fail "$s exited non-zero"; }
     done
-    wait "$pid_optimiser" || true  # stopped before learning: exit 1 by design
+    [ "$optimiser_status" != running ] || wait "$pid_optimiser" || true  # stopped before learning: exit 1 by design
     status=0; wait "$pid_sim" || status=$?
     [ "$status" -lt 128 ] || { cat "$tmp/sim.log"; fail "sim-driver ended by signal $((status - 128))"; }
     for s in perception labeller sampler optimiser dashboard sim; do
       bad="$(grep -o '#[0-9]* on' "$tmp/$s.log" | tr -d '#on ' | sort -n | tail -n 1)"
-      [ -n "$bad" ] && [ "$bad" -gt 0 ] || { cat "$tmp/$s.log"; fail "$s did not count the bad messages"; }
-      echo "$s: $bad bad messages counted, kept running"
+      if [ -z "$bad" ] || [ "$bad" -le 0 ]; then cat "$tmp/$s.log"; fail "$s did not count the bad messages"; fi
+      echo "$s: $bad bad messages counted, $([ "$s" = optimiser ] && [ "$optimiser_status" = 3 ] && echo "then failed the run: it contradicts itself" || echo "kept running")"
     done
     # A poisoned recording: every hostile message of every type, read offline.
     "$inject" --log "$tmp/poisoned.lcmlog" >/dev/null
@@ -315,6 +328,120 @@ PY
       [ "$status" -lt 128 ] || { tail -n 5 "$tmp/reader.out"; fail "'$reader' ended by signal $((status - 128))"; }
       echo "${reader%% --log*} read the poisoned recording: exit $status; $(tail -n 1 "$tmp/reader.out")"
     done
+    ;;
+  shared_key_replay)
+    # One key for two runs (hbirl keygen, as for workers on other machines), paths with
+    # spaces: run A's recording replayed into run C while C runs. Every run's key file
+    # names its own run, so A's messages are counted and dropped: C learns the theta of C
+    # run alone, bit for bit; its recording read with C's key file gives that theta too,
+    # and read with the shared key (no run of its own) is refused: it holds two runs.
+    dir="$tmp/with space"
+    mkdir -p "$dir"
+    "$build/hbirl" keygen "$dir/shared key" 2>/dev/null
+    gw=(--domain gridworld --key "$dir/shared key" --trajectories 12 --max-fps 400)
+    launch_in() {  # launch_in NAME ARGS...: into "$dir/NAME"
+      local name="$1"; shift
+      "$repo/services/launch.sh" --build "$build" --out "$dir/$name" "$@" >"$tmp/$name.out" 2>&1 ||
+        { cat "$tmp/$name.out"; fail "launch.sh $name exited non-zero"; }
+    }
+    launch_in a "${gw[@]}" --seed 1 --record
+    launch_in alone "${gw[@]}" --seed 2
+    [ "$(sed -n 's/^run //p' "$dir/a/run.key")" != "$(sed -n 's/^run //p' "$dir/alone/run.key")" ] || fail "two runs, one run identity"
+    "$repo/services/launch.sh" --build "$build" --out "$dir/c" "${gw[@]}" --seed 2 --record >"$tmp/c.out" 2>&1 &
+    set_pid=$!
+    sleep 0.3
+    lcm-logplayer -s 1 -l "$url" "$dir/a/run.lcmlog" >/dev/null
+    wait "$set_pid" || { cat "$tmp/c.out"; fail "launch.sh c exited non-zero"; }
+    other="$(sed -n 's/^ *"other_run_messages": \([0-9]*\),*$/\1/p' "$dir/c/result.json")"
+    if [ -z "$other" ] || [ "$other" = 0 ]; then fail "no message of run A was counted in run C (other_run_messages '$other')"; fi
+    same_theta "$dir/c/result.json" "$dir/alone/result.json" || fail "run A's replay changed run C's theta"
+    "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$dir/c/run.key" --out "$tmp/c_offline.json" 2>/dev/null
+    same_theta "$tmp/c_offline.json" "$dir/alone/result.json" || fail "hbirl learn --log with C's key file: another theta"
+    status=0; "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$dir/shared key" >/dev/null 2>"$tmp/shared.err" || status=$?
+    if [ "$status" != 2 ] || [ "$(wc -l <"$tmp/shared.err")" != 1 ] || ! grep -q "more than one run" "$tmp/shared.err"; then
+      cat "$tmp/shared.err"; fail "a recording of two runs read with the shared key: exit $status"
+    fi
+    # A key of another run: one line saying so, not a screenful ending in "no END_RUN".
+    "$build/hbirl" keygen "$tmp/other.key" 2>/dev/null
+    status=0; "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$tmp/other.key" >/dev/null 2>"$tmp/wrong.err" || status=$?
+    if [ "$status" != 2 ] || [ "$(wc -l <"$tmp/wrong.err")" != 1 ] || ! grep -q "the wrong key" "$tmp/wrong.err"; then
+      cat "$tmp/wrong.err"; fail "a wrong key: exit $status"
+    fi
+    echo "run A replayed into run C under one key: $other messages of A dropped; C's theta as C alone: $(theta "$dir/c/result.json")"
+    ;;
+  stalled_services)
+    # SIGSTOP, not SIGKILL: a service alive but silent. With --stall-timeout 3 the
+    # supervisor kills and restarts a stopped perception, then a stopped simulator, and the
+    # run learns the clean run's theta bit for bit. Without it, a run whose frames stop
+    # coming fails (exit non-zero, saying what is missing) instead of learning from what
+    # came -- unless --allow-incomplete -- and teardown does not wait on the stopped process.
+    launch clean --workers 2
+    pid_in() { awk -v n="$2" '$1 == n { p = $2 } END { print p }' "$tmp/$1/logs/pids" 2>/dev/null; }
+    start_set() {  # start_set NAME ARGS...: launch.sh in the background, once its simulator is up
+      local name="$1"; shift
+      "$repo/services/launch.sh" --build "$build" --out "$tmp/$name" "${small[@]}" --workers 2 "$@" >"$tmp/$name.out" 2>&1 &
+      set_pid=$!
+      for _ in $(seq 1 100); do [ -n "$(pid_in "$name" sim-driver)" ] && break; sleep 0.1; done
+      sleep 1
+    }
+    start_set stalled --stall-timeout 3
+    kill -STOP "$(pid_in stalled perception)"
+    for _ in $(seq 1 150); do grep -q "perception died" "$tmp/stalled.out" && break; sleep 0.1; done
+    sim="$(pid_in stalled sim-driver)"
+    kill -STOP "$sim" 2>/dev/null || echo "note: the simulator had finished"
+    wait "$set_pid" || { cat "$tmp/stalled.out"; fail "launch.sh with stopped services exited non-zero"; }
+    grep -q "perception died (silent for over 3 s" "$tmp/stalled.out" || { cat "$tmp/stalled.out"; fail "the stopped perception was not restarted"; }
+    grep -q "sim-driver died (silent for over 3 s" "$tmp/stalled.out" || echo "note: the simulator was not stopped in time"
+    same_theta "$tmp/stalled/result.json" "$tmp/clean/result.json" || fail "theta after restarting stopped services differs"
+    for mode in fail allow; do
+      args=(--stall-timeout 0 --incomplete-after 3)
+      [ "$mode" = fail ] || args+=(--allow-incomplete)
+      SECONDS=0
+      start_set "$mode" "${args[@]}"
+      stopped="$(pid_in "$mode" perception)"
+      kill -STOP "$stopped"
+      status=0; wait "$set_pid" || status=$?
+      took=$SECONDS
+      ! kill -0 "$stopped" 2>/dev/null || fail "$mode: the stopped perception outlived launch.sh"
+      [ "$took" -lt 60 ] || fail "$mode: launch.sh took $took s (teardown waited on the stopped process?)"
+      if [ "$mode" = fail ]; then
+        [ "$status" != 0 ] || { cat "$tmp/fail.out"; fail "a run with frames missing exited 0"; }
+        grep -q "the run is incomplete: [0-9]* frame(s)" "$tmp/fail.out" || { cat "$tmp/fail.out"; fail "the failure does not say what is missing"; }
+        [ ! -f "$tmp/fail/result.json" ] || fail "a result was written for an incomplete run"
+      else
+        [ "$status" = 0 ] || { cat "$tmp/allow.out"; fail "--allow-incomplete: exit $status"; }
+        grep -q '"incomplete": "[0-9]* frame(s)' "$tmp/allow/result.json" || fail "--allow-incomplete: the result does not say what is missing"
+      fi
+      echo "$mode: exit $status in $took s; $(grep -h -o 'incomplete[:(][^;]*' "$tmp/$mode.out" | head -n 1)"
+    done
+    ;;
+  unkeyed_forgeries)
+    # Without a key: an END_RUN stating 22 episodes right after the first one ends (the run
+    # has 40) fails the run loudly instead of learning from 2 of 20 demonstrations; 300
+    # made-up workers copying a real one's heartbeat ten times a second cost at most
+    # kMaxTrialPasses passes (3), and theta is the clean run's.
+    forge="$(dirname "$inject")/lcm_forge"
+    gw=(--domain gridworld --no-key --workers 2 --max-fps 400)
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/early" "${gw[@]}" >"$tmp/early.out" 2>&1 &
+    set_pid=$!
+    "$forge" "$url" end-run 22
+    status=0; wait "$set_pid" || status=$?
+    [ "$status" != 0 ] || { cat "$tmp/early.out"; fail "a forged early END_RUN: exit 0"; }
+    grep -q "the run contradicts itself" "$tmp/early.out" || { cat "$tmp/early.out"; fail "the failure does not say why"; }
+    [ ! -f "$tmp/early/result.json" ] || fail "a result was written for a contradicted run"
+    echo "forged END_RUN: exit $status; $(grep -o 'the run contradicts itself: [^(]*' "$tmp/early.out")"
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/clean" "${gw[@]}" >"$tmp/clean.out" 2>&1 || { cat "$tmp/clean.out"; fail "clean run failed"; }
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/ghosts" "${gw[@]}" >"$tmp/ghosts.out" 2>&1 &
+    set_pid=$!
+    "$forge" "$url" ghosts 300 10 >"$tmp/forge.out" 2>&1 &
+    forger=$!
+    wait "$set_pid" || { cat "$tmp/ghosts.out"; fail "launch.sh with 300 ghost workers exited non-zero"; }
+    kill "$forger" 2>/dev/null || true
+    wait "$forger" 2>/dev/null || true
+    same_theta "$tmp/ghosts/result.json" "$tmp/clean/result.json" || fail "ghost workers changed theta"
+    passes="$(sed -n 's/^ *"trial_passes": \([0-9]*\),*$/\1/p' "$tmp/ghosts/result.json")"
+    if [ -z "$passes" ] || [ "$passes" -gt 3 ]; then fail "ghost workers cost '$passes' passes (at most 3)"; fi
+    echo "300 ghost workers at 10 Hz: $(cat "$tmp/forge.out"); $passes passes waited on them; theta as the clean run's"
     ;;
   *) fail "unknown case $case" ;;
 esac

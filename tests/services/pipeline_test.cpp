@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <atomic>
 #include <filesystem>
 #include <fstream>
@@ -482,6 +484,19 @@ TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {
 
 // A marker that relabels an episode (controlled run vs demonstration) after its first
 // marker said otherwise is refused, naming the field; the first word stands.
+// One frame of episode `episode` holding one observation: `symbol` with `eta` (over
+// eta.size() sources) in a four-symbol alphabet.
+hbirl::observations_t one_observation(int symbol, const std::vector<double>& eta, int episode = 0) {
+  hbirl::observations_t o{};
+  o.num_symbols = 4;
+  o.num_sources = static_cast<std::int32_t>(eta.size());
+  o.n = 1;
+  o.symbol = {static_cast<std::int16_t>(symbol)};
+  o.eta = {eta};
+  o.episode = episode;
+  return o;
+}
+
 TEST(DatasetBuilder, AMarkerCannotRelabelAnEpisode) {
   DatasetBuilder b;
   hbirl::episode_marker_t m{};
@@ -504,6 +519,111 @@ TEST(DatasetBuilder, AMarkerCannotRelabelAnEpisode) {
   m.kind = hbirl::episode_marker_t::END_EPISODE;
   m.num_steps = 1;
   EXPECT_NO_THROW(b.on_marker(m));  // the sensor's own end marker agrees
+  // Refused, and the run contradicts itself (had the forged marker come first, the
+  // sensor's would be the one refused: either way the optimiser fails the run).
+  EXPECT_NE(b.contradiction().find("contradicts it"), std::string::npos) << b.contradiction();
+}
+
+// Two copies of one frame's observations, one step's ground truth or one episode's end
+// that differ: one of them is not the sensor's (its services are deterministic), and the
+// run contradicts itself -- a forger who is first no longer decides silently. Copies that
+// agree (the simulator's repeats, frames sent again on request) are ignored.
+TEST(DatasetBuilder, CopiesThatDisagreeContradictTheRun) {
+  const hbirl::observations_t o = one_observation(2, {0.7, 0.3});
+  hbirl::ground_truth_t t{};
+  t.domain = "gridworld";
+  t.state = 3;
+  t.action = 1;
+  hbirl::episode_marker_t end{};
+  end.domain = "gridworld";
+  end.kind = hbirl::episode_marker_t::END_EPISODE;
+  end.num_steps = 1;
+  end.frames_per_step = 1;
+  {
+    DatasetBuilder b;
+    b.on_observations(o);
+    b.on_observations(o);
+    b.on_truth(t);
+    b.on_truth(t);
+    b.on_marker(end);
+    b.on_marker(end);
+    EXPECT_TRUE(b.contradiction().empty()) << b.contradiction();
+  }
+  {
+    DatasetBuilder b;
+    b.on_observations(o);
+    hbirl::observations_t other = o;
+    other.symbol = {1};
+    b.on_observations(other);
+    EXPECT_NE(b.contradiction().find("two different observations of episode 0, step 0, frame 0"), std::string::npos) << b.contradiction();
+  }
+  {
+    DatasetBuilder b;
+    b.on_observations(o);
+    hbirl::observations_t other = o;
+    other.eta = {{0.6, 0.4}};
+    b.on_observations(other);
+    EXPECT_FALSE(b.contradiction().empty());
+  }
+  {
+    DatasetBuilder b;
+    b.on_truth(t);
+    hbirl::ground_truth_t other = t;
+    other.action = 0;
+    b.on_truth(other);
+    EXPECT_NE(b.contradiction().find("two different ground truths"), std::string::npos) << b.contradiction();
+  }
+  for (const auto& change : std::vector<std::function<void(hbirl::episode_marker_t&)>>{
+           [](auto& m) { m.num_steps = 2; }, [](auto& m) { m.ends_in_terminal = true; }, [](auto& m) { m.frames_per_step = 2; }}) {
+    DatasetBuilder b;
+    b.on_marker(end);
+    hbirl::episode_marker_t other = end;
+    change(other);
+    b.on_marker(other);
+    EXPECT_NE(b.contradiction().find("ended twice, differently"), std::string::npos) << b.contradiction();
+  }
+  // The forger first, the sensor's copies only once the data set is taken (the optimiser
+  // learning): still compared, with the digests of what was taken.
+  hbirl::episode_marker_t end_run = end;
+  end_run.kind = hbirl::episode_marker_t::END_RUN;
+  end_run.num_steps = 1;
+  const auto taken = [&](const hbirl::observations_t& first) {
+    auto b = std::make_unique<DatasetBuilder>();
+    b->on_observations(first);
+    b->on_truth(t);
+    b->on_marker(end);
+    b->on_marker(end_run);
+    EXPECT_TRUE(b->complete());
+    b->take();
+    return b;
+  };
+  hbirl::observations_t forged = o;
+  forged.symbol = {3};
+  {
+    auto b = taken(forged);
+    b->on_observations(forged);  // a repeat of what was taken
+    EXPECT_TRUE(b->contradiction().empty()) << b->contradiction();
+    b->on_observations(o);  // the sensor's
+    EXPECT_NE(b->contradiction().find("two different observations"), std::string::npos) << b->contradiction();
+  }
+  {
+    auto b = taken(o);
+    hbirl::ground_truth_t other = t;
+    other.state = 0;
+    b->on_truth(t);
+    EXPECT_TRUE(b->contradiction().empty()) << b->contradiction();
+    b->on_truth(other);
+    EXPECT_NE(b->contradiction().find("two different ground truths"), std::string::npos) << b->contradiction();
+  }
+  {
+    auto b = taken(o);
+    b->on_marker(end);
+    EXPECT_TRUE(b->contradiction().empty()) << b->contradiction();
+    hbirl::episode_marker_t longer = end;
+    longer.num_steps = 3;
+    b->on_marker(longer);
+    EXPECT_NE(b->contradiction().find("ended twice, differently"), std::string::npos) << b->contradiction();
+  }
 }
 
 // Once END_RUN states how many episodes the run had, an episode beyond them (a stray
@@ -517,13 +637,7 @@ TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
   end_run.num_steps = 1;
   end_run.frames_per_step = 1;
   EXPECT_THROW(b.on_marker(end_run), InputError);  // before any episode ended
-  hbirl::observations_t o{};
-  o.num_symbols = 4;
-  o.num_sources = 1;
-  o.n = 1;
-  o.symbol = {2};
-  o.eta = {{1.0}};
-  o.episode = 999;  // a stray sender's
+  hbirl::observations_t o = one_observation(2, {1.0}, 999);  // a stray sender's
   b.on_observations(o);
   o.episode = 0;
   b.on_observations(o);
@@ -537,8 +651,81 @@ TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
   b.on_marker(end_run);
   EXPECT_TRUE(b.complete());
   EXPECT_EQ(b.build().observed.size(), 1u);
+  // ... but a run with an episode 999 cannot have had 1 episode: it contradicts itself.
+  EXPECT_NE(b.contradiction().find("END_RUN of 1 episodes after a message about episode 999"), std::string::npos) << b.contradiction();
   end_run.num_steps = 2;
   EXPECT_THROW(b.on_marker(end_run), InputError);  // contradicts the first
+}
+
+// Without a key anyone may send an END_RUN. One the run's own messages contradict -- a
+// second END_RUN stating another number, an episode at or past its number (sent before it,
+// or after, also once the data set has been taken), a number below an episode already
+// begun -- marks the run contradicted (the optimiser then fails it, loudly): before, an
+// END_RUN of 2 sent after the first episode ended made the data set complete with 2 of
+// the run's episodes.
+TEST(DatasetBuilder, AnEndRunTheRunContradictsFailsIt) {
+  const auto marker = [](int episode, std::int8_t kind, int num_steps) {
+    hbirl::episode_marker_t m{};
+    m.domain = "gridworld";
+    m.episode = episode;
+    m.kind = kind;
+    m.num_steps = num_steps;
+    m.frames_per_step = 1;
+    return m;
+  };
+  const auto frame = [](int episode) { return one_observation(2, {1.0}, episode); };
+  const auto episode = [&](DatasetBuilder& b, int e) {
+    b.on_marker(marker(e, hbirl::episode_marker_t::BEGIN_EPISODE, 0));
+    b.on_observations(frame(e));
+    b.on_marker(marker(e, hbirl::episode_marker_t::END_EPISODE, 1));
+  };
+  using M = hbirl::episode_marker_t;
+  {  // the report's attack: END_RUN of 2 after the first episode; the sensor goes on to episode 2
+    DatasetBuilder b;
+    episode(b, 0);
+    b.on_marker(marker(0, M::END_RUN, 2));
+    EXPECT_TRUE(b.contradiction().empty());
+    episode(b, 1);
+    EXPECT_TRUE(b.complete());  // what a forger wants: 2 of the run's episodes make a data set
+    b.on_marker(marker(2, M::BEGIN_EPISODE, 0));
+    EXPECT_NE(b.contradiction().find("episode 2 after END_RUN said the run had 2"), std::string::npos) << b.contradiction();
+  }
+  {  // the same, the sensor's next episode only heard once the data set was taken
+    DatasetBuilder b;
+    episode(b, 0);
+    b.on_marker(marker(0, M::END_RUN, 2));
+    episode(b, 1);
+    ASSERT_TRUE(b.complete());
+    EXPECT_EQ(b.take().observed.size(), 2u);
+    b.on_observations(frame(2));
+    EXPECT_FALSE(b.contradiction().empty());
+  }
+  {  // the sensor's own END_RUN, stating the run's 3 episodes, after the forged one
+    DatasetBuilder b;
+    episode(b, 0);
+    b.on_marker(marker(0, M::END_RUN, 1));
+    b.take();
+    EXPECT_THROW(b.on_marker(marker(0, M::END_RUN, 3)), InputError);
+    EXPECT_NE(b.contradiction().find("END_RUN of 3 episodes after one of 1"), std::string::npos) << b.contradiction();
+  }
+  {  // a number below an episode already begun
+    DatasetBuilder b;
+    episode(b, 0);
+    b.on_marker(marker(4, M::BEGIN_EPISODE, 0));
+    b.on_marker(marker(0, M::END_RUN, 3));
+    EXPECT_FALSE(b.contradiction().empty());
+  }
+  {  // the sensor's END_RUN, repeated: nothing contradicts it
+    DatasetBuilder b;
+    for (int e = 0; e < 3; ++e) episode(b, e);
+    for (int k = 0; k < 3; ++k) b.on_marker(marker(0, M::END_RUN, 3));
+    ASSERT_TRUE(b.complete());
+    b.take();
+    for (int e = 0; e < 3; ++e) b.on_marker(marker(e, M::END_EPISODE, 1));
+    b.on_marker(marker(0, M::END_RUN, 3));
+    EXPECT_TRUE(b.contradiction().empty()) << b.contradiction();
+    EXPECT_EQ(b.end_runs_heard(), 4);
+  }
 }
 
 // take() hands over the data set that build() assembles, letting each episode's frames
@@ -737,12 +924,7 @@ TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
   t.num_features = 4;
   t.true_weights = {0, 0, 0, 1};
   b.on_truth(t);
-  hbirl::observations_t o{};
-  o.num_symbols = 4;
-  o.num_sources = 2;
-  o.n = 1;
-  o.symbol = {3};
-  o.eta = {{1.0, 0.0}};
+  hbirl::observations_t o = one_observation(3, {1.0, 0.0});
   b.on_observations(o);
   t.step = 1;
   t.true_weights = {0, 0, 1, 0};  // another expert?

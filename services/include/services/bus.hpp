@@ -19,11 +19,13 @@ namespace hbirl::services {
 
 // One message as delivered. `recv_utime` is when it arrived (for a log: when it was
 // recorded); services act on the message's own utime, never on this.
+// `run`: the run it was signed for, when a keyed bus checked it (keyed_bus.hpp); else 0.
 struct Message {
   const std::string& channel;
   const std::uint8_t* data;
   int size;
   std::int64_t recv_utime;
+  std::uint64_t run = 0;
 };
 using RawHandler = std::function<void(const Message&)>;
 
@@ -50,6 +52,10 @@ class Bus {
   // failed.
   virtual int handle(int timeout_ms) = 0;
   virtual std::string url() const = 0;
+  // A bus that signs for a run and serves any run of its key (a sampler worker started
+  // with a key file that names none; keyed_bus.hpp) signs what is published from now on
+  // for `run`: the run of the request being answered. Other buses ignore it.
+  virtual void sign_for_run(std::uint64_t /*run*/) {}
 };
 
 // Subscriptions that end with their owner: a service holds one as its last member (so it

@@ -55,6 +55,13 @@ class DatasetBuilder {
   void on_truth(const hbirl::ground_truth_t& m);
 
   bool run_ended() const { return run_ended_; }
+  // Non-empty when the run's own messages contradict each other: two END_RUNs stating
+  // different numbers of episodes, or an episode at or past the number END_RUN states
+  // (begun before it, or after). Nothing says which message was forged: a run that says
+  // this cannot be learned from (docs/RELIABILITY.md), it fails, loudly.
+  const std::string& contradiction() const { return contradiction_; }
+  // How many END_RUN markers were heard (the simulator repeats its own each second).
+  std::int64_t end_runs_heard() const { return end_runs_heard_; }
   // The run has ended and every episode has every frame's observations.
   // ... and every controlled episode has every step's ground truth (its prior needs them).
   bool complete() const;
@@ -72,9 +79,12 @@ class DatasetBuilder {
   // ground truth is incomplete are left out and counted).
   Dataset build() const;
   // The same data set, taken out: each episode's frames are let go as soon as they are
-  // assembled, so that the observations are never held twice. The builder's episodes are
+  // assembled, so that the observations are never held twice. The builder's frames are
   // gone afterwards (what it knows of the run as a whole stays): read missing_frames(),
-  // complete() and the like first; it is not meant to collect again.
+  // complete() and the like first; it is not meant to collect again. From then on it
+  // watches the run for a contradiction: it keeps the episodes' markers and a digest of
+  // each frame and ground-truth step taken, so that a copy arriving later which differs
+  // (the sensor's, when a forger's came first) still contradicts the run; nothing new is kept.
   Dataset take();
 
  private:
@@ -83,6 +93,8 @@ class DatasetBuilder {
     std::vector<double> eta;  // rows of num_sources
     std::vector<int> contexts;  // one per symbol, or none
   };
+  static std::uint64_t frame_digest(const Frame& f);
+  void watch_frame(const hbirl::observations_t& m, const Frame& f);
   struct Episode {
     bool controlled = false;
     bool marked = false;  // a marker has said whether it is controlled (then later ones must agree)
@@ -101,12 +113,27 @@ class DatasetBuilder {
   Dataset empty_dataset() const;  // the run's facts, no episodes yet
   void add_episode(Dataset& d, int id, const Episode& e) const;  // if it ended and belongs to the run
   static void finish_dataset(Dataset& d);
-  static void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
+  void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
   // Episode `id` belongs to the run: any, until END_RUN states how many it had.
   bool in_run(int id) const { return run_episodes_ == 0 || id < run_episodes_; }
 
+  void contradicted(const std::string& why);
+  void saw_episode(int id);  // a message about episode `id` came
+  // Taken (watching_): the checks of a message against what was taken.
+  void watch_marker(const hbirl::episode_marker_t& m);
+  void watch_truth(const hbirl::ground_truth_t& m);
+
   std::string domain_;
   std::string expected_domain_;
+  std::string contradiction_;
+  int last_episode_ = -1;  // the highest episode any message was about
+  std::int64_t end_runs_heard_ = 0;
+  bool watching_ = false;  // taken: only watching for a contradiction
+  // What was taken, to check later copies against: (episode, step, frame) -> the frame's
+  // digest, and (episode, step) -> its truth; sorted (24 and 16 bytes a frame and a step).
+  std::vector<std::pair<std::tuple<int, int, int>, std::uint64_t>> taken_frames_;
+  std::vector<std::pair<std::pair<int, int>, StateAction>> taken_truth_;
+  std::map<int, Episode> taken_episodes_;  // without their frames and truth
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;

@@ -78,6 +78,7 @@ struct Stopped : std::runtime_error {
 
 struct BusExecutorOptions {
   std::function<bool()> stop;  // checked while waiting for answers; true: run() throws Stopped
+  std::function<void()> idle;  // called while waiting (the process beats its heartbeat there)
   int timeout_ms = 2000;       // wait this long without progress (an answer, a block received) before re-asking
   int max_attempts = 3;        // attempts over the bus; then the optimiser computes the rest
   double worker_silence_s = 3.0;  // workers not heard from for this long get no work
@@ -131,7 +132,13 @@ class BusBlockExecutor final : public BlockExecutor {
     std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
     double round_trip_s = 0.0;                            // summed over requests
     std::int64_t trajectories_sent = 0, bytes_sent = 0;   // TRAJECTORY_<tag> messages to workers, and their bytes
+    // Passes that waited on a worker that had never answered (its one trial block left
+    // unanswered): at most kMaxTrialPasses, whatever the number and rate of fake workers.
+    std::int64_t trial_passes = 0;
   };
+  // What workers that never answer (a crashed build, a forger's heartbeats) may cost a run:
+  // this many passes, each at most one timeout longer (docs/RELIABILITY.md).
+  static constexpr int kMaxTrialPasses = 3;
   Stats stats() const;
 
  private:
@@ -149,6 +156,7 @@ class BusBlockExecutor final : public BlockExecutor {
     std::chrono::steady_clock::time_point suspect_since;
     bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
     std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
+    bool ever_answered = false;  // answered a block in this run (answers is reset by silence, this is not)
     bool checked = false;      // one of its answers matched the optimiser's own computation
     // Per block sent to it: how many heartbeats after its sending said it was not held (lost
     // on the way, or refused: over its --max-dataset-mb, a digest that did not match). Twice,

@@ -29,7 +29,16 @@ struct OptimiserOptions {
   int workers = 0;              // wait for this many sampler workers before learning
   int wait_workers_ms = 10000;
   int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
-  int quiet_ms = 5000;          // ... and learn without them when still none came for this long
+  // A run whose frames stop coming before it is complete: learned from what came (and
+  // said so: OptimiserResult::incomplete) only when allowed, after quiet_ms without a
+  // frame; otherwise it fails (RunFailed) after incomplete_after_ms without one, asking
+  // for them again all the while (a hung or restarted service may still send them).
+  bool allow_incomplete = false;
+  int quiet_ms = 5000;
+  int incomplete_after_ms = 60000;
+  // Once the run is complete, wait up to this long for END_RUN to be heard again (the
+  // simulator repeats it each second): what comes meanwhile may contradict the run.
+  int confirm_ms = 1500;
   // The most memory the run's observations may take (hbirl-optimiser --max-dataset-mb):
   // frames beyond it are refused, counted, and not kept (DatasetBuilder::limit).
   std::int64_t max_dataset_bytes = std::int64_t{2048} << 20;
@@ -38,6 +47,11 @@ struct OptimiserOptions {
   // so services that wait for it (the simulator) and the dashboard hear it throughout.
   std::function<void(const std::string&)> beat;
 };
+// A run that cannot be learned from: what it lacks or how it contradicts itself, in one line.
+struct RunFailed : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 struct OptimiserResult {
   Learned learned;
   Dataset data;
@@ -45,10 +59,11 @@ struct OptimiserResult {
   int frame_requests = 0;            // FRAME_REQUEST messages sent
   int workers = 0;
   BusBlockExecutor::Stats estep;
-  std::string incomplete;            // a recorded run read with allow_incomplete: what it lacks ("" when complete)
+  std::string incomplete;            // learned with allow_incomplete from a run that lacks this ("" when complete)
 };
 // Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
-// to stop first.
+// to stop first; throws RunFailed for a run that is incomplete (unless allowed) or
+// contradicts itself (then no REWARD is published).
 // `ready` is called once it listens (so a simulator may start).
 std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
                                              const std::function<bool()>& stop,
@@ -65,9 +80,11 @@ struct RecordedRun {
 };
 
 // The data set of a recorded log, as the live optimiser collected it (up to the moment
-// the run was complete); `learned` is left empty. Throws InputError for unusable logs --
-// and for a log whose run never completed, unless allow_incomplete (then `incomplete`
-// says what is missing).
+// the run was complete; the rest of the log is read for contradictions); `learned` is
+// left empty. Throws InputError for unusable logs: damaged, signed with another key,
+// holding messages of more than one run (when the key file names none), a run that
+// contradicts itself -- and a log whose run never completed, unless allow_incomplete
+// (then `incomplete` says what is missing).
 OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters);
 
 // Learns offline from a recorded log (hbirl learn --log): the same data set and the same

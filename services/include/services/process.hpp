@@ -17,6 +17,13 @@ bool stop_requested();
 // "<service>-<host>-<pid>": unique on a network of machines.
 std::string default_id(const std::string& service);
 
+// Liveness for a supervisor (services/launch.sh): every heartbeat this process sends
+// touches `path` (its time of last modification is the heartbeat's), so a service that is
+// alive but silent -- stopped, or stuck -- is seen as such. Errors are ignored: the
+// supervisor then sees silence.
+void set_alive_file(const std::string& path);
+void touch_alive_file();
+
 class Heartbeat {
  public:
   Heartbeat(Bus& bus, Counters& counters, std::string service, std::string id);

@@ -54,7 +54,7 @@ class SamplerWorker {
   };
   void on_mdp(const hbirl::mdp_t& m);
   void on_trajectory(const hbirl::trajectory_t& m, int bytes);
-  void on_request(const hbirl::estep_request_t& m);
+  void on_request(const hbirl::estep_request_t& m, std::uint64_t run);
   // Computes the blocks of the pending request whose trajectories are here (all of them
   // when `all_here_only` says to wait until every one is).
   void serve(bool all_here_only);
@@ -82,6 +82,7 @@ class SamplerWorker {
   // of it and not answered yet: the request and its blocks.
   std::map<int, std::uint64_t> assigned_;
   std::optional<hbirl::estep_request_t> request_;
+  std::uint64_t request_run_ = 0;  // the run it was signed for (keyed_bus.hpp), whose answers it gets
   std::set<int> pending_;
   bool said_missing_ = false;  // told the optimiser (a heartbeat) which blocks it lacks
   std::uint64_t last_dataset_digest_ = 0;

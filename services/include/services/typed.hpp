@@ -24,6 +24,7 @@ struct Counters {
   std::int64_t bad_messages = 0;
   std::int64_t send_failures = 0;
   std::int64_t gaps = 0;         // sequence numbers skipped by publishers
+  std::int64_t other_run = 0;    // signed with the key for another run (keyed_bus.hpp): dropped, also counted as bad
   std::string last_problem;
   bool quiet = false;            // no reports on stderr (tests)
   bool authenticated = false;    // the bus checks every message against a run key (keyed_bus.hpp)
@@ -49,14 +50,23 @@ void same_frame(const From& from, To& to) {
 }
 
 // What a message signed with a run key carries after its encoding (keyed_bus.hpp): a
-// 32-byte tag and the marker "hbk1". Defined here because a reader without the key
-// recognises it (to say "give --key" rather than "garbage").
+// 32-byte tag, the run's identity (8 bytes, big-endian) and the marker "hbk2". Defined
+// here because a reader without the key recognises it (to say "give --key" rather than
+// "garbage"). Messages of the format before run identities ended in a 32-byte tag and
+// "hbk1": they are recognised, and refused.
 constexpr int kTagBytes = 32;
-constexpr int kTrailerBytes = kTagBytes + 4;
-inline constexpr std::uint8_t kTrailerMarker[4] = {'h', 'b', 'k', '1'};
+constexpr int kRunBytes = 8;
+constexpr int kTrailerBytes = kTagBytes + kRunBytes + 4;
+inline constexpr std::uint8_t kTrailerMarker[4] = {'h', 'b', 'k', '2'};
+constexpr int kOldTrailerBytes = kTagBytes + 4;
+inline constexpr std::uint8_t kOldTrailerMarker[4] = {'h', 'b', 'k', '1'};
 // True when `data` ends in a trailer (whether or not its tag is valid).
 inline bool has_trailer(const std::uint8_t* data, int size) {
   return size >= kTrailerBytes && std::equal(kTrailerMarker, kTrailerMarker + 4, data + size - 4);
+}
+// True when `data` ends in a trailer of the format before run identities.
+inline bool has_old_trailer(const std::uint8_t* data, int size) {
+  return size >= kOldTrailerBytes && std::equal(kOldTrailerMarker, kOldTrailerMarker + 4, data + size - 4);
 }
 
 // Decodes `m` as a T; the reason when it cannot.
@@ -68,7 +78,8 @@ std::optional<std::string> decode(const Message& m, T& out) {
       return "not a " + std::string(T::getTypeName()) + " (wrong fingerprint, or truncated)";
     }
     if (used != m.size) {
-      if (m.size - used == kTrailerBytes && has_trailer(m.data, m.size)) {
+      if ((m.size - used == kTrailerBytes && has_trailer(m.data, m.size)) ||
+          (m.size - used == kOldTrailerBytes && has_old_trailer(m.data, m.size))) {
         return std::string("signed with a run key: give --key to check and read it");
       }
       return std::to_string(m.size - used) + " bytes after the " + T::getTypeName();
