@@ -38,12 +38,25 @@ int run(int argc, char** argv) {
   app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
   dashboard::ServerLimits limits;
   app.add_option("--max-connections", limits.max_connections,
-                 "HTTP connections served at once (as many more wait; beyond that new ones wait in the kernel)")
+                 "HTTP requests answered at once, each on a thread of its own, once its whole head has arrived\n"
+                 "(as many more complete ones wait in line); one request per connection")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app.add_option("--http-timeout", limits.timeout_s,
                  "Seconds a client may send or take nothing before it is dropped (slow and idle connections)")
       ->check(CLI::Range(0.05, 600.0))
+      ->capture_default_str();
+  app.add_option("--header-timeout", limits.header_timeout_s,
+                 "Seconds a connection has to send its whole request head (request line and headers): one\n"
+                 "that has not by then is closed unanswered, however steadily it trickles. Until then it\n"
+                 "holds no thread; once its head is in, it has as long again to take the answer")
+      ->check(CLI::Range(0.05, 600.0))
+      ->capture_default_str();
+  app.add_option("--max-waiting-per-client", limits.max_waiting_per_client,
+                 "Connections one client address (IPv6: one /64) may have waiting for their heads; a new one\n"
+                 "beyond this closes that client's OLDEST waiting connection, so a request sent whole is\n"
+                 "still served (at most " + std::to_string(limits.max_waiting) + " wait in all, the oldest closed first)")
+      ->check(CLI::Range(1, limits.max_waiting))
       ->capture_default_str();
   std::string key_file;
   app.add_option("--key", key_file,
@@ -90,7 +103,7 @@ int run(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     if (services::stop_requested()) return 0;
-    auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("bus", ...) if it cannot
+    auto follow = std::make_unique<services::LogBus>(log);  // throws InputError("--log", ...) if it cannot
     follow->follow(true);
     bus = services::with_key(std::move(follow), key_file, counters, services::KeyUse::kReader);
   } else {
