@@ -102,9 +102,9 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          outside sensor is unauthenticated unless --key is given (the sensor
                          must then sign with OUT/run.key)
   --no-key               no key: the bus is unauthenticated (every service says so)
-  --stall-timeout S      a service whose heartbeat has not been heard for S seconds (stopped or
-                         hung: alive, but silent) is killed and restarted, like one that died
-                         (default $stall; 0: only deaths are noticed)
+  --stall-timeout S      a service that has neither beaten its heartbeat nor computed for S
+                         seconds (stopped, or blocked: alive, but silent) is killed and
+                         restarted, like one that died (default $stall; 0: only deaths are noticed)
   --allow-incomplete     learn from what came when a run's frames stop coming before it is
                          complete, and exit 0 (the result says what is missing under
                          "incomplete"); by default such a run fails, after
@@ -297,8 +297,9 @@ fi
 # back-off of 0.5, 1, 2 s, at most $max_restarts times; the protocol asks again for what it
 # lost (frames, end markers, E-step blocks), so the run still completes with the same
 # result. A service alive but silent -- no heartbeat for --stall-timeout seconds: stopped
-# (SIGSTOP) or hung -- is killed and restarted the same way (each touches logs/NAME.alive
-# with every heartbeat, hbirl-services --alive-file). Exit 2 (bad input) and 3 (the run
+# (SIGSTOP) or blocked -- is killed and restarted the same way (each touches logs/NAME.alive
+# once a second while it beats its heartbeat or computes, hbirl-services --alive-file).
+# Exit 2 (bad input) and 3 (the run
 # cannot be learned: incomplete, or contradicting itself) are not restarted: they fail the
 # run. lcm-logger is not restarted (what it missed cannot be recorded again: the recording
 # is then incomplete, and `hbirl learn --log` says so). logs/pids lists every process

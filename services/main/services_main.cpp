@@ -46,8 +46,8 @@ void add_common(CLI::App& app, Common& c) {
                  "the run it names and drop, counting them, those not signed with it for that run. Without it the\n"
                  "bus is unauthenticated (docs/RELIABILITY.md)");
   app.add_option("--alive-file", c.alive_file,
-                 "Touch this file with every heartbeat (about once a second), so a supervisor (services/launch.sh)\n"
-                 "sees a service that is alive but silent -- stopped or hung -- and restarts it");
+                 "Touch this file once a second while the service beats its heartbeat or computes, so a supervisor\n"
+                 "(services/launch.sh) sees one that is alive but silent -- stopped, or blocked -- and restarts it");
 }
 
 // The bus of a service, signed when it has a key; its heartbeats touch --alive-file.

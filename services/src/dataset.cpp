@@ -3,10 +3,16 @@
 #include <algorithm>
 #include <cmath>
 
-#include "learner/digest.hpp"
+#include <sodium.h>
+
 #include "learner/input_error.hpp"
 
 namespace hbirl::services {
+
+DatasetBuilder::DatasetBuilder() {
+  if (sodium_init() < 0) throw std::runtime_error("libsodium could not be initialised");
+  randombytes_buf(digest_key_.data(), digest_key_.size());
+}
 
 void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   counters_ = &counters;
@@ -43,6 +49,8 @@ void DatasetBuilder::saw_episode(int id) {
   if (run_episodes_ > 0 && id >= run_episodes_) {
     contradicted("a message about episode " + std::to_string(id) + " after END_RUN said the run had " + std::to_string(run_episodes_) +
                  " episodes");
+  } else if (watching_ && taken_complete_ && !taken_episodes_.count(id)) {  // (an END_RUN that stated no number)
+    contradicted("a message about episode " + std::to_string(id) + ", which the run did not have when it was complete");
   }
 }
 
@@ -411,15 +419,32 @@ Dataset DatasetBuilder::build() const {
   return d;
 }
 
-std::uint64_t DatasetBuilder::frame_digest(const Frame& f) {
-  Fnv1a h;
-  h.add(f.symbols.data(), f.symbols.size() * sizeof(int));
-  h.add(f.eta.data(), f.eta.size() * sizeof(double));
-  h.add(f.contexts.data(), f.contexts.size() * sizeof(int));
-  return h.value();
+// SipHash-2-4 (libsodium's crypto_shorthash) with a key of this builder's, random: a
+// forger cannot make a frame that collides with another, as it could with an unkeyed hash.
+std::uint64_t DatasetBuilder::frame_digest(const Frame& f) const {
+  std::vector<std::uint8_t> bytes;
+  const auto add = [&bytes](const void* p, size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    bytes.insert(bytes.end(), b, b + n);
+  };
+  const std::uint64_t sizes[3] = {f.symbols.size(), f.eta.size(), f.contexts.size()};
+  add(sizes, sizeof sizes);
+  add(f.symbols.data(), f.symbols.size() * sizeof(int));
+  add(f.eta.data(), f.eta.size() * sizeof(double));
+  add(f.contexts.data(), f.contexts.size() * sizeof(int));
+  std::uint64_t out = 0;
+  static_assert(crypto_shorthash_BYTES == sizeof out, "an 8-byte digest");
+  crypto_shorthash(reinterpret_cast<unsigned char*>(&out), bytes.data(), bytes.size(), digest_key_.data());
+  return out;
 }
 
 Dataset DatasetBuilder::take() {
+  // A complete run is closed: an episode it did not have contradicts it from now on, and
+  // so does an END_RUN stating another number than the episodes 0 .. n-1 it had.
+  taken_complete_ = complete();
+  if (taken_complete_ && run_episodes_ == 0 && !episodes_.empty() && episodes_.rbegin()->first + 1 == static_cast<int>(episodes_.size())) {
+    run_episodes_ = static_cast<int>(episodes_.size());
+  }
   Dataset d = empty_dataset();
   // (In order: episodes_ is ordered by episode, each one's frames by step and frame.)
   for (auto& [id, e] : episodes_) {

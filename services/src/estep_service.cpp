@@ -259,10 +259,13 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) const {
     workers_.erase(m.id);
     return;
   }
-  if (!workers_.count(m.id) && workers_.size() >= kMaxWorkers) {  // heartbeats under ever new names: forget the longest silent
-    const auto oldest = std::min_element(workers_.begin(), workers_.end(),
-                                         [](const auto& a, const auto& b) { return a.second.last_seen < b.second.last_seen; });
-    workers_.erase(oldest);
+  if (!workers_.count(m.id) && workers_.size() >= kMaxWorkers) {
+    // Heartbeats under ever new names: forget the longest silent of those that never
+    // answered (a worker that did, busy computing now, is not pushed out by made-up names).
+    const auto older = [](const auto& a, const auto& b) {
+      return std::pair(a.second.ever_answered, a.second.last_seen) < std::pair(b.second.ever_answered, b.second.last_seen);
+    };
+    workers_.erase(std::min_element(workers_.begin(), workers_.end(), older));
   }
   Worker& w = workers_[m.id];
   w.mdp_digest = static_cast<std::uint64_t>(m.mdp_digest);

@@ -155,6 +155,9 @@ void KeyedBus::sign_for_run(RunId run) {
 
 bool KeyedBus::publish(const std::string& channel, const void* data, int size) {
   const RunId run = run_ != 0 ? run_ : signing_;
+  // A worker of every run that has heard from none yet has no run to sign for: what it
+  // would send (a heartbeat) could only be counted as another run's by every optimiser.
+  if (run == 0 && use_ == KeyUse::kWorker) return true;
   std::vector<std::uint8_t> signed_bytes(static_cast<size_t>(size) + kTrailerBytes);
   if (size > 0) std::memcpy(signed_bytes.data(), data, static_cast<size_t>(size));
   const auto tag = tag_of(key_, run, channel, data, size);
@@ -168,7 +171,10 @@ bool KeyedBus::publish(const std::string& channel, const void* data, int size) {
 // first one seen (a reader), or any (a worker).
 bool KeyedBus::believes(RunId run) {
   if (key_.run() || use_ == KeyUse::kService) return run == run_;
-  if (use_ == KeyUse::kWorker) return true;
+  if (use_ == KeyUse::kWorker) {
+    if (signing_ == 0) signing_ = run;  // its first run: heartbeats go there until a request says otherwise
+    return true;
+  }
   if (run_ == 0) run_ = run;
   return run == run_;
 }
@@ -206,11 +212,12 @@ SubscriptionId KeyedBus::subscribe(const std::string& channel, RawHandler handle
 void check_recording_key(const std::string& log_path, const std::string& key_file) {
   const std::optional<RunKey> key = key_file.empty() ? std::nullopt : std::optional<RunKey>(RunKey::read(key_file));
   LogBus log(log_path);
-  // The first of hbirl's messages decide (LCM's own, e.g. LCM_SELF_TEST, are never signed):
-  // one signed message is enough to say "give the key"; with a key, up to a thousand signed
-  // ones are tried (a forger's messages recorded at the start do not make it "wrong").
-  constexpr int kTried = 1000;
-  int hbirl_messages = 0, signed_messages = 0, old_format = 0, with_key = 0, for_its_run = 0;
+  // hbirl's messages decide (LCM's own, e.g. LCM_SELF_TEST, are never signed): without a
+  // key, the first one says whether they are signed; with one, the recording is read until a
+  // message signed with it (for its run, when the key file names one) is found -- to the
+  // end if none is: messages a forger recorded first cannot make the key "wrong".
+  int hbirl_messages = 0, signed_messages = 0, old_format = 0, with_key = 0;
+  bool found = false;
   RunId recorded_run = 0;  // the run of the first message signed with the key
   const SubscriptionId all = log.subscribe(".*", [&](const Message& m) {
     if (m.channel.rfind("LCM_", 0) == 0) return;
@@ -222,9 +229,9 @@ void check_recording_key(const std::string& log_path, const std::string& key_fil
     if (!key || !signed_with(*key, m.channel, m.data, m.size, &run)) return;
     ++with_key;
     if (recorded_run == 0) recorded_run = run;
-    for_its_run += key->run() && run == *key->run();
+    found = found || !key->run() || run == *key->run();
   });
-  while (signed_messages + old_format < (key ? kTried : 1) && hbirl_messages < 10 * kTried && log.handle(0) >= 0) {
+  while (!found && (key || hbirl_messages == 0) && log.handle(0) >= 0) {
   }
   log.unsubscribe(all);
   if (!key) {
@@ -238,10 +245,10 @@ void check_recording_key(const std::string& log_path, const std::string& key_fil
                                              : "the messages in '" + log_path + "' are not signed: read it without --key");
   }
   if (with_key == 0) {
-    throw InputError("--key", "none of the first " + std::to_string(signed_messages) + " signed messages in '" + log_path +
+    throw InputError("--key", "none of the " + std::to_string(signed_messages) + " signed messages in '" + log_path +
                                   "' is signed with the key in '" + key_file + "': the wrong key (a run's key is OUT/run.key, beside its recording)");
   }
-  if (key->run() && for_its_run == 0) {
+  if (!found) {
     throw InputError("--key", "'" + key_file + "' is the key file of run " + run_id_text(*key->run()) + ", and '" + log_path +
                                   "' holds run " + run_id_text(recorded_run) + ": give that run's key file (OUT/run.key beside its recording)");
   }

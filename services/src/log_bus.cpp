@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -50,6 +51,9 @@ std::int64_t file_size(std::FILE* file) {
 LogBus::LogBus(const std::string& path, const std::string& out_path)
     : path_(path), in_(std::fopen(regular_file(path).c_str(), "rbe")) {
   if (!in_) throw InputError("--log", "cannot read the LCM log '" + path + "': " + std::strerror(errno));
+  // A large buffer: each event's header is read and the reader goes back to it, and events
+  // nobody listens to are skipped by a seek, which stays inside the buffer.
+  std::setvbuf(in_.get(), nullptr, _IOFBF, std::size_t{1} << 20);
   if (!out_path.empty()) {
     out_ = std::make_unique<lcm::LogFile>(out_path, "w");
     if (!out_->good()) throw InputError("bus", "cannot write the LCM log '" + out_path + "'");
@@ -75,57 +79,76 @@ void LogBus::unsubscribe(SubscriptionId id) {
   std::erase_if(subscriptions_, [id](const Subscription& s) { return s.id == id; });
 }
 
-// Reads the header at the reading position and goes back to it.
+// Reads the header at pos_. kEvent: the file is positioned after it; otherwise back at pos_.
 LogBus::Next LogBus::check_next(std::string& why, Header& header) {
   std::FILE* file = in_.get();
-  const off_t at = ::ftello(file);
+  const auto back = [&] {
+    std::clearerr(file);  // glibc's end-of-file flag is sticky
+    ::fseeko(file, pos_, SEEK_SET);
+  };
   std::uint8_t h[kHeaderBytes];
-  const size_t got = std::fread(h, 1, kHeaderBytes, file);
-  std::clearerr(file);
-  ::fseeko(file, at, SEEK_SET);
-  if (got < static_cast<size_t>(kHeaderBytes)) return Next::kEnd;
-  const std::string where = "the event at byte " + std::to_string(at);
-  if (std::memcmp(h, kSync, 4) != 0) {
-    why = "no event starts at byte " + std::to_string(at) + " (no sync word)";
-    return Next::kDamaged;
+  if (std::fread(h, 1, kHeaderBytes, file) < static_cast<size_t>(kHeaderBytes)) {
+    back();
+    return Next::kEnd;
   }
+  const std::string where = "the event at byte " + std::to_string(pos_);
   const std::int64_t channel = be32(h + 20), data = be32(h + 24);
-  if (channel < 1 || channel > kMaxChannelBytes) {
+  if (std::memcmp(h, kSync, 4) != 0) {
+    why = "no event starts at byte " + std::to_string(pos_) + " (no sync word)";
+  } else if (channel < 1 || channel > kMaxChannelBytes) {
     why = where + " states a channel name of " + std::to_string(channel) + " bytes (1 to " + std::to_string(kMaxChannelBytes) + " are read)";
-    return Next::kDamaged;
-  }
-  if (data < 0 || data > kMaxEventBytes) {
+  } else if (data < 0 || data > kMaxEventBytes) {
     why = where + " states " + std::to_string(data) + " bytes of data (at most " + std::to_string(kMaxEventBytes >> 20) + " MB are read)";
+  }
+  if (!why.empty()) {
+    back();
     return Next::kDamaged;
   }
-  // Cut short, or still being written.
-  if (static_cast<std::int64_t>(at) + kHeaderBytes + channel + data > file_size(file)) return Next::kEnd;
+  // Cut short, or still being written (the file's size is asked for again only then).
+  const std::int64_t end = pos_ + kHeaderBytes + channel + data;
+  if (end > size_ && end > (size_ = file_size(file))) {
+    back();
+    return Next::kEnd;
+  }
   header = Header{be64(h + 12), channel, data};
   return Next::kEvent;
 }
 
-// Moves the reading position to the next sync word at or after it; when none is written
+// Moves pos_ (and the file) to the next sync word at or after pos_; when none is written
 // yet, to where the search may go on from (the last three bytes could start one).
 bool LogBus::skip_to_next_sync() {
   std::FILE* file = in_.get();
-  off_t at = ::ftello(file);
+  ::fseeko(file, pos_, SEEK_SET);
   std::vector<std::uint8_t> chunk(1 << 16);
   for (;;) {
     const size_t got = std::fread(chunk.data(), 1, chunk.size(), file);
     std::clearerr(file);
     for (size_t k = 0; k + 4 <= got; ++k) {
       if (std::memcmp(chunk.data() + k, kSync, 4) == 0) {
-        ::fseeko(file, at + static_cast<off_t>(k), SEEK_SET);
+        pos_ += static_cast<std::int64_t>(k);
+        ::fseeko(file, pos_, SEEK_SET);
         return true;
       }
     }
-    if (got < chunk.size()) {
-      ::fseeko(file, at + static_cast<off_t>(got >= 3 ? got - 3 : 0), SEEK_SET);
-      return false;
-    }
-    at += static_cast<off_t>(got - 3);
-    ::fseeko(file, at, SEEK_SET);
+    pos_ += static_cast<std::int64_t>(got >= 3 ? got - 3 : 0);
+    ::fseeko(file, pos_, SEEK_SET);
+    if (got < chunk.size()) return false;
   }
+}
+
+// The event's channel and, if someone listens to it, its data (the file positioned after
+// its header); false if the file ends inside it.
+bool LogBus::read_event(const Header& header, bool& wanted) {
+  std::FILE* file = in_.get();
+  channel_.resize(static_cast<size_t>(header.channel_bytes));
+  if (std::fread(channel_.data(), 1, channel_.size(), file) != channel_.size()) return false;
+  wanted = std::any_of(subscriptions_.begin(), subscriptions_.end(), [this](const Subscription& s) { return s.channel->matches(channel_); });
+  // Data nobody listens to is read through when it is small (a seek costs more), else skipped.
+  if (wanted || header.data_bytes <= std::int64_t{1} << 20) {
+    data_.resize(static_cast<size_t>(header.data_bytes));
+    return std::fread(data_.data(), 1, data_.size(), file) == data_.size();
+  }
+  return ::fseeko(file, pos_ + kHeaderBytes + header.channel_bytes + header.data_bytes, SEEK_SET) == 0;
 }
 
 int LogBus::handle(int timeout_ms) {
@@ -134,39 +157,39 @@ int LogBus::handle(int timeout_ms) {
   for (;;) {
     std::string why;
     Header header;
-    Next next = lost_ ? (skip_to_next_sync() ? Next::kEvent : Next::kEnd) : Next::kEvent;
-    lost_ = lost_ && next == Next::kEnd;
-    const off_t at = ::ftello(file);
-    if (next == Next::kEvent) next = check_next(why, header);
+    if (lost_) lost_ = !skip_to_next_sync();
+    Next next = lost_ ? Next::kEnd : check_next(why, header);
     if (next == Next::kDamaged) {
       if (!follow_) throw InputError("--log", "'" + path_ + "' is damaged: " + why);
       if (++damaged_ <= 20) std::fprintf(stderr, "hbirl: %s: %s: skipped to the next event\n", path_.c_str(), why.c_str());
-      ::fseeko(file, at + 1, SEEK_SET);
+      ++pos_;
       lost_ = true;
       continue;
     }
-    if (next == Next::kEvent) {  // sound, and whole in the file: read it
-      channel_.resize(static_cast<size_t>(header.channel_bytes));
-      data_.resize(static_cast<size_t>(header.data_bytes));
-      const bool whole = ::fseeko(file, at + kHeaderBytes, SEEK_SET) == 0 &&
-                         std::fread(channel_.data(), 1, channel_.size(), file) == channel_.size() &&
-                         std::fread(data_.data(), 1, data_.size(), file) == data_.size();
-      if (!whole) next = Next::kEnd;
+    bool wanted = false;
+    if (next == Next::kEvent && !read_event(header, wanted)) {
+      std::clearerr(file);
+      ::fseeko(file, pos_, SEEK_SET);
+      next = Next::kEnd;
     }
     if (next == Next::kEnd) {
       if (!follow_) return -1;
       // The end, or an event the logger is still writing: read it again from its start
-      // once more has been written (clearerr: glibc's end-of-file flag is sticky).
-      std::clearerr(file);
-      const bool truncated = file_size(file) < at;  // rewritten from the start (lcm-logger -f)
-      ::fseeko(file, truncated ? 0 : at, SEEK_SET);
-      if (truncated) lost_ = false;
+      // once more has been written.
+      if (file_size(file) < pos_) {  // rewritten from the start (lcm-logger -f)
+        pos_ = 0;
+        lost_ = false;
+        ::fseeko(file, 0, SEEK_SET);
+      }
+      size_ = 0;
       if (std::chrono::steady_clock::now() >= deadline) return 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;
     }
+    pos_ += kHeaderBytes + header.channel_bytes + header.data_bytes;
     ++events_;
     last_utime_ = header.utime;
+    if (!wanted) continue;
     int delivered = 0;
     for (const Subscription& s : subscriptions_) {
       if (!s.channel->matches(channel_)) continue;

@@ -91,63 +91,72 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                       " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
     }
   };
-  while (!builder->complete()) {
-    if (stop && stop()) return std::nullopt;
-    if (options.beat) options.beat("collecting");
-    if (bus.handle(100) < 0) break;  // a log at its end
-    check_contradiction();
-    if (builder->frames() != frames) {
-      frames = builder->frames();
-      last_frame = Clock::now();
-    }
-    if (builder->run_ended() && !announced_end) {
-      say("end of the run announced; " + std::to_string(builder->frames()) + " frames observed so far");
-      announced_end = true;
-    }
-    // Frames lost on the way: ask for them again (a few hundred per request), once a second.
-    if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
-        Clock::now() - last_request > std::chrono::milliseconds(options.resend_after_ms)) {
-      const auto missing = builder->missing_frame_keys(500);
-      if (!missing.empty()) {
-        hbirl::frame_request_t r{};
-        r.utime = builder->build_utime();
-        r.requester = "optimiser";
-        r.n = static_cast<std::int32_t>(missing.size());
-        for (const auto& [episode, step, frame] : missing) {
-          r.episode.push_back(episode);
-          r.step.push_back(step);
-          r.frame.push_back(frame);
+  // Collected until complete; then confirmed: until END_RUN is heard again (or confirm_ms
+  // passes), what comes may still contradict the run (an END_RUN forged early, then the
+  // sensor's next episode) or show it was not complete after all (an END_RUN that stated no
+  // number of episodes, before the sensor's next one began): then collected again.
+  bool ended = false;  // the bus has (a log at its end)
+  for (;;) {
+    while (!builder->complete()) {
+      if (stop && stop()) return std::nullopt;
+      if (options.beat) options.beat("collecting");
+      if (bus.handle(100) < 0) {
+        ended = true;
+        break;
+      }
+      check_contradiction();
+      if (builder->frames() != frames) {
+        frames = builder->frames();
+        last_frame = Clock::now();
+      }
+      if (builder->run_ended() && !announced_end) {
+        say("end of the run announced; " + std::to_string(builder->frames()) + " frames observed so far");
+        announced_end = true;
+      }
+      // Frames lost on the way: ask for them again (a few hundred per request), once a second.
+      if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
+          Clock::now() - last_request > std::chrono::milliseconds(options.resend_after_ms)) {
+        const auto missing = builder->missing_frame_keys(500);
+        if (!missing.empty()) {
+          hbirl::frame_request_t r{};
+          r.utime = builder->build_utime();
+          r.requester = "optimiser";
+          r.n = static_cast<std::int32_t>(missing.size());
+          for (const auto& [episode, step, frame] : missing) {
+            r.episode.push_back(episode);
+            r.step.push_back(step);
+            r.frame.push_back(frame);
+          }
+          publish(bus, channels::kFrameRequest, r, counters);
+          say("asked for " + std::to_string(missing.size()) + " lost frames again");
+          ++result_requests;
         }
-        publish(bus, channels::kFrameRequest, r, counters);
-        say("asked for " + std::to_string(missing.size()) + " lost frames again");
-        ++result_requests;
+        last_request = Clock::now();
       }
-      last_request = Clock::now();
-    }
-    const auto quiet = Clock::now() - last_frame;
-    if (builder->run_ended() && quiet > std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
-      incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " + std::to_string(builder->missing_truth()) +
-                   " ground-truth step(s) missing, " + std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
-      const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
-      if (!options.allow_incomplete) {
-        throw RunFailed("the run is incomplete: " + incomplete + ", and nothing came for " + waited +
-                        " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
+      const auto quiet = Clock::now() - last_frame;
+      if (builder->run_ended() && quiet > std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
+        incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " + std::to_string(builder->missing_truth()) +
+                     " ground-truth step(s) missing, " + std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
+        const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
+        if (!options.allow_incomplete) {
+          throw RunFailed("the run is incomplete: " + incomplete + ", and nothing came for " + waited +
+                          " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
+        }
+        say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete + "), as allowed");
+        break;
       }
-      say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete + "), as allowed");
-      break;
     }
-  }
-  if (stop && stop()) return std::nullopt;
-  // Complete: until END_RUN is heard again (or confirm_ms passes), what comes may still
-  // contradict the run (an END_RUN forged early, then the sensor's next episode).
-  if (incomplete.empty()) {
+    if (stop && stop()) return std::nullopt;
+    if (!incomplete.empty() || ended) break;  // learning from what came, as allowed (or all there is)
     const std::int64_t heard = builder->end_runs_heard();
     const auto until = Clock::now() + std::chrono::milliseconds(options.confirm_ms);
-    while (builder->end_runs_heard() == heard && Clock::now() < until && !(stop && stop())) {
+    while (!ended && builder->complete() && builder->end_runs_heard() == heard && Clock::now() < until && !(stop && stop())) {
       if (options.beat) options.beat("collecting");
-      if (bus.handle(50) < 0) break;
+      ended = bus.handle(50) < 0;
       check_contradiction();
     }
+    if (builder->complete() || ended) break;
+    say("the run went on after it seemed complete: collecting on");
   }
   OptimiserResult result;
   result.missing_frames = builder->missing_frames();
@@ -242,11 +251,24 @@ std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<con
 
 OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
   check_recording_key(run.path, run.key_file);
-  std::unique_ptr<Bus> bus = with_key(std::make_unique<LogBus>(run.path), run.key_file, counters, KeyUse::kReader);
+  auto log = std::make_unique<LogBus>(run.path);
+  const LogBus& clock = *log;  // the recording's time
+  std::unique_ptr<Bus> bus = with_key(std::move(log), run.key_file, counters, KeyUse::kReader);
   DatasetBuilder builder;
   builder.subscribe(*bus, counters);
-  // As the live optimiser does: up to the moment the run is complete.
-  while (!builder.complete() && bus->handle(0) >= 0) {
+  // As the live optimiser does: up to the moment the run is complete, and confirmed (in
+  // the recording's time).
+  bool ended = false;
+  for (;;) {
+    while (!builder.complete() && !(ended = bus->handle(0) < 0)) {
+    }
+    if (ended) break;
+    const std::int64_t heard = builder.end_runs_heard(), since = clock.last_utime();
+    const std::int64_t confirm_us = std::int64_t{OptimiserOptions{}.confirm_ms} * 1000;
+    while (builder.complete() && builder.end_runs_heard() == heard && clock.last_utime() - since < confirm_us &&
+           !(ended = bus->handle(0) < 0)) {
+    }
+    if (builder.complete() || ended) break;
   }
   OptimiserResult result;
   result.missing_frames = builder.missing_frames();
@@ -254,25 +276,26 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
     result.incomplete = std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
                         ", " + std::to_string(builder.unfinished_episodes()) + " episode(s) without their end, " +
                         std::to_string(builder.missing_frames()) + " frame(s) missing";
-    if (!run.allow_incomplete && builder.contradiction().empty()) {
-      throw InputError("--log", "'" + run.path + "' is not a complete run: " + result.incomplete +
-                                    "; --allow-incomplete learns from the finished episodes");
-    }
   }
   result.data = builder.take();
   // The rest of the recording (what the live optimiser heard while it learned) is read for
-  // contradictions, and for messages of another run.
+  // contradictions, and for messages of another run; what is wrong with the recording as a
+  // whole is said before what its run lacks.
   while (bus->handle(0) >= 0) {
-  }
-  if (!builder.contradiction().empty()) {
-    throw InputError("--log", "'" + run.path + "': the run contradicts itself: " + builder.contradiction() +
-                                  " (a forged or stray message? docs/RELIABILITY.md)");
   }
   if (counters.other_run > 0 && !RunKey::read(run.key_file).run()) {
     throw InputError("--log", "'" + run.path + "' holds messages of more than one run signed with this key (" +
                                   std::to_string(counters.other_run) + " not of the first run " +
                                   run_id_text(static_cast<const KeyedBus&>(*bus).run()) +
                                   "; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
+  }
+  if (!builder.contradiction().empty()) {
+    throw InputError("--log", "'" + run.path + "': the run contradicts itself: " + builder.contradiction() +
+                                  " (a forged or stray message? docs/RELIABILITY.md)");
+  }
+  if (!result.incomplete.empty() && !run.allow_incomplete) {
+    throw InputError("--log", "'" + run.path + "' is not a complete run: " + result.incomplete +
+                                  "; --allow-incomplete learns from the finished episodes");
   }
   return result;
 }

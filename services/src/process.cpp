@@ -5,7 +5,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
+#include <ctime>
+#include <thread>
 
 #include "services/channels.hpp"
 
@@ -27,18 +30,47 @@ void install_stop_handlers() {
 bool stop_requested() { return g_stop.load(); }
 
 namespace {
-int g_alive_fd = -1;
+std::atomic<int> g_alive_fd{-1};
+std::atomic<std::int64_t> g_beats{0};
+
+double cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// Once a second: the alive file is touched when the process beat its heartbeat or used
+// CPU (at least 5 % of the second) since the last look. A long computation -- an M-step on a
+// big task, a worker's large block -- sends no heartbeat but uses CPU; a stopped process
+// does neither, nor does one blocked for good (a deadlock, a read that never returns). One
+// spinning in a loop is not told from one computing.
+void watch_alive() {
+  std::int64_t beats = g_beats.load();
+  double cpu = cpu_seconds();
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    const std::int64_t now_beats = g_beats.load();
+    const double now_cpu = cpu_seconds();
+    if (now_beats != beats || now_cpu - cpu >= 0.05) ::futimens(g_alive_fd.load(), nullptr);
+    beats = now_beats;
+    cpu = now_cpu;
+  }
+}
 }  // namespace
 
 void set_alive_file(const std::string& path) {
-  if (g_alive_fd >= 0) ::close(g_alive_fd);
-  g_alive_fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0600);
-  touch_alive_file();
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0600);
+  if (fd < 0) return;  // the supervisor then sees silence, and says so
+  ::futimens(fd, nullptr);
+  const int before = g_alive_fd.exchange(fd);
+  if (before < 0) {
+    std::thread(watch_alive).detach();  // ends with the process
+  } else {
+    ::close(before);
+  }
 }
 
-void touch_alive_file() {
-  if (g_alive_fd >= 0) ::futimens(g_alive_fd, nullptr);  // now
-}
+void touch_alive_file() { ++g_beats; }
 
 std::string default_id(const std::string& service) {
   char host[256] = {0};

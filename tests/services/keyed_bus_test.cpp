@@ -196,6 +196,31 @@ TEST(KeyedBus, AKeySharedByRunsKeepsEachRunsMessagesApart) {
   EXPECT_EQ(seen_b, (std::vector<int>{2, 20}));
 }
 
+// A worker of every run of a key sends nothing before it has heard from a run (a heartbeat
+// signed for no run would be counted as another run's by every optimiser); then it signs
+// for the first run it heard until a request says otherwise.
+TEST(KeyedBus, AWorkerOfEveryRunSignsForNoneUntilItHearsOne) {
+  auto hub = std::make_shared<MemoryHub>();
+  const RunKey shared = RunKey::generate();
+  const RunKey run_a = shared.for_new_run();
+  Counters cw = quiet("worker"), ca = quiet("a");
+  KeyedBus worker(std::make_unique<MemoryBus>(hub), shared, cw, KeyUse::kWorker);
+  KeyedBus a(std::make_unique<MemoryBus>(hub), run_a, ca);
+  std::vector<int> seen;
+  subscribe<hbirl::episode_marker_t>(a, "STATUS", ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
+  subscribe<hbirl::episode_marker_t>(worker, "EPISODE", cw, [](const hbirl::episode_marker_t&, const Message&) {});
+  publish(worker, "STATUS", marker(1), cw);  // before any run: not sent
+  a.handle(0);
+  EXPECT_TRUE(seen.empty());
+  EXPECT_EQ(ca.bad_messages, 0);
+  publish(a, channels::kEpisode, marker(7), ca);
+  worker.handle(0);
+  publish(worker, "STATUS", marker(2), cw);
+  a.handle(0);
+  EXPECT_EQ(seen, (std::vector<int>{2}));
+  EXPECT_EQ(ca.bad_messages, 0);
+}
+
 // A service's key file must name its run; a worker's and a reader's need not.
 TEST(KeyedBus, AServiceNeedsAKeyFileThatNamesItsRun) {
   const auto shared = scratch("shared.key"), run = scratch("run.key");
@@ -257,6 +282,28 @@ TEST(KeyedBus, ARecordingsKeyIsCheckedBeforeItIsRead) {
       EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
     }
   };
+  // A thousand and more messages ending in a made-up trailer, recorded first (anyone can
+  // send them): the key is still found to be the right one, further on.
+  const auto forged_first = scratch("forged-first.lcmlog");
+  {
+    std::ofstream out(forged_first, std::ios::binary);
+    const std::string fake(kTrailerBytes, '\0');
+    for (int k = 0; k < 1500; ++k) {
+      std::string data = "junk" + fake;
+      std::copy(kTrailerMarker, kTrailerMarker + 4, data.end() - 4);
+      std::string event = {'\xED', '\xA1', '\xDA', '\x01'};
+      event += std::string(16, '\0');
+      const auto be32 = [&event](std::uint32_t v) {
+        for (int s = 24; s >= 0; s -= 8) event.push_back(static_cast<char>((v >> s) & 0xFF));
+      };
+      be32(7);
+      be32(static_cast<std::uint32_t>(data.size()));
+      out << event << "EPISODE" << data;
+    }
+    std::ifstream in(log_path, std::ios::binary);
+    out << in.rdbuf();
+  }
+  EXPECT_NO_THROW(check_recording_key(forged_first.string(), run_key.string()));
   refused(log_path.string(), "", "give it");
   refused(log_path.string(), other_key.string(), "the wrong key");
   refused(plain.string(), run_key.string(), "not signed");

@@ -1,7 +1,8 @@
 // Test helper: a forger without the run's key, who knows the protocol and sends
 // well-formed messages at the worst moment (tests/services/netns_test.sh; docs/RELIABILITY.md).
-//   lcm_forge URL end-run N     once the first episode has ended, an END_RUN stating N
-//                               episodes (the run has more), in the run's domain; then exits
+//   lcm_forge URL end-run N [E] once episode E (default 0) has ended, an END_RUN stating N
+//                               episodes (0: not stated; the run has more), in the run's
+//                               domain, five times; then exits
 //   lcm_forge URL ghosts N HZ   N made-up sampler workers, each heartbeat copying a real
 //                               worker's MDP digest, numerics and held blocks, HZ times a
 //                               second each, until the final REWARD (or SIGTERM)
@@ -22,19 +23,20 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 extern "C" void on_term(int) { g_stop = 1; }
 
-int forge_end_run(lcm::LCM& lcm, int episodes) {
+int forge_end_run(lcm::LCM& lcm, int episodes, int after) {
   hbirl::episode_marker_t seen{};
   bool ended = false;
   struct Watch {
     hbirl::episode_marker_t* seen;
     bool* ended;
+    int after;
     void on(const lcm::ReceiveBuffer*, const std::string&, const hbirl::episode_marker_t* m) {
-      if (m->kind == hbirl::episode_marker_t::END_EPISODE && !*ended) {
+      if (m->kind == hbirl::episode_marker_t::END_EPISODE && m->episode == after && !*ended) {
         *seen = *m;
         *ended = true;
       }
     }
-  } watch{&seen, &ended};
+  } watch{&seen, &ended, after};
   lcm.subscribe(hbirl::services::channels::kEpisode, &Watch::on, &watch);
   while (!ended && !g_stop) lcm.handleTimeout(100);
   if (!ended) return 1;
@@ -42,9 +44,12 @@ int forge_end_run(lcm::LCM& lcm, int episodes) {
   forged.kind = hbirl::episode_marker_t::END_RUN;
   forged.episode = 0;
   forged.num_steps = episodes;
-  forged.seq = seen.seq + 1;
-  lcm.publish(hbirl::services::channels::kEpisode, &forged);
-  std::printf("forged END_RUN of %d episodes after episode %d ended (%s)\n", episodes, seen.episode, seen.domain.c_str());
+  for (int k = 0; k < 5; ++k) {  // repeated, as the simulator repeats its own
+    forged.seq = seen.seq + 1 + k;
+    lcm.publish(hbirl::services::channels::kEpisode, &forged);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::printf("forged END_RUN of %d episodes (5 times) after episode %d ended (%s)\n", episodes, seen.episode, seen.domain.c_str());
   return 0;
 }
 
@@ -92,13 +97,13 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_term);
   std::signal(SIGINT, on_term);
   if (argc < 4) {
-    std::fprintf(stderr, "usage: lcm_forge URL end-run N  |  lcm_forge URL ghosts N HZ\n");
+    std::fprintf(stderr, "usage: lcm_forge URL end-run N [E]  |  lcm_forge URL ghosts N HZ\n");
     return 2;
   }
   lcm::LCM lcm(argv[1]);
   if (!lcm.good()) return 1;
   const std::string what = argv[2];
-  if (what == "end-run") return forge_end_run(lcm, std::stoi(argv[3]));
+  if (what == "end-run") return forge_end_run(lcm, std::stoi(argv[3]), argc > 4 ? std::stoi(argv[4]) : 0);
   if (what == "ghosts" && argc == 5) return ghosts(lcm, std::stoi(argv[3]), std::stod(argv[4]));
   std::fprintf(stderr, "lcm_forge: unknown '%s'\n", what.c_str());
   return 2;

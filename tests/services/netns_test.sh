@@ -350,13 +350,20 @@ PY
     "$repo/services/launch.sh" --build "$build" --out "$dir/c" "${gw[@]}" --seed 2 --record >"$tmp/c.out" 2>&1 &
     set_pid=$!
     sleep 0.3
-    lcm-logplayer -s 1 -l "$url" "$dir/a/run.lcmlog" >/dev/null
+    lcm-logplayer -s 0.5 -l "$url" "$dir/a/run.lcmlog" >/dev/null  # half speed: spread over C's run
     wait "$set_pid" || { cat "$tmp/c.out"; fail "launch.sh c exited non-zero"; }
     other="$(sed -n 's/^ *"other_run_messages": \([0-9]*\),*$/\1/p' "$dir/c/result.json")"
     if [ -z "$other" ] || [ "$other" = 0 ]; then fail "no message of run A was counted in run C (other_run_messages '$other')"; fi
     same_theta "$dir/c/result.json" "$dir/alone/result.json" || fail "run A's replay changed run C's theta"
-    "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$dir/c/run.key" --out "$tmp/c_offline.json" 2>/dev/null
-    same_theta "$tmp/c_offline.json" "$dir/alone/result.json" || fail "hbirl learn --log with C's key file: another theta"
+    # (lcm-logger, on a bus carrying both runs, may lose a frame the optimiser asked for again
+    # and got: then the recording is refused as incomplete, which is all it can say.)
+    status=0; "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$dir/c/run.key" --out "$tmp/c_offline.json" 2>"$tmp/c_offline.err" || status=$?
+    if [ "$status" = 0 ]; then
+      same_theta "$tmp/c_offline.json" "$dir/alone/result.json" || fail "hbirl learn --log with C's key file: another theta"
+    else
+      grep -q "is not a complete run" "$tmp/c_offline.err" || { cat "$tmp/c_offline.err"; fail "hbirl learn --log with C's key file: exit $status"; }
+      echo "note: lcm-logger lost frames of run C: $(cat "$tmp/c_offline.err")"
+    fi
     status=0; "$build/hbirl" learn --log "$dir/c/run.lcmlog" --key "$dir/shared key" >/dev/null 2>"$tmp/shared.err" || status=$?
     if [ "$status" != 2 ] || [ "$(wc -l <"$tmp/shared.err")" != 1 ] || ! grep -q "more than one run" "$tmp/shared.err"; then
       cat "$tmp/shared.err"; fail "a recording of two runs read with the shared key: exit $status"
@@ -384,14 +391,17 @@ PY
       for _ in $(seq 1 100); do [ -n "$(pid_in "$name" sim-driver)" ] && break; sleep 0.1; done
       sleep 1
     }
+    # The simulator first (one second into its run: it is publishing), then perception
+    # while the restarted simulator publishes the run again.
     start_set stalled --stall-timeout 3
+    kill -STOP "$(pid_in stalled sim-driver)"
+    for _ in $(seq 1 150); do grep -q "sim-driver died" "$tmp/stalled.out" && break; sleep 0.1; done
+    sleep 1
     kill -STOP "$(pid_in stalled perception)"
-    for _ in $(seq 1 150); do grep -q "perception died" "$tmp/stalled.out" && break; sleep 0.1; done
-    sim="$(pid_in stalled sim-driver)"
-    kill -STOP "$sim" 2>/dev/null || echo "note: the simulator had finished"
     wait "$set_pid" || { cat "$tmp/stalled.out"; fail "launch.sh with stopped services exited non-zero"; }
-    grep -q "perception died (silent for over 3 s" "$tmp/stalled.out" || { cat "$tmp/stalled.out"; fail "the stopped perception was not restarted"; }
-    grep -q "sim-driver died (silent for over 3 s" "$tmp/stalled.out" || echo "note: the simulator was not stopped in time"
+    for victim in sim-driver perception; do
+      grep -q "$victim died (silent for over 3 s" "$tmp/stalled.out" || { cat "$tmp/stalled.out"; fail "the stopped $victim was not restarted"; }
+    done
     same_theta "$tmp/stalled/result.json" "$tmp/clean/result.json" || fail "theta after restarting stopped services differs"
     for mode in fail allow; do
       args=(--stall-timeout 0 --incomplete-after 3)
@@ -412,7 +422,7 @@ PY
         [ "$status" = 0 ] || { cat "$tmp/allow.out"; fail "--allow-incomplete: exit $status"; }
         grep -q '"incomplete": "[0-9]* frame(s)' "$tmp/allow/result.json" || fail "--allow-incomplete: the result does not say what is missing"
       fi
-      echo "$mode: exit $status in $took s; $(grep -h -o 'incomplete[:(][^;]*' "$tmp/$mode.out" | head -n 1)"
+      echo "$mode: exit $status in $took s; $(grep -h -o -E '(the run is incomplete|incomplete run)[^;]*' "$tmp/$mode.out" | head -n 1)"
     done
     ;;
   unkeyed_forgeries)
@@ -431,6 +441,20 @@ PY
     [ ! -f "$tmp/early/result.json" ] || fail "a result was written for a contradicted run"
     echo "forged END_RUN: exit $status; $(grep -o 'the run contradicts itself: [^(]*' "$tmp/early.out")"
     "$repo/services/launch.sh" --build "$build" --out "$tmp/clean" "${gw[@]}" >"$tmp/clean.out" 2>&1 || { cat "$tmp/clean.out"; fail "clean run failed"; }
+    # An END_RUN that states no number of episodes (a sensor may not know it), five times,
+    # once episode 21 (the second demonstration) has ended: the run collects on when the
+    # sensor's next episode begins, or fails loudly -- never learns from 2 demonstrations.
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/countless" "${gw[@]}" >"$tmp/countless.out" 2>&1 &
+    set_pid=$!
+    "$forge" "$url" end-run 0 21
+    status=0; wait "$set_pid" || status=$?
+    if [ "$status" = 0 ]; then
+      same_theta "$tmp/countless/result.json" "$tmp/clean/result.json" || fail "an END_RUN without a number changed theta"
+      echo "forged END_RUN without a number: the run collected on, theta as the clean run's"
+    else
+      grep -q "the run contradicts itself" "$tmp/countless.out" || { cat "$tmp/countless.out"; fail "an END_RUN without a number: exit $status, not said why"; }
+      echo "forged END_RUN without a number: exit $status, $(grep -o 'the run contradicts itself: [^(]*' "$tmp/countless.out")"
+    fi
     "$repo/services/launch.sh" --build "$build" --out "$tmp/ghosts" "${gw[@]}" >"$tmp/ghosts.out" 2>&1 &
     set_pid=$!
     "$forge" "$url" ghosts 300 10 >"$tmp/forge.out" 2>&1 &

@@ -715,6 +715,27 @@ TEST(DatasetBuilder, AnEndRunTheRunContradictsFailsIt) {
     b.on_marker(marker(0, M::END_RUN, 3));
     EXPECT_FALSE(b.contradiction().empty());
   }
+  {  // an END_RUN that states no number (a sensor may not know it): a run complete when
+     // taken is closed -- an episode it did not have, or an END_RUN stating another number,
+     // contradicts it (the reviewer's attack: 3 of 20 demonstrations, exit 0)
+    DatasetBuilder b;
+    episode(b, 0);
+    episode(b, 1);
+    b.on_marker(marker(0, M::END_RUN, 0));
+    ASSERT_TRUE(b.complete());
+    EXPECT_EQ(b.take().observed.size(), 2u);
+    b.on_marker(marker(0, M::END_RUN, 0));
+    b.on_marker(marker(1, M::END_EPISODE, 1));
+    EXPECT_TRUE(b.contradiction().empty()) << b.contradiction();
+    b.on_marker(marker(2, M::BEGIN_EPISODE, 0));
+    EXPECT_NE(b.contradiction().find("episode 2"), std::string::npos) << b.contradiction();
+    DatasetBuilder c;
+    episode(c, 0);
+    c.on_marker(marker(0, M::END_RUN, 0));
+    c.take();
+    EXPECT_THROW(c.on_marker(marker(0, M::END_RUN, 10)), InputError);
+    EXPECT_NE(c.contradiction().find("END_RUN of 10 episodes after one of 1"), std::string::npos) << c.contradiction();
+  }
   {  // the sensor's END_RUN, repeated: nothing contradicts it
     DatasetBuilder b;
     for (int e = 0; e < 3; ++e) episode(b, e);

@@ -5,6 +5,7 @@
 // of step with each other (observations come two services later than the markers), so
 // everything is placed by its (episode, step, frame) fields, never by arrival order, and
 // a replayed log gives the same data as the live run.
+#include <array>
 #include <map>
 #include <optional>
 #include <tuple>
@@ -38,6 +39,7 @@ struct Dataset {
 
 class DatasetBuilder {
  public:
+  DatasetBuilder();
   // Subscribes to the three channels; bad messages are counted in `counters`.
   void subscribe(Bus& bus, Counters& counters);
   // The domain learned on, when known before the run: its name in the markers, its
@@ -93,7 +95,7 @@ class DatasetBuilder {
     std::vector<double> eta;  // rows of num_sources
     std::vector<int> contexts;  // one per symbol, or none
   };
-  static std::uint64_t frame_digest(const Frame& f);
+  std::uint64_t frame_digest(const Frame& f) const;
   void watch_frame(const hbirl::observations_t& m, const Frame& f);
   struct Episode {
     bool controlled = false;
@@ -134,6 +136,8 @@ class DatasetBuilder {
   std::vector<std::pair<std::tuple<int, int, int>, std::uint64_t>> taken_frames_;
   std::vector<std::pair<std::pair<int, int>, StateAction>> taken_truth_;
   std::map<int, Episode> taken_episodes_;  // without their frames and truth
+  bool taken_complete_ = false;            // the run was complete when taken
+  std::array<std::uint8_t, 16> digest_key_{};  // frame_digest's, random
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;

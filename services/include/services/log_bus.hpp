@@ -43,6 +43,8 @@ class LogBus final : public Bus {
   int handle(int timeout_ms) override;
   std::string url() const override { return "log:" + path_; }
   std::int64_t events_read() const { return events_; }
+  // The time lcm-logger recorded for the last event read (microseconds).
+  std::int64_t last_utime() const { return last_utime_; }
   // Following: damaged events skipped so far.
   std::int64_t damaged() const { return damaged_; }
 
@@ -69,7 +71,10 @@ class LogBus final : public Bus {
     std::int64_t utime = 0, channel_bytes = 0, data_bytes = 0;
   };
   Next check_next(std::string& why, Header& header);
-  bool skip_to_next_sync();  // from the reading position; false: none in what is written yet
+  bool skip_to_next_sync();  // from pos_; false: none in what is written yet
+  bool read_event(const Header& header, bool& wanted);
+  std::int64_t pos_ = 0;   // the reading position: the start of the next event
+  std::int64_t size_ = 0;  // the file's size when last asked
   std::int64_t events_ = 0;
   std::int64_t damaged_ = 0;
   bool lost_ = false;  // following past damage: looking for the next sync word

@@ -17,9 +17,10 @@ bool stop_requested();
 // "<service>-<host>-<pid>": unique on a network of machines.
 std::string default_id(const std::string& service);
 
-// Liveness for a supervisor (services/launch.sh): every heartbeat this process sends
-// touches `path` (its time of last modification is the heartbeat's), so a service that is
-// alive but silent -- stopped, or stuck -- is seen as such. Errors are ignored: the
+// Liveness for a supervisor (services/launch.sh): `path` is touched once a second while
+// the process beats its heartbeat (touch_alive_file(), called with every heartbeat) or
+// computes (uses CPU), so a service alive but silent -- stopped, or blocked for good -- is
+// seen as such by the file's age, and one busy computing is not. Errors are ignored: the
 // supervisor then sees silence.
 void set_alive_file(const std::string& path);
 void touch_alive_file();
