@@ -19,7 +19,7 @@ seconds="$2"
 shift 2
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(fuzz_problem_file fuzz_lcm_decoders fuzz_service_handlers fuzz_png_frame fuzz_dashboard_http)
+  targets=(fuzz_problem_file fuzz_lcm_decoders fuzz_service_handlers fuzz_png_frame fuzz_dashboard_http fuzz_recording)
 fi
 jobs="${FUZZ_JOBS:-$(nproc)}"
 

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -86,7 +87,12 @@ TEST_F(Recordings, A54ByteRecordingIsRefusedInOneLine) {
     EXPECT_TRUE(r.out.empty()) << command << ": " << r.out;
   }
   // The dashboard follows a recording as it is written: it says what it skipped and stays up
-  // (timeout ends it: 124, not a signal of its own).
+  // (timeout ends it: 124, not a signal of its own). (The sanitizer build of test.sh makes
+  // no dashboard: there, this half is left to the Release run.)
+  if (!fs::exists(dashboard())) {
+    std::printf("no %s in this build: the dashboard's half of the test is not run\n", dashboard().c_str());
+    return;
+  }
   const Outcome d = run(dashboard(), "--port 0 --log '" + log.string() + "'", 2);
   EXPECT_EQ(d.status, 124) << d.err;
   EXPECT_NE(d.err.find("2147483647 bytes of data"), std::string::npos) << d.err;
