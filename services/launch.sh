@@ -484,7 +484,8 @@ if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
     fi
   fi
   if [ "$record" = 1 ]; then
-    echo "launch.sh: recorded $out/run.lcmlog; replay: $(printf '%q ' "$build/hbirl" learn --log "$out/run.lcmlog" "${key_args[@]}")"
+    replay="$(printf '%q ' "$build/hbirl" learn --log "$out/run.lcmlog" "${key_args[@]}")"
+    echo "launch.sh: recorded $out/run.lcmlog; replay: ${replay% }"
   fi
 fi
 finish "$failed"
