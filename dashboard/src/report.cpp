@@ -236,6 +236,10 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   state.subscribe(bus, counters);
   while (bus.handle(0) >= 0) {
   }
+  if (counters.signed_unread > 0) {
+    throw InputError("--key", "'" + log_path + "' holds " + std::to_string(counters.signed_unread) +
+                                  " messages signed with a run key: give it (launch.sh wrote OUT/run.key)");
+  }
   if (counters.messages_in == 0) {
     throw InputError("--log", "nothing in '" + log_path + "' could be read (" + std::to_string(counters.bad_messages) + " bad messages" +
                                   (counters.last_problem.empty() ? "" : "; the last: " + counters.last_problem) + ")");

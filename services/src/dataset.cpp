@@ -167,6 +167,13 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       const bool any_ended = watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
       if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
       if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+      // Without a number, an END_RUN ends the run once the episodes begun have ended: on a bus
+      // anyone may publish to, a forger could end it in any pause of the sensor's (and repeat
+      // it to pass the confirmation). Believed only when every message is signed.
+      if (m.num_steps == 0 && counters_ && !counters_->authenticated) {
+        throw InputError("episode_marker.num_steps", "an END_RUN that states no number of episodes is believed only with a run key "
+                                                     "(anyone on an unauthenticated bus could end the run early with one)");
+      }
       ++end_runs_heard_;
       if (m.num_steps > 0) {
         if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {

@@ -158,6 +158,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
     if (builder->complete() || ended) break;
     say("the run went on after it seemed complete: collecting on");
   }
+  if (stop && stop()) return std::nullopt;
   OptimiserResult result;
   result.missing_frames = builder->missing_frames();
   result.incomplete = incomplete;
@@ -282,6 +283,10 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
   // contradictions, and for messages of another run; what is wrong with the recording as a
   // whole is said before what its run lacks.
   while (bus->handle(0) >= 0) {
+  }
+  if (counters.signed_unread > 0) {  // (the first of hbirl's messages was not: check_recording_key let it be read)
+    throw InputError("--key", "'" + run.path + "' holds " + std::to_string(counters.signed_unread) +
+                                  " messages signed with a run key: give it (launch.sh wrote OUT/run.key)");
   }
   if (counters.other_run > 0 && !RunKey::read(run.key_file).run()) {
     throw InputError("--log", "'" + run.path + "' holds messages of more than one run signed with this key (" +

@@ -44,6 +44,13 @@ SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::
                                                    on_trajectory(m, raw.size);
                                                  },
                                                  100000));
+  // A worker of every run of a shared key that starts after an optimiser sent its MDP: it
+  // answers the optimiser it hears (its heartbeats then reach it, and it sends the MDP).
+  subs_.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+                                                     [this](const hbirl::service_status_t& m, const Message& raw) {
+                                                       if (m.service == "optimiser" && !mdp_ && request_run_ == 0) bus_.sign_for_run(raw.run);
+                                                     },
+                                                     100));
   subs_.add(bus_, subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
                                                     [this](const hbirl::estep_request_t& m, const Message& raw) {
                                                       bus_.sign_for_run(raw.run);

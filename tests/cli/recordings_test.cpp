@@ -122,6 +122,22 @@ TEST_F(Recordings, TheWrongKeyAndAnUnfinishedRunAreSaidAsSuch) {
   EXPECT_TRUE(fs::exists(dir_ / "report" / "index.html"));
 }
 
+// A signed recording with an unsigned message first (anyone may send one): read without a
+// key, it is still refused as signed (second review: the first message decided).
+TEST_F(Recordings, ASignedRecordingIsNotReadWithoutItsKeyWhateverComesFirst) {
+  const RunKey key = RunKey::generate().for_new_run();
+  const fs::path unsigned_part = recording("unsigned.lcmlog", nullptr), signed_part = recording("signed.lcmlog", &key);
+  const fs::path mixed = dir_ / "mixed.lcmlog";
+  {
+    std::ofstream out(mixed, std::ios::binary);
+    std::ifstream a(unsigned_part, std::ios::binary), b(signed_part, std::ios::binary);
+    out << a.rdbuf() << b.rdbuf();
+  }
+  const Outcome r = hbirl("learn --log '" + mixed.string() + "'");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--key: '" + mixed.string() + "' holds 3 messages signed with a run key: give it"), std::string::npos) << r.err;
+}
+
 // Not a regular file: refused at once (a FIFO used to block the reader forever).
 TEST_F(Recordings, AFifoIsRefusedAtOnce) {
   const fs::path fifo = dir_ / "fifo.lcmlog";

@@ -475,6 +475,36 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
 // A block's declared data set size takes no memory until its trajectories arrive (a
 // 61-byte TRAJECTORY claiming 10 million used to make a worker allocate 1.1 GB), and blocks
 // beyond the worker's --max-dataset-mb are refused and dropped.
+// A worker of every run of a shared key that starts after the optimiser sent its MDP hears
+// no MDP and no request (none is sent to a worker nobody has heard): it follows the
+// optimiser whose heartbeat it hears, so its own heartbeat reaches that optimiser (which
+// then sends it the MDP). Before, it signed for no run and was never used in the run.
+TEST(SamplerWorker, AWorkerOfEveryRunFollowsTheOptimiserItHears) {
+  auto hub = std::make_shared<MemoryHub>();
+  const RunKey shared = RunKey::generate();
+  const RunKey run_a = shared.for_new_run();
+  Counters cw = quiet("sampler-late"), co = quiet("optimiser");
+  KeyedBus worker_bus(std::make_unique<MemoryBus>(hub), shared, cw, KeyUse::kWorker);
+  KeyedBus optimiser_bus(std::make_unique<MemoryBus>(hub), run_a, co);
+  std::vector<std::string> heard;
+  subscribe<hbirl::service_status_t>(optimiser_bus, channels::kStatus, co,
+                                     [&](const hbirl::service_status_t& m, const Message&) { heard.push_back(m.id); });
+  SamplerWorker worker(worker_bus, "sampler-late", cw);
+  worker.publish_status();
+  optimiser_bus.handle(0);
+  EXPECT_TRUE(heard.empty()) << "a worker of no run yet sent a heartbeat";
+  hbirl::service_status_t beat{};
+  beat.service = "optimiser";
+  beat.id = "optimiser-1";
+  beat.state = "collecting";
+  publish(optimiser_bus, channels::kStatus, beat, co);
+  worker.handle(0);
+  worker.publish_status();
+  optimiser_bus.handle(0);
+  EXPECT_EQ(heard, (std::vector<std::string>{"optimiser-1", "sampler-late"}));
+  EXPECT_EQ(co.other_run, 0);
+}
+
 TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   const auto max_rss_kb = [] {
     rusage u{};

@@ -442,15 +442,16 @@ PY
     echo "forged END_RUN: exit $status; $(grep -o 'the run contradicts itself: [^(]*' "$tmp/early.out")"
     "$repo/services/launch.sh" --build "$build" --out "$tmp/clean" "${gw[@]}" >"$tmp/clean.out" 2>&1 || { cat "$tmp/clean.out"; fail "clean run failed"; }
     # An END_RUN that states no number of episodes (a sensor may not know it), five times,
-    # once episode 21 (the second demonstration) has ended: the run collects on when the
-    # sensor's next episode begins, or fails loudly -- never learns from 2 demonstrations.
+    # once episode 21 (the second demonstration) has ended: without a key it is not believed
+    # and the run goes on (or, with a key, collects on or fails loudly) -- it never learns
+    # from 2 demonstrations.
     "$repo/services/launch.sh" --build "$build" --out "$tmp/countless" "${gw[@]}" >"$tmp/countless.out" 2>&1 &
     set_pid=$!
     "$forge" "$url" end-run 0 21
     status=0; wait "$set_pid" || status=$?
     if [ "$status" = 0 ]; then
       same_theta "$tmp/countless/result.json" "$tmp/clean/result.json" || fail "an END_RUN without a number changed theta"
-      echo "forged END_RUN without a number: the run collected on, theta as the clean run's"
+      echo "forged END_RUN without a number: $(grep -c 'believed only with a run key' "$tmp/countless/logs/optimiser.err") refused; theta as the clean run's"
     else
       grep -q "the run contradicts itself" "$tmp/countless.out" || { cat "$tmp/countless.out"; fail "an END_RUN without a number: exit $status, not said why"; }
       echo "forged END_RUN without a number: exit $status, $(grep -o 'the run contradicts itself: [^(]*' "$tmp/countless.out")"

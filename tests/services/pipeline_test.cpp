@@ -733,6 +733,19 @@ TEST(DatasetBuilder, AnEndRunTheRunContradictsFailsIt) {
     episode(c, 0);
     c.on_marker(marker(0, M::END_RUN, 0));
     c.take();
+    // ... and is believed only with a run key: on a bus anyone may publish to, a forger
+    // could end the run with one in any pause of the sensor's (second review).
+    auto hub = std::make_shared<MemoryHub>();
+    MemoryBus open_bus(hub);
+    Counters unauthenticated = testing::quiet("optimiser");
+    DatasetBuilder d;
+    d.subscribe(open_bus, unauthenticated);
+    episode(d, 0);
+    EXPECT_THROW(d.on_marker(marker(0, M::END_RUN, 0)), InputError);
+    EXPECT_FALSE(d.run_ended());
+    unauthenticated.authenticated = true;
+    d.on_marker(marker(0, M::END_RUN, 0));
+    EXPECT_TRUE(d.complete());
     EXPECT_THROW(c.on_marker(marker(0, M::END_RUN, 10)), InputError);
     EXPECT_NE(c.contradiction().find("END_RUN of 10 episodes after one of 1"), std::string::npos) << c.contradiction();
   }

@@ -25,6 +25,7 @@ struct Counters {
   std::int64_t send_failures = 0;
   std::int64_t gaps = 0;         // sequence numbers skipped by publishers
   std::int64_t other_run = 0;    // signed with the key for another run (keyed_bus.hpp): dropped, also counted as bad
+  std::int64_t signed_unread = 0;  // signed with a run key, read without one: not decoded, also counted as bad
   std::string last_problem;
   bool quiet = false;            // no reports on stderr (tests)
   bool authenticated = false;    // the bus checks every message against a run key (keyed_bus.hpp)
@@ -119,6 +120,7 @@ SubscriptionId subscribe(Bus& bus, const std::string& channel, Counters& counter
       [&counters, handler](const Message& m) mutable {
         T msg;
         if (const auto why = decode(m, msg)) {
+          counters.signed_unread += has_trailer(m.data, m.size) || has_old_trailer(m.data, m.size);
           counters.bad(m.channel, *why);
           return;
         }
