@@ -60,6 +60,20 @@ void publish_model(Bus& bus, Counters& counters, const Mdp& mdp, const Dataset& 
   publish(bus, channels::kPosterior, p, counters);
 }
 
+// A run no observation of which came (a sensor stopped at once, learned from with
+// --allow-incomplete) has episodes but no alphabet or sources: the domain's, and the
+// subject alone when the domain does not state its confounding elements. Learning from it
+// gives what the controlled run and the prior say.
+void size_unobserved(Dataset& data, const Domain& domain) {
+  if (data.num_symbols > 0) return;
+  data.num_symbols = domain.num_symbols();
+  const std::optional<ObservationPrior> stated = domain.stated_prior();
+  data.num_sources = stated ? 1 + stated->num_confounders : 1;
+  for (auto* set : {&data.observed, &data.controlled_observed}) {
+    for (auto& t : *set) t.eta.resize(0, data.num_sources);
+  }
+}
+
 }  // namespace
 
 std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
@@ -168,6 +182,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   // (checked before the reward is published); frames are not read while learning.
   result.frame_requests = result_requests;
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
+  size_unobserved(result.data, *domain);
   const Mdp& mdp = domain->mdp();
   BusExecutorOptions executor_options = options.executor;
   if (!executor_options.stop) executor_options.stop = stop;
@@ -308,7 +323,9 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
 OptimiserResult learn_from_log(const RecordedRun& run, const LearningOptions& options, Counters& counters,
                                std::shared_ptr<const Domain> domain) {
   OptimiserResult result = collect_from_log(run, counters);
-  result.learned = learn_from_dataset(*domain_of(result.data, std::move(domain)), result.data, options);
+  const std::shared_ptr<const Domain> learned_on = domain_of(result.data, std::move(domain));
+  size_unobserved(result.data, *learned_on);
+  result.learned = learn_from_dataset(*learned_on, result.data, options);
   return result;
 }
 

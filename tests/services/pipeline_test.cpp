@@ -175,6 +175,44 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
 // Camera frames lost on the way (every 6th, and again when sent again): the optimiser asks
 // for them (FRAME_REQUEST), the simulator renders them again, and the data set is the
 // same as without loss.
+// A run no frame of which came (perception stopped at once, learned from with
+// --allow-incomplete: no perception or labeller here): the episodes are there, their
+// observations are not. The optimiser learns what the prior and the controlled run say,
+// and says what is missing, whether it was told the domain (as the service is) or not.
+TEST(Pipeline, ARunWithoutObservationsIsLearnedFromWhenAllowed) {
+  SimDriverOptions run = small_run();
+  run.simulation.controlled_sorts = 2;
+  run.simulation.sorts = 2;
+  for (const bool told : {true, false}) {
+    auto hub = std::make_shared<MemoryHub>();
+    MemoryBus sim_bus(hub);
+    Counters sim_counters = quiet("sim_driver");
+    SimDriver driver(sim_bus, *builtin_domain("onion"), run, sim_counters);
+    std::promise<void> listening;
+    std::atomic<bool> done{false};
+    std::thread sim([&] {
+      listening.get_future().wait();
+      driver.publish_run(nullptr);
+      while (!done) sim_bus.handle(20);
+    });
+    MemoryBus opt_bus(hub);
+    Counters opt_counters = quiet("optimiser");
+    OptimiserOptions options;
+    if (told) options.domain = builtin_domain("onion");
+    options.allow_incomplete = true;
+    options.quiet_ms = 200;
+    options.resend_after_ms = 50;
+    const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+    done = true;
+    sim.join();
+    ASSERT_TRUE(live.has_value()) << told;
+    EXPECT_NE(live->incomplete.find("frame(s)"), std::string::npos) << live->incomplete;
+    EXPECT_EQ(live->data.observed.size(), 2u);
+    EXPECT_EQ(live->data.num_symbols, builtin_domain("onion")->num_symbols());
+    EXPECT_TRUE(live->learned.theta.allFinite()) << told;
+  }
+}
+
 TEST(Pipeline, LostFramesAreAskedForAgain) {
   const SimDriverOptions run = small_run();
   const Mdp mdp = onion::make_onion_mdp();
