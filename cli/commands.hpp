@@ -58,17 +58,6 @@ Problem load_problem(const std::string& path);
 // An InputError about the content of the file at `path`, with the file name prefixed.
 InputError in_file(const std::string& path, const InputError& e);
 
-// The posterior engines, chosen with --engine exact|mcmc and the MCMC options.
-struct EngineArgs {
-  std::string name = "exact";
-  // 4 chains unless told: R-hat compares chains (Vehtari et al. 2021 run 4 by default).
-  McmcOptions mcmc = [] {
-    McmcOptions o;
-    o.chains = 4;
-    return o;
-  }();
-};
-void add_engine_options(CLI::App* cmd, EngineArgs& args);
 // The MCMC engine's convergence diagnostics as printed ("mcmc_diagnostics": worst_rhat,
 // worst_bulk_ess, quantities, chains; the worst are null when nothing was checked, and
 // worst_rhat also when it is infinite, JSON having no infinity), and one warning line on
@@ -77,17 +66,5 @@ nlohmann::ordered_json mcmc_diagnostics_json(const McmcDiagnostics& diagnostics)
 void warn_if_not_converged(const McmcDiagnostics& diagnostics);
 // --alpha-update posterior|paper: how the observation model is refined (observation_model.hpp).
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update);
-EngineFactory engine_factory(const EngineArgs& args);
 
-// --domain onion|gridworld|FILE and --size N: a domain from the registry (sim_driver/domain.hpp).
-struct DomainArgs {
-  std::string spec;
-  DomainOptions options;
-};
-void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what);
-// --key FILE: the run's key, for a recording of a run whose messages were signed
-// (services/keyed_bus.hpp; docs/RELIABILITY.md).
-void add_key_option(CLI::App* cmd, std::string& key_file);
-// The domain, warnings to stderr; nullptr when no --domain was given.
-std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args);
 }  // namespace hbirl::cli

@@ -52,28 +52,6 @@ InputError in_file(const std::string& path, const InputError& e) {
 
 namespace hbirl::cli {
 
-void add_engine_options(CLI::App* cmd, EngineArgs& args) {
-  cmd->add_option("--engine", args.name,
-                  "Posterior engine: 'exact' (forward-backward, Z summed out) or 'mcmc' (the paper's "
-                  "Metropolis-within-Gibbs sampler)")
-      ->check(CLI::IsMember({"exact", "mcmc"}))
-      ->capture_default_str();
-  cmd->add_option("--mcmc-samples", args.mcmc.samples, "MCMC: sweeps kept per chain")
-      ->check(CLI::Range(1, 1000000000))
-      ->capture_default_str();
-  cmd->add_option("--mcmc-burn-in", args.mcmc.burn_in, "MCMC: sweeps discarded per chain")
-      ->check(CLI::Range(0, 1000000000))
-      ->capture_default_str();
-  cmd->add_option("--mcmc-chains", args.mcmc.chains, "MCMC: independent chains")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-}
-
-EngineFactory engine_factory(const EngineArgs& args) {
-  if (args.name == "mcmc") return mcmc_engine_factory(args.mcmc);
-  return exact_engine_factory();
-}
-
 nlohmann::ordered_json mcmc_diagnostics_json(const McmcDiagnostics& diagnostics) {
   nlohmann::ordered_json out;
   const bool checked = diagnostics.quantities > 0;
@@ -116,24 +94,5 @@ CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
       ->transform(CLI::CheckedTransformer(names))
       ->default_str("posterior");
 }
-
-}  // namespace hbirl::cli
-
-namespace hbirl::cli {
-
-void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what) {
-  cmd->add_option("--domain", args.spec, what);
-  cmd->add_option("--size", args.options.gridworld_size, "With --domain gridworld: cells a side")
-      ->check(CLI::Range(2, 200))
-      ->capture_default_str();
-}
-
-void add_key_option(CLI::App* cmd, std::string& key_file) {
-  cmd->add_option("--key", key_file,
-                  "The run's key file (services/launch.sh writes OUT/run.key): check every recorded message against it\n"
-                  "and drop, counting them, those it did not sign for its run (docs/RELIABILITY.md). A key file for\n"
-                  "many runs (hbirl keygen FILE) reads the recording's run, and refuses a recording of several");
-}
-
 
 }  // namespace hbirl::cli

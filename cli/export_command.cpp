@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "app/domain_args.hpp"
 #include "commands.hpp"
 #include "full_commands.hpp"
 #include "problem/json_format.hpp"
@@ -14,10 +15,8 @@ namespace {
 struct ExportArgs {
   std::string log, out, key_file;
   bool allow_incomplete = false;
-  DomainArgs domain;
-  AlphaUpdate update = AlphaUpdate::kPosterior;
-  bool update_given = false;
-  std::string eta;  // empty: the domain's default
+  app::DomainArgs domain;
+  app::LearnSettings settings;  // those that override the prior (app::Front::kPrior)
 };
 
 // The domain and the data set as the live optimiser had them; the observation model is
@@ -28,18 +27,16 @@ int run_export(const ExportArgs& args) {
   counters.service = "hbirl export";
   counters.quiet = true;
   const services::OptimiserResult r = services::collect_from_log({args.log, args.key_file, args.allow_incomplete}, counters);
-  const std::shared_ptr<const Domain> domain = services::domain_of(r.data, open_domain_args(args.domain));
+  const std::shared_ptr<const Domain> domain = services::domain_of(r.data, app::open_domain_args(args.domain, "hbirl"));
   if (r.data.observed.empty()) throw InputError(args.log, "the log holds no demonstrations");
-  services::LearningOptions options;
-  if (args.update_given) options.update = args.update;
-  if (!args.eta.empty()) options.learn_eta = args.eta == "learned";
   Problem problem;
   problem.mdp = domain->mdp();
   const DomainNames names = domain->names(r.data.num_sources);
   problem.state_names = names.states;
   problem.action_names = names.actions;
   problem.feature_names = names.features;
-  problem.observation_model = services::observation_prior(*domain, r.data, options);
+  problem.observation_model = services::observation_prior(*domain, r.data);
+  app::apply_to_prior(args.settings, *problem.observation_model);
   for (size_t i = 0; i < r.data.observed.size(); ++i) {
     DemonstratedTrajectory t;
     t.steps = r.data.observed[i];
@@ -69,13 +66,12 @@ Command add_export(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(kExport.name, kExport.description);
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out,-o", args->out, "Problem file to write (default: stdout)");
-  add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");
-  add_key_option(cmd, args->key_file);
+  app::add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");
+  app::add_key_option(cmd, args->key_file, app::kRecordingKeyHelp);
   cmd->add_flag("--allow-incomplete", args->allow_incomplete,
                 "Export a recording whose run never reached its end (END_RUN): the episodes that finished");
-  add_alpha_update_option(cmd, args->update)->each([args](const std::string&) { args->update_given = true; });
-  cmd->add_option("--eta", args->eta, "As the run's hbirl-optimiser --eta, when it was given: 'stated' or 'learned'")
-      ->check(CLI::IsMember({"stated", "learned"}));
+  // As the run's hbirl-optimiser was told, when it was: the prior it learned from.
+  app::add_learn_settings(cmd, args->settings, app::Front::kPrior);
   return [args] { return run_export(*args); };
 }
 

@@ -4,8 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/command_line.hpp"
 #include "commands.hpp"
-#include "learner/observations.hpp"
 
 namespace hbirl::cli {
 
@@ -14,25 +14,10 @@ struct LearnArgs {
   std::string log;
   std::string key_file;       // --log: the run's key
   bool allow_incomplete = false;
-  DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
+  app::DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
   std::string from = "observations";
-  std::string optimizer = "lbfgs";
-  double l2 = 0.0;
-  int restarts = 1;  // more changed nothing on average on the random tasks (docs/results/random_tasks)
-  std::uint64_t seed = 1;
-  int threads = 0;
-  int max_iterations = 1000;
-  double tolerance = 1e-9;
-  double eg_radius = 50.0;
-  double eg_rate = 0.25;
-  EngineArgs engine;
-  int max_em_iterations = 300;
-  double alpha_tolerance = 1e-4;
-  int max_alpha_iterations = 10;
-  AlphaUpdate update = AlphaUpdate::kPosterior;
-  bool update_given = false;  // --alpha-update overrides the file's observation_model.update
+  app::LearnSettings settings;  // every learning setting (app/learn_settings.hpp)
   bool verbose = false;
-  std::string eta = "file";  // "stated", "learned", or as the file's observation_model.learn_eta says
   std::string out;
 };
 

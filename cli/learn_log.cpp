@@ -1,6 +1,7 @@
 // hbirl learn --log: learning from a recorded run of the service set (hbirl-full only).
 #include <iostream>
 
+#include "app/domain_args.hpp"
 #include "learn_args.hpp"
 #include "problem/json_format.hpp"
 #include "services/optimiser.hpp"
@@ -10,14 +11,11 @@ namespace hbirl::cli {
 // Offline from a recorded run of the service set: the same data set and the same learning
 // as hbirl-optimiser, so the same theta (services/optimiser.hpp).
 int run_learn_from_log(const LearnArgs& args) {
-  services::LearningOptions options;
-  options.seed = args.seed;
-  if (args.eta != "file") options.learn_eta = args.eta == "learned";
   services::Counters counters;
   counters.service = "hbirl learn";
-  const std::shared_ptr<const Domain> domain = open_domain_args(args.domain);
+  const std::shared_ptr<const Domain> domain = app::open_domain_args(args.domain, "hbirl");
   const services::OptimiserResult r =
-      services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, options, counters, domain);
+      services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, args.settings, counters, domain);
   if (!r.incomplete.empty()) std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
   nlohmann::ordered_json out;
   out["log"] = args.log;

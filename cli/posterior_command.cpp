@@ -1,6 +1,8 @@
 // hbirl posterior: the exact (or MCMC) posterior of each trajectory under given weights.
 #include <sstream>
 
+#include "app/command_line.hpp"
+#include "app/learn.hpp"
 #include "commands.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
@@ -12,7 +14,7 @@ namespace {
 
 struct PosteriorArgs {
   std::string problem;
-  EngineArgs engine;
+  app::LearnSettings engine;  // the posterior engine's settings (app::Front::kEngine)
   std::string weights;
   std::uint64_t seed = 1;
   std::string out;
@@ -59,7 +61,7 @@ int run_posterior(const PosteriorArgs& args) {
   ObservationPrior prior = *problem.observation_model;
   add_unlisted_source(prior, observed);
   const ObservationModel model = dirichlet_mean(prior);
-  std::unique_ptr<PosteriorEngine> engine = engine_factory(args.engine)(mdp);
+  std::unique_ptr<PosteriorEngine> engine = app::engine_factory(args.engine)(mdp);
   const Rng root(args.seed);
   nlohmann::ordered_json trajectories = nlohmann::ordered_json::array();
   double total = 0.0;
@@ -107,7 +109,7 @@ int run_posterior(const PosteriorArgs& args) {
     trajectories.push_back(traj);
   }
   nlohmann::ordered_json out;
-  out["engine"] = args.engine.name;
+  out["engine"] = args.engine.engine;
   out["weights"] = std::vector<double>(theta.data(), theta.data() + theta.size());
   if (std::isfinite(total)) {
     out["log_likelihood"] = total;
@@ -115,7 +117,7 @@ int run_posterior(const PosteriorArgs& args) {
     out["log_likelihood"] = nullptr;
   }
   if (truth_steps > 0) out["map_accuracy"] = static_cast<double>(map_correct) / static_cast<double>(truth_steps);
-  const bool sampled = args.engine.name == "mcmc";
+  const bool sampled = args.engine.engine == "mcmc";
   if (sampled) out["mcmc_diagnostics"] = mcmc_diagnostics_json(mcmc);
   out["trajectories"] = trajectories;
   if (sampled) warn_if_not_converged(mcmc);
@@ -136,7 +138,7 @@ Command add_posterior(CLI::App& app) {
       "truth in the file, each step also gets truth_probability and the output map_accuracy\n"
       "(share of steps whose most probable pair is the true one).");
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")->required();
-  add_engine_options(cmd, args->engine);
+  app::add_learn_settings(cmd, args->engine, app::Front::kEngine);
   cmd->add_option("--weights,-w", args->weights, "Reward weights theta as w1,w2,... (default: all zero)");
   cmd->add_option("--seed", args->seed, "Seed of the MCMC engine")->capture_default_str();
   cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");

@@ -10,6 +10,7 @@
 #include <memory>
 #include <thread>
 
+#include "app/domain_args.hpp"
 #include "dashboard/server.hpp"
 #include "dashboard/state.hpp"
 #include "learner/input_error.hpp"
@@ -30,7 +31,7 @@ int run(int argc, char** argv) {
   std::string url, log, host = "127.0.0.1", web = HBIRL_DASHBOARD_WEB_DIR;
   int port = 8765;
   double wait_log = 60.0;
-  app.add_option("--url", url, "LCM URL to listen on (default: LCM's default; not with --log)");
+  app::add_url_option(&app, url, "to listen on (not with --log)");
   app.add_option("--log", log, "Follow this LCM log (services/launch.sh --record writes OUT/run.lcmlog)");
   app.add_option("--wait-log", wait_log, "Wait this many seconds for the log to appear")->check(CLI::Range(0.0, 3600.0))->capture_default_str();
   app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
@@ -59,21 +60,14 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(1, limits.max_waiting))
       ->capture_default_str();
   std::string key_file;
-  app.add_option("--key", key_file,
-                 "The run's key file (services/launch.sh writes OUT/run.key): show only messages signed with it, count\n"
-                 "the rest as bad (docs/RELIABILITY.md); without it the dashboard believes anything on the bus");
-  std::string domain_spec;
-  DomainOptions domain_options;
-  app.add_option("--domain", domain_spec,
-                 "The run's domain when it is a domain file (built-in domains, onion and gridworld, are named by the run)");
-  app.add_option("--size", domain_options.gridworld_size, "--domain gridworld: cells a side")->check(CLI::Range(2, 200));
+  app::add_key_option(&app, key_file,
+                      "show only messages signed with it, count the rest as bad; without it the dashboard believes\n"
+                      "anything on the bus");
+  app::DomainArgs domain_args;
+  app::add_domain_options(&app, domain_args,
+                          "The run's domain when it is a domain file (built-in domains, onion and gridworld, are named by the run)");
   CLI11_PARSE(app, argc, argv);
-  std::shared_ptr<const Domain> domain;
-  if (!domain_spec.empty()) {
-    std::vector<std::string> warnings;
-    domain = open_domain(domain_spec, domain_options, &warnings);
-    for (const auto& w : warnings) std::fprintf(stderr, "hbirl-dashboard: warning: %s: %s\n", domain_spec.c_str(), w.c_str());
-  }
+  const std::shared_ptr<const Domain> domain = app::open_domain_args(domain_args, "hbirl-dashboard");
   if (!url.empty() && !log.empty()) throw InputError("--log", "give --url or --log, not both");
 
   services::install_stop_handlers();

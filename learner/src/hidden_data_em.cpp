@@ -188,15 +188,15 @@ bool squarem(EmMap& map, EmMap::Point& x, const LearnOptions& options, const Rep
 constexpr int kMaxStrengthChoices = 4;
 
 RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
-                          Eigen::VectorXd theta, std::uint64_t seed, int index) {
+                          const IterationReport& on_iteration, Eigen::VectorXd theta, std::uint64_t seed, int index) {
   RestartResult result;
   result.initial_theta = theta;
   EmMap map(mdp, estep, options, seed);
   EmMap::Point x = map.start(theta);
   const Report report = [&](const EmMap::Step& step) {
     ++result.em_iterations;
-    if (options.on_iteration) {
-      options.on_iteration(index, result.em_iterations, step.objective, step.next.theta, step.e,
+    if (on_iteration) {
+      on_iteration(index, result.em_iterations, step.objective, step.next.theta, step.e,
                            step.next.alpha ? &*step.next.alpha : nullptr);
     }
     result.optimizer_status = step.m.status;
@@ -240,7 +240,8 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
 
 }  // namespace
 
-LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions& options) {
+LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
+                         const IterationReport& on_iteration) {
   if (options.restarts < 1) throw InputError("restarts", "must be at least 1");
   const int k = mdp.num_features();
   // Draw every start point up front, each restart from its own stream.
@@ -258,7 +259,7 @@ LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions&
   result.restarts.resize(static_cast<size_t>(options.restarts));
   parallel_for(options.restarts, options.threads, [&](int r) {
     result.restarts[static_cast<size_t>(r)] =
-        run_restart(mdp, estep, options, starts[static_cast<size_t>(r)],
+        run_restart(mdp, estep, options, on_iteration, starts[static_cast<size_t>(r)],
                     root.split(0x5EED0000ull + static_cast<std::uint64_t>(r)).next_u64(), r);
   });
   for (int r = 1; r < options.restarts; ++r) {

@@ -297,6 +297,64 @@ def read_log(path, key=None, domain=None, allow_incomplete=False, eta=None, hbir
         return _hbirl.load_problem(out)
 
 
+# Every learning setting, as `hbirl learn` has it (app/learn_settings.hpp): the estimators'
+# keyword arguments, defaults and docstrings are made from this one schema.
+_SETTINGS = {s["name"]: s for s in _hbirl._learn_settings()}
+
+
+def _setting_value(name, value):
+    """A keyword argument as the C++ schema takes it: whole numbers as int, numbers as float,
+    choices as str, switches as bool; None where unset is allowed. The schema checks ranges."""
+    s = _SETTINGS[name]
+    if value is None:
+        return None
+    if s["type"] == "integer":
+        return _int(value, name, s["min"], s["max"])
+    if s["type"] == "number":
+        return _float(value, name)
+    if s["type"] == "switch":
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{name}: must be True, False or None, got {value!r}")
+        return bool(value)
+    if not isinstance(value, str):
+        raise ValueError(f"{name}: must be {s['range']}, got {value!r}")
+    return value
+
+
+def _settings_doc(names):
+    """The Parameters section of an estimator's docstring, from the schema."""
+    lines = ["Parameters (as `hbirl learn`'s options of the same names):"]
+    for name in names:
+        s = _SETTINGS[name]
+        default = s["unset"] if s["default"] is None else repr(s["default"])
+        lines.append(f"  {name}: {s['help']} ({s['range']}; default {default}).")
+    return "\n".join(lines)
+
+
+def _with_settings(names):
+    """A class decorator: an __init__ taking `names` as keyword arguments with the schema's
+    defaults (what inspect.signature, get_params and set_params see), and the docstring's
+    Parameters section."""
+    parameters = [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    parameters += [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=_SETTINGS[n]["default"]) for n in names]
+    signature = inspect.Signature(parameters)
+
+    def __init__(self, **kwargs):
+        bound = signature.bind(self, **kwargs)
+        bound.apply_defaults()
+        for name in names:
+            setattr(self, name, bound.arguments[name])
+
+    __init__.__signature__ = signature
+
+    def decorate(cls):
+        cls.__init__ = __init__
+        cls.__doc__ = cls.__doc__.replace("{parameters}", _settings_doc(names))
+        return cls
+
+    return decorate
+
+
 class _Estimator:
     """scikit-learn conventions: hyper-parameters in the constructor, get_params/set_params,
     fit returns self, fitted attributes end in "_"."""
@@ -318,6 +376,10 @@ class _Estimator:
             setattr(self, name, value)
         return self
 
+    def _settings(self):
+        """The parameters as the C++ learner takes them (checked against the schema there)."""
+        return {name: _setting_value(name, value) for name, value in self.get_params().items()}
+
     def __repr__(self):
         return type(self).__name__ + "(" + ", ".join(f"{k}={v!r}" for k, v in self.get_params().items()) + ")"
 
@@ -326,65 +388,38 @@ class _Estimator:
             raise ValueError(f"{type(self).__name__}: not fitted yet; call fit first")
 
 
+@_with_settings([name for name, s in _SETTINGS.items() if not s["observations_only"]])
 class MaxCausalEntIRL(_Estimator):
     """Maximum causal entropy IRL from the expert's true steps (Ziebart et al.), as
-    `hbirl learn --from truth` computes it: the same C++ code and the same defaults, so the
-    same theta bit for bit.
+    `hbirl learn --from truth` computes it: the same C++ function and the same settings, so
+    the same theta bit for bit.
 
-    Parameters:
-      optimizer: "lbfgs" (default) or "eg" (exponentiated gradient on an L1 ball).
-      l2: penalty on ||theta||^2 per demonstrated step (default 0).
-      restarts: random restarts of the optimiser (default 1, as the CLI: more changed
-        nothing on average on random tasks, docs/results/random_tasks).
-      seed: seed of the restarts.
-      max_iterations, tolerance: the optimiser's budget and gradient tolerance.
-      threads: 0 for one per core; the result does not depend on it.
+    {parameters}
 
     Fitted attributes: theta_ (K,), policy_ (S, A) the soft policy of theta_,
     log_likelihood_ (the causal log-likelihood of the demonstrations).
     """
 
-    def __init__(self, optimizer="lbfgs", l2=0.0, restarts=1, seed=1, max_iterations=1000, tolerance=1e-9, threads=0):
-        self.optimizer = optimizer
-        self.l2 = l2
-        self.restarts = restarts
-        self.seed = seed
-        self.max_iterations = max_iterations
-        self.tolerance = tolerance
-        self.threads = threads
-
     def fit(self, mdp, trajectories):
         """Learn reward weights from true trajectories, a list of (T, 2) integer arrays of
         (state, action). Returns self."""
         result = _hbirl._fit_maxcausalent(mdp, [_int_array(t, f"trajectories[{i}]") for i, t in enumerate(trajectories)],
-                                          self.optimizer, _float(self.l2, "l2"), _int(self.restarts, "restarts", 1, 100000),
-                                          _int(self.seed, "seed", 0, 2 ** 64 - 1), _int(self.max_iterations, "max_iterations", 1),
-                                          _float(self.tolerance, "tolerance"), _int(self.threads, "threads", 0, 4096))
+                                          self._settings())
         self.theta_ = result["theta"]
         self.log_likelihood_ = result["log_likelihood"]
         self.policy_ = mdp.soft_policy(self.theta_)
         return self
 
 
+@_with_settings(list(_SETTINGS))
 class HierarchicalIRL(_Estimator):
     """The hierarchical Bayesian model of IRL in partially-controlled environments (Bogert &
     Doshi, IROS 2021): HiddenDataEM over the expert's unseen trajectories with the source of
     every observation summed out, the observation model (and eta) learned, MaxCausalEnt
-    in the M-step -- as `hbirl learn --problem` runs it: the same C++ code and defaults, so
-    the same theta bit for bit.
+    in the M-step -- as `hbirl learn --problem` runs it: the same C++ function and settings,
+    so the same theta bit for bit.
 
-    Parameters:
-      engine: "exact" (forward-backward, the default) or "mcmc" (the paper's sampler;
-        mcmc_samples, mcmc_burn_in, mcmc_chains).
-      learn_observation_model: refine O inside the E-step (None: as the prior says, True
-        unless it was made with learn=False).
-      alpha_update: "posterior" or "paper" (None: the prior's); see docs/MODEL.md.
-      eta: "learned" (per context) or "stated" (as given); None: the prior's (learned with
-        the posterior update).
-      optimizer, l2, restarts, seed, max_iterations, tolerance: as MaxCausalEntIRL.
-      max_em_iterations: EM's budget of E-step + M-step evaluations.
-      alpha_tolerance, max_alpha_iterations: when O has converged; refinements per E-step.
-      threads: 0 for one per core; the result does not depend on it.
+    {parameters}
 
     Fitted attributes: theta_ (K,), policy_ (S, A), log_likelihood_, n_iter_ (EM iterates),
     converged_, history_ (dict of per-iterate arrays: "log_likelihood", "objective" (EM's:
@@ -398,49 +433,6 @@ class HierarchicalIRL(_Estimator):
     "learned" (C, J'), "observations" (C,)), mcmc_diagnostics_ (MCMC only: worst R-hat and
     bulk ESS over the pair marginals).
     """
-
-    def __init__(self, engine="exact", learn_observation_model=None, alpha_update=None, eta=None, optimizer="lbfgs",
-                 l2=0.0, restarts=1, seed=1, max_iterations=1000, tolerance=1e-9, max_em_iterations=300,
-                 alpha_tolerance=1e-4, max_alpha_iterations=10, mcmc_samples=1000, mcmc_burn_in=200, mcmc_chains=4,
-                 threads=0):
-        self.engine = engine
-        self.learn_observation_model = learn_observation_model
-        self.alpha_update = alpha_update
-        self.eta = eta
-        self.optimizer = optimizer
-        self.l2 = l2
-        self.restarts = restarts
-        self.seed = seed
-        self.max_iterations = max_iterations
-        self.tolerance = tolerance
-        self.max_em_iterations = max_em_iterations
-        self.alpha_tolerance = alpha_tolerance
-        self.max_alpha_iterations = max_alpha_iterations
-        self.mcmc_samples = mcmc_samples
-        self.mcmc_burn_in = mcmc_burn_in
-        self.mcmc_chains = mcmc_chains
-        self.threads = threads
-
-    def _settings(self):
-        s = _hbirl._HierarchicalSettings()
-        s.engine = str(self.engine)
-        s.learn_observation_model = None if self.learn_observation_model is None else bool(self.learn_observation_model)
-        s.alpha_update = str(self.alpha_update or "")
-        s.eta = str(self.eta or "")
-        s.optimizer = str(self.optimizer)
-        s.l2 = _float(self.l2, "l2")
-        s.restarts = _int(self.restarts, "restarts")
-        s.seed = _int(self.seed, "seed", 0, 2 ** 64 - 1)
-        s.max_iterations = _int(self.max_iterations, "max_iterations")
-        s.tolerance = _float(self.tolerance, "tolerance")
-        s.max_em_iterations = _int(self.max_em_iterations, "max_em_iterations")
-        s.alpha_tolerance = _float(self.alpha_tolerance, "alpha_tolerance")
-        s.max_alpha_iterations = _int(self.max_alpha_iterations, "max_alpha_iterations")
-        s.mcmc_samples = _int(self.mcmc_samples, "mcmc_samples")
-        s.mcmc_burn_in = _int(self.mcmc_burn_in, "mcmc_burn_in")
-        s.mcmc_chains = _int(self.mcmc_chains, "mcmc_chains")
-        s.threads = _int(self.threads, "threads")
-        return s
 
     def fit(self, mdp, observations, prior):
         """Learn the expert's reward from observations (a list of trajectories of steps of

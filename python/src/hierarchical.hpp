@@ -1,42 +1,18 @@
 #pragma once
-// HierarchicalIRL's C++ side (python/hbirl/__init__.py): HiddenDataEM on observations with
-// the observation model and eta learned, as `hbirl learn --problem` runs it -- the same
-// E-step, options and defaults, so the same theta bit for bit -- and the fitted model's
-// posterior and log-likelihood of any observations.
+// HierarchicalIRL's C++ side (python/hbirl/__init__.py): app::learn with the estimator's
+// settings, as `hbirl learn --problem` calls it -- so the same theta bit for bit -- and the
+// fitted model's posterior and log-likelihood of any observations.
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "app/learn_settings.hpp"
 #include "learner/estep_mcmc.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/mcmc_diagnostics.hpp"
 #include "learner/observation_model.hpp"
 
 namespace hbirl::python {
-
-struct HierarchicalSettings {
-  std::string engine = "exact";  // or "mcmc"
-  McmcOptions mcmc = [] {
-    McmcOptions o;
-    o.chains = 4;  // as hbirl learn's --mcmc-chains
-    return o;
-  }();
-  std::optional<bool> learn_observation_model;  // unset: as the prior says
-  std::string alpha_update;                     // "posterior" or "paper"; empty: as the prior says
-  std::string eta;                              // "stated" or "learned"; empty: as the prior says
-  std::string optimizer = "lbfgs";
-  double l2 = 0.0;
-  int restarts = 1;
-  std::uint64_t seed = 1;
-  int max_iterations = 1000;
-  double tolerance = 1e-9;
-  double eg_radius = 50.0;
-  double eg_rate = 0.25;
-  int max_em_iterations = 300;
-  double alpha_tolerance = 1e-4;
-  int max_alpha_iterations = 10;
-  int threads = 0;
-};
 
 // A fitted model: theta, the observation model and eta it learned, and how EM got there.
 struct FittedHierarchical {
@@ -54,9 +30,7 @@ struct FittedHierarchical {
   std::optional<LearnedEta> learned_eta;
   bool contexts_given = false;  // the observations carried contexts (else each distinct eta was one)
   std::optional<McmcDiagnostics> mcmc;
-  std::string engine;
-  McmcOptions mcmc_options;
-  std::uint64_t seed = 1;
+  app::LearnSettings settings;  // fitted with
 
   // The observations as this model sees them: the unlisted catch-all added as when fitting,
   // and with learned eta each observation's eta replaced by its context's learned one
@@ -65,12 +39,9 @@ struct FittedHierarchical {
   std::vector<ObservedTrajectory> believed(std::vector<ObservedTrajectory> trajectories) const;
 };
 
-// InputError("prior") unless the prior's shapes are the MDP's.
-void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior);
-
-// Throws InputError naming the argument or the observation when it cannot be learned from.
-FittedHierarchical fit_hierarchical(const Mdp& mdp, std::vector<ObservedTrajectory> observations, ObservationPrior prior,
-                                    const HierarchicalSettings& settings);
+// Throws InputError naming the setting, the prior or the observation when it cannot be learned from.
+FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const ObservationPrior& prior,
+                                    const app::LearnSettings& settings);
 
 struct Posteriors {
   std::vector<TrajectoryPosterior> trajectories;

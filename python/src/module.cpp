@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "arrays.hpp"
+#include "app/learn.hpp"
 #include "hierarchical.hpp"
 #include "learner/controlled_prior.hpp"
 #include "learner/estep.hpp"
@@ -331,30 +332,76 @@ FlatObservations flat_of(const py::tuple& t) {
   return f;
 }
 
-// MaxCausalEnt IRL from true trajectories (hbirl learn --from truth): HiddenDataEM with the
-// truth as its E-step, so the same code and defaults as the command line.
-py::dict fit_maxcausalent(const Mdp& mdp, const std::vector<IntArray>& arrays, const std::string& optimizer, double l2,
-                          int restarts, std::uint64_t seed, int max_iterations, double tolerance, int threads) {
-  if (optimizer != "lbfgs" && optimizer != "eg") throw InputError("optimizer", "'" + optimizer + "' is not lbfgs or eg");
-  if (!(l2 >= 0.0) || !std::isfinite(l2)) throw InputError("l2", "must be finite and >= 0");
-  if (restarts < 1) throw InputError("restarts", "must be at least 1");
-  if (max_iterations < 1) throw InputError("max_iterations", "must be at least 1");
-  if (!(tolerance > 0.0)) throw InputError("tolerance", "must be > 0");
-  if (threads < 0) throw InputError("threads", "must be >= 0 (0: one per core)");
+// A Python value as a setting's JSON value (app::set checks it against the schema).
+nlohmann::json json_of(const std::string& name, const py::handle& value) {
+  if (value.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+  if (py::isinstance<py::int_>(value)) {
+    if (value.cast<py::int_>() < py::int_(0)) return value.cast<std::int64_t>();
+    return value.cast<std::uint64_t>();
+  }
+  if (py::isinstance<py::float_>(value)) return value.cast<double>();
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  throw InputError(name, "must be a number, a string, True, False or None");
+}
+
+// The estimator's settings (a dict of setting: value) as app::learn takes them.
+app::LearnSettings settings_of(const py::dict& values) {
+  app::LearnSettings settings;
+  for (const auto& [key, value] : values) {
+    const std::string name = py::str(key);
+    app::set(settings, app::learn_setting(name), json_of(name, value));
+  }
+  return settings;
+}
+
+// The schema, for the estimators' keyword arguments and docstrings (python/hbirl/__init__.py).
+py::list settings_schema() {
+  static const char* const kTypes[] = {"integer", "number", "choice", "switch"};
+  const app::LearnSettings defaults;
+  py::list out;
+  for (const app::Setting& s : app::learn_settings_schema()) {
+    py::dict d;
+    d["name"] = s.name;
+    d["help"] = s.help;
+    d["type"] = kTypes[static_cast<int>(s.type)];
+    d["range"] = app::describe_range(s);
+    const nlohmann::json value = s.get(defaults);
+    if (value.is_null()) {
+      d["default"] = py::none();
+    } else if (value.is_boolean()) {
+      d["default"] = value.get<bool>();
+    } else if (value.is_number_unsigned()) {
+      d["default"] = value.get<std::uint64_t>();
+    } else if (value.is_number_integer()) {
+      d["default"] = value.get<std::int64_t>();
+    } else if (value.is_number()) {
+      d["default"] = value.get<double>();
+    } else {
+      d["default"] = value.get<std::string>();
+    }
+    if (s.type == app::Setting::Type::kInteger) {
+      d["min"] = py::int_(static_cast<std::int64_t>(s.min));
+      d["max"] = s.max >= static_cast<long double>(std::numeric_limits<std::uint64_t>::max())
+                     ? py::int_(std::numeric_limits<std::uint64_t>::max())
+                     : py::int_(static_cast<std::int64_t>(s.max));
+    }
+    d["choices"] = s.choices;
+    d["unset"] = s.optional ? py::object(py::str(s.unset_help)) : py::none();
+    d["observations_only"] = s.hidden_data;
+    out.append(d);
+  }
+  return out;
+}
+
+// MaxCausalEnt IRL from true trajectories (hbirl learn --from truth): app::learn_from_truth.
+py::dict fit_maxcausalent(const Mdp& mdp, const std::vector<IntArray>& arrays, const py::dict& values) {
+  const app::LearnSettings settings = settings_of(values);
   std::vector<Trajectory> truth = trajectories_of(mdp, arrays, "trajectories");
   LearnResult learned;
   {
     py::gil_scoped_release released;  // minutes on large MDPs: other Python threads run meanwhile
-    LearnOptions options;
-    options.optimizer.kind = optimizer == "eg" ? OptimizerKind::kExponentiatedGradient : OptimizerKind::kLbfgs;
-    options.optimizer.max_iterations = max_iterations;
-    options.optimizer.gradient_tolerance = tolerance;
-    options.l2 = l2;
-    options.restarts = restarts;
-    options.seed = seed;
-    options.threads = threads;
-    const TruthEStep estep(mdp, std::move(truth));
-    learned = learn_reward(mdp, estep, options);
+    learned = app::learn_from_truth(mdp, std::move(truth), settings).em;
   }
   py::dict out;
   out["theta"] = learned.theta;
@@ -634,30 +681,9 @@ PYBIND11_MODULE(_hbirl, m) {
       "The causal log-likelihood L(theta) of true trajectories (list of (T, 2) arrays) under the soft policy of\n"
       "theta, and its exact gradient (K,): what MaxCausalEntIRL maximises, for an optimiser of your own\n"
       "(docs/MODEL.md).");
-  m.def("_fit_maxcausalent", &fit_maxcausalent, py::arg("mdp"), py::arg("trajectories"), py::arg("optimizer"), py::arg("l2"),
-        py::arg("restarts"), py::arg("seed"), py::arg("max_iterations"), py::arg("tolerance"), py::arg("threads"));
-
-  py::class_<HierarchicalSettings>(m, "_HierarchicalSettings")
-      .def(py::init<>())
-      .def_readwrite("engine", &HierarchicalSettings::engine)
-      .def_property("mcmc_samples", [](const HierarchicalSettings& s) { return s.mcmc.samples; }, [](HierarchicalSettings& s, int v) { s.mcmc.samples = v; })
-      .def_property("mcmc_burn_in", [](const HierarchicalSettings& s) { return s.mcmc.burn_in; }, [](HierarchicalSettings& s, int v) { s.mcmc.burn_in = v; })
-      .def_property("mcmc_chains", [](const HierarchicalSettings& s) { return s.mcmc.chains; }, [](HierarchicalSettings& s, int v) { s.mcmc.chains = v; })
-      .def_readwrite("learn_observation_model", &HierarchicalSettings::learn_observation_model)
-      .def_readwrite("alpha_update", &HierarchicalSettings::alpha_update)
-      .def_readwrite("eta", &HierarchicalSettings::eta)
-      .def_readwrite("optimizer", &HierarchicalSettings::optimizer)
-      .def_readwrite("l2", &HierarchicalSettings::l2)
-      .def_readwrite("restarts", &HierarchicalSettings::restarts)
-      .def_readwrite("seed", &HierarchicalSettings::seed)
-      .def_readwrite("max_iterations", &HierarchicalSettings::max_iterations)
-      .def_readwrite("tolerance", &HierarchicalSettings::tolerance)
-      .def_readwrite("eg_radius", &HierarchicalSettings::eg_radius)
-      .def_readwrite("eg_rate", &HierarchicalSettings::eg_rate)
-      .def_readwrite("max_em_iterations", &HierarchicalSettings::max_em_iterations)
-      .def_readwrite("alpha_tolerance", &HierarchicalSettings::alpha_tolerance)
-      .def_readwrite("max_alpha_iterations", &HierarchicalSettings::max_alpha_iterations)
-      .def_readwrite("threads", &HierarchicalSettings::threads);
+  m.def("_fit_maxcausalent", &fit_maxcausalent, py::arg("mdp"), py::arg("trajectories"), py::arg("settings"));
+  m.def("_learn_settings", &settings_schema,
+        "Every learning setting (app/learn_settings.hpp): name, help, type, range, default, choices, what unset means");
 
   py::class_<FittedHierarchical>(m, "_FittedHierarchical")
       .def_readonly("theta", &FittedHierarchical::theta)
@@ -699,11 +725,12 @@ PYBIND11_MODULE(_hbirl, m) {
 
   m.def(
       "_fit_hierarchical",
-      [](const Mdp& mdp, const py::tuple& observations, const ObservationPrior& prior, const HierarchicalSettings& settings) {
-        check_prior_fits(mdp, prior);
-        std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), prior, mdp);
+      [](const Mdp& mdp, const py::tuple& observations, const ObservationPrior& prior, const py::dict& values) {
+        const app::LearnSettings settings = settings_of(values);
+        app::check_prior_fits(mdp, prior);
+        const std::vector<ObservedTrajectory> seen = observed_trajectories(flat_of(observations), prior, mdp);
         py::gil_scoped_release released;
-        return fit_hierarchical(mdp, std::move(seen), prior, settings);
+        return fit_hierarchical(mdp, seen, prior, settings);
       },
       py::arg("mdp"), py::arg("observations"), py::arg("prior"), py::arg("settings"));
   m.def(

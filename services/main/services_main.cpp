@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "app/domain_args.hpp"
 #include "learner/input_error.hpp"
 #include "services/estep_service.hpp"
 #include "services/keyed_bus.hpp"
@@ -36,15 +37,13 @@ struct Common {
 };
 
 void add_common(CLI::App& app, Common& c) {
-  app.add_option("--url", c.url,
-                 "LCM URL (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
+  app::add_url_option(&app, c.url, "to use");
   app.add_option("--id", c.id, "This process's id in STATUS messages (default: service-host-pid)");
   app.add_option("--restarts", c.restarts, "How many times the supervisor restarted this service before (shown in STATUS)")
       ->check(CLI::Range(0, 1000000));
-  app.add_option("--key", c.key_file,
-                 "The run's key file (services/launch.sh writes OUT/run.key for every run): sign every message for\n"
-                 "the run it names and drop, counting them, those not signed with it for that run. Without it the\n"
-                 "bus is unauthenticated (docs/RELIABILITY.md)");
+  app::add_key_option(&app, c.key_file,
+                      "sign every message for the run it names and drop, counting them, those not signed with it for\n"
+                      "that run. Without it the bus is unauthenticated");
   app.add_option("--alive-file", c.alive_file,
                  "Touch this file once a second while the service beats its heartbeat or computes, so a supervisor\n"
                  "(services/launch.sh) sees one that is alive but silent -- stopped, or blocked -- and restarts it");
@@ -70,24 +69,6 @@ int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
   return 0;
 }
 
-// --domain and --size: a domain from the registry (sim_driver/domain.hpp).
-struct DomainArgs {
-  std::string spec;
-  DomainOptions options;
-};
-
-void add_domain_options(CLI::App& app, DomainArgs& d, const std::string& what) {
-  app.add_option("--domain", d.spec, what)->capture_default_str();
-  app.add_option("--size", d.options.gridworld_size, "gridworld: cells a side")->check(CLI::Range(2, 200))->capture_default_str();
-}
-
-std::shared_ptr<const Domain> open_domain_args(const DomainArgs& d) {
-  std::vector<std::string> warnings;
-  std::shared_ptr<const Domain> domain = open_domain(d.spec, d.options, &warnings);
-  for (const auto& w : warnings) std::fprintf(stderr, "hbirl: warning: %s: %s\n", d.spec.c_str(), w.c_str());
-  return domain;
-}
-
 int sim_driver(int argc, char** argv) {
   CLI::App app("hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
                "the subject prior), then the demonstrations, as EPISODE markers and GROUND_TRUTH, and\n"
@@ -101,12 +82,12 @@ int sim_driver(int argc, char** argv) {
   add_common(app, c);
   SimDriverOptions o;
   SimulationOptions& sim = o.simulation;
-  DomainArgs d{"onion", {}};
+  app::DomainArgs d{"onion", {}};
   std::string config = "all";
   std::string eta = "plausible";
   double delay = 10.0;
   bool print_listeners = false;
-  add_domain_options(app, d, "onion, gridworld or a domain file");
+  app::add_domain_options(&app, d, "onion, gridworld or a domain file");
   app.add_flag("--print-listeners", print_listeners,
                "Print the services this domain's run needs listening (perception and labeller for a camera,\n"
                "the optimiser) and exit");
@@ -145,7 +126,8 @@ int sim_driver(int argc, char** argv) {
   sim.scene.foreground_person = elements.foreground_person;
   sim.scene.mirror = elements.mirror;
   sim.eta = eta == "uniform" ? EtaKind::kUniform : eta == "true" ? EtaKind::kTrue : EtaKind::kPlausible;
-  const std::shared_ptr<const Domain> domain = open_domain_args(d);
+  const std::shared_ptr<const Domain> domain = app::open_domain_args(d, "hbirl");
+  if (!domain) throw InputError("--domain", "give the domain to simulate: onion, gridworld or a domain file");
   if (print_listeners) {
     std::printf("%s\n", domain->has_camera() ? "perception labeller optimiser" : "optimiser");
     return 0;
@@ -248,8 +230,8 @@ int optimiser(int argc, char** argv) {
   add_common(app, c);
   OptimiserOptions o;
   std::string out;
-  DomainArgs d;
-  add_domain_options(app, d, "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
+  app::DomainArgs d;
+  app::add_domain_options(&app, d, "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
                               "the EPISODE markers name; a domain file must be given here)");
   app.add_option("--workers", o.workers, "Sampler workers to wait for before learning (0: compute here)")
       ->check(CLI::Range(0, 10000))
@@ -287,33 +269,12 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--no-spot-check", no_spot_check,
                "Do not recompute one worker-computed block per E-step pass here (by default a worker whose block\n"
                "differs from the optimiser's own is reported, gets no more work, and its blocks are computed here)");
-  std::string update;
-  double step_size = 0.0;
-  app.add_option("--alpha-update", update,
-                 "Observation-model learning: posterior (keeps the prior; docs/MODEL.md) or paper (default: the\n"
-                 "domain file's observation_model.update, else posterior)")
-      ->check(CLI::IsMember({"posterior", "paper"}));
-  CLI::Option* c_option = app.add_option("--c", step_size, "The paper's step size (--alpha-update paper only; default: the domain's, else 0.1)")
-                              ->check(CLI::Range(1e-6, 1.0));
-  std::string eta;
-  app.add_option("--eta", eta,
-                 "'stated': take every observation's eta as the sensor gives it; 'learned': learn one source\n"
-                 "distribution per context (the labeller's rule, else each distinct eta; docs/MODEL.md). Default: the\n"
-                 "domain file's observation_model.learn_eta, else learned with the posterior update")
-      ->check(CLI::IsMember({"stated", "learned"}));
-  app.add_option("--seed", o.learning.seed, "Seed")->capture_default_str();
+  app::add_learn_settings(&app, o.learning, app::Front::kOptimiser);
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
-  if (!update.empty()) {
-    AlphaUpdate u = AlphaUpdate::kPosterior;
-    parse_alpha_update(update, u);
-    o.learning.update = u;
-  }
-  if (c_option->count() > 0) o.learning.c = step_size;
-  if (!eta.empty()) o.learning.learn_eta = eta == "learned";
   o.executor.spot_check = !no_spot_check;
   o.max_dataset_bytes = max_dataset_mb << 20;
-  if (!d.spec.empty()) o.domain = open_domain_args(d);
+  if (!d.spec.empty()) o.domain = app::open_domain_args(d, "hbirl");
   Counters counters;
   counters.service = "optimiser";
   counters.restarts = c.restarts;

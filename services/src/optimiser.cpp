@@ -320,12 +320,12 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
   return result;
 }
 
-OptimiserResult learn_from_log(const RecordedRun& run, const LearningOptions& options, Counters& counters,
+OptimiserResult learn_from_log(const RecordedRun& run, const app::LearnSettings& settings, Counters& counters,
                                std::shared_ptr<const Domain> domain) {
   OptimiserResult result = collect_from_log(run, counters);
   const std::shared_ptr<const Domain> learned_on = domain_of(result.data, std::move(domain));
   size_unobserved(result.data, *learned_on);
-  result.learned = learn_from_dataset(*learned_on, result.data, options);
+  result.learned = learn_from_dataset(*learned_on, result.data, settings);
   return result;
 }
 

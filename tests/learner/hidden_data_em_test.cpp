@@ -62,12 +62,12 @@ TEST(LearnReward, RecordedObjectiveNeverDecreasesOnRandomTasks) {
         options.threads = 1;
         options.max_em_iterations = 30;
         std::vector<std::pair<double, double>> record;  // (strength, objective)
-        options.on_iteration = [&](int, int iteration, double objective, const Eigen::VectorXd&, const EStepResult&,
-                                   const ObservationPrior* alpha) {
+        const IterationReport on_iteration = [&](int, int iteration, double objective, const Eigen::VectorXd&,
+                                                 const EStepResult&, const ObservationPrior* alpha) {
           EXPECT_EQ(iteration, static_cast<int>(record.size()) + 1);
           record.emplace_back(alpha ? alpha->strength : 0.0, objective);
         };
-        const LearnResult result = learn_reward(task.mdp, estep, options);
+        const LearnResult result = learn_reward(task.mdp, estep, options, on_iteration);
         const std::string where = "task " + std::to_string(seed) + ", mode " + std::to_string(static_cast<int>(mode)) +
                                   (accelerate ? ", SQUAREM" : ", plain EM");
         ASSERT_EQ(static_cast<int>(record.size()), result.restarts[0].em_iterations) << where;

@@ -46,6 +46,8 @@ def test_gridworld_is_hbirl_generate_gridworld(tmp_path):
     (["--alpha-update", "paper", "--restarts", "2"], {"alpha_update": "paper", "restarts": 2}),
     (["--engine", "mcmc", "--mcmc-samples", "40", "--mcmc-burn-in", "10", "--max-em-iterations", "4"],
      {"engine": "mcmc", "mcmc_samples": 40, "mcmc_burn_in": 10, "max_em_iterations": 4}),
+    (["--em-theta-tolerance", "0.01", "--learn-observation-model", "false", "--c", "0.3", "--alpha-update", "paper"],
+     {"em_theta_tolerance": 0.01, "learn_observation_model": False, "c": 0.3, "alpha_update": "paper"}),
 ])
 def test_fit_gives_hbirl_learns_theta_bit_for_bit(grid, flags, params):
     problem, path = grid
@@ -388,7 +390,7 @@ def test_an_impossible_observation_is_named():
     subject = np.ones((3, 2, 3))
     subject[:, :, 2] = 0.0  # the subject never shows symbol 2, and eta says only it is seen
     prior = hbirl.ObservationPrior(mdp, 3, 1, subject_alpha=subject)
-    with pytest.raises(ValueError, match=r"^observations\[0\]\[1\]: observation 0: impossible"):
+    with pytest.raises(ValueError, match=r"^observations\[0\]\.steps\[1\]\.observations\[0\]: impossible"):
         hbirl.HierarchicalIRL().fit(mdp, [[(np.array([0]), np.array([[1.0, 0.0]])), (np.array([2]), np.array([[1.0, 0.0]]))]], prior)
 
 
@@ -482,3 +484,23 @@ def test_a_pair_without_transitions_is_impossible_in_every_form():
     for other in (hbirl.Mdp(scipy_sparse.csr_matrix(T.reshape(4, 2)), F), hbirl.Mdp(dense.transition_rows(), F)):
         np.testing.assert_array_equal(other.soft_policy([0.5]), dense.soft_policy([0.5]))
     assert dense.soft_policy([0.5])[1, 1] == 0.0
+
+
+def test_the_estimators_parameters_are_hbirl_learns_settings():
+    """One schema (app/learn_settings.hpp): HierarchicalIRL takes every setting of `hbirl
+    learn`, with its default, MaxCausalEntIRL those that apply to true trajectories; each is
+    documented in the class's docstring, and a value out of range is refused by name."""
+    settings = hbirl._hbirl._learn_settings()
+    names = [s["name"] for s in settings]
+    assert list(hbirl.HierarchicalIRL().get_params()) == names
+    truth_names = [s["name"] for s in settings if not s["observations_only"]]
+    assert list(hbirl.MaxCausalEntIRL().get_params()) == truth_names
+    assert "max_em_iterations" not in truth_names and "seed" in truth_names
+    help_text = cli("learn", "--help")
+    for s in settings:
+        assert hbirl.HierarchicalIRL().get_params()[s["name"]] == s["default"]
+        assert f"  {s['name']}: " in hbirl.HierarchicalIRL.__doc__
+        assert f"--{s['name'].replace('_', '-')} " in help_text
+    assert hbirl.HierarchicalIRL().get_params()["max_em_iterations"] == 300
+    with pytest.raises(TypeError):
+        hbirl.HierarchicalIRL(max_em_iteration=3)  # a misspelt setting

@@ -154,7 +154,7 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   Dataset same = live->data;
   same.observed = d.observed;
   same.controlled_observed = c.observed;
-  const Learned local = learn_from_dataset(*builtin_domain("onion"), same, LearningOptions{});
+  const Learned local = learn_from_dataset(*builtin_domain("onion"), same, app::LearnSettings{});
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
   // Eta was learned per labeller rule, over the bus as here: the same learned eta.
   ASSERT_FALSE(live->data.observed[0].contexts.empty());
@@ -164,7 +164,7 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
   EXPECT_EQ(live->learned.eta->learned, local.eta->learned);
   // The recorded log replays to the same data and the same theta.
   Counters replay_counters = quiet("replay");
-  const OptimiserResult replay = learn_from_log({log_path.string(), "", false}, LearningOptions{}, replay_counters);
+  const OptimiserResult replay = learn_from_log({log_path.string(), "", false}, app::LearnSettings{}, replay_counters);
   EXPECT_EQ(replay.learned.digest, live->learned.digest);
   for (int k = 0; k < 4; ++k) EXPECT_EQ(replay.learned.theta[k], live->learned.theta[k]) << k;
   ASSERT_TRUE(replay.learned.eta.has_value());
@@ -305,7 +305,7 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   ASSERT_TRUE(live->data.true_weights.has_value());
   EXPECT_EQ(live->data.true_weights->sum(), 1.0);  // one goal corner
   // Same bits as learning in one process; the goal corner is the learned reward's best.
-  const Learned local = learn_from_dataset(*builtin_domain("gridworld"), live->data, LearningOptions{});
+  const Learned local = learn_from_dataset(*builtin_domain("gridworld"), live->data, app::LearnSettings{});
   for (int k = 0; k < 4; ++k) EXPECT_EQ(live->learned.theta[k], local.theta[k]) << k;
   Eigen::Index goal = 0, best = 0;
   live->data.true_weights->maxCoeff(&goal);

@@ -43,11 +43,14 @@ struct LearnOptions {
   // deterministic E-step: turn it off for sampling engines.
   bool accelerate = true;
   SoftViOptions soft_vi;
-  // Called after every accepted EM iterate (from the restart's thread; SQUAREM's rejected
-  // extrapolations are not iterates): restart index, iterate number (1, 2, ...), objective (EStepResult::objective), theta, the E-step's report, and the observation model's
-  // refined Dirichlet parameters (nullptr when O is not learned).
-  std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&, const ObservationPrior*)> on_iteration;
 };
+
+// Called after every accepted EM iterate (from the restart's thread; SQUAREM's rejected
+// extrapolations are not iterates): restart index, iterate number (1, 2, ...), objective
+// (EStepResult::objective), theta, the E-step's report, and the observation model's
+// refined Dirichlet parameters (nullptr when O is not learned).
+using IterationReport =
+    std::function<void(int, int, double, const Eigen::VectorXd&, const EStepResult&, const ObservationPrior*)>;
 
 struct RestartResult {
   Eigen::VectorXd initial_theta;
@@ -76,6 +79,7 @@ struct LearnResult {
   std::vector<RestartResult> restarts;
 };
 
-LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions& options);
+LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions& options,
+                         const IterationReport& on_iteration = nullptr);
 
 }  // namespace hbirl

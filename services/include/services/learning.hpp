@@ -10,24 +10,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/learn_settings.hpp"
 #include "learner/estep_observations.hpp"
-#include "learner/hidden_data_em.hpp"
 #include "services/dataset.hpp"
 #include "sim_driver/domain.hpp"
 
 namespace hbirl::services {
-
-// How the optimiser learns: as `hbirl learn` does with the same problem (HiddenDataEM's
-// and the E-step's defaults; the domain's stated observation model when it has one), so
-// a run learned live and the same data learned offline give the same theta. Eta is
-// learned per context (the sensor's, else each distinct eta) as `hbirl learn` learns it;
-// the workers get each pass's learned eta with the request (estep_service.hpp).
-struct LearningOptions {
-  std::optional<AlphaUpdate> update;  // overrides the domain's (default: the posterior update)
-  std::optional<double> c;            // the paper's step size, overriding the domain's
-  std::optional<bool> learn_eta;      // overrides the domain's (default: learned with the posterior update)
-  std::uint64_t seed = 1;
-};
 
 struct Learned {
   Eigen::VectorXd theta;
@@ -50,26 +38,20 @@ using ProgressFn = std::function<void(int, double, const Eigen::VectorXd&, const
 // they do not fit the domain's features.
 std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Dataset& data);
 
-// The observation prior learned from: see LearningOptions. Throws InputError when the data
-// do not fit the domain (symbols, sources) or there is no subject prior.
-ObservationPrior observation_prior(const Domain& domain, const Dataset& data, const LearningOptions& options);
-
-// What is learned from: the observation prior above and the demonstrations, with the
-// catch-all source for unlisted confounders added to both when the domain's
-// observation_model asks for one (add_unlisted_source). The optimiser sends the workers
-// these demonstrations, so that both sides hold the data the E-step computes on. They
-// are the data set's own unless the catch-all widens their eta: only then is there a copy.
-struct LearningInput {
-  ObservationPrior prior;
-  const std::vector<ObservedTrajectory>* given = nullptr;  // the data set's (it outlives this)
-  std::optional<std::vector<ObservedTrajectory>> widened;  // with the catch-all's share of eta
-  const std::vector<ObservedTrajectory>& observed() const { return widened ? *widened : *given; }
-};
-LearningInput learning_input(const Domain& domain, const Dataset& data, const LearningOptions& options);
+// The observation prior learned from, before the settings override it (app::apply_to_prior):
+// the domain's stated observation model, else uninformative priors for the confounding
+// elements; the subject prior from the run's controlled episodes when there are any.
+// Throws InputError when the data do not fit the domain (symbols, sources) or there is no
+// subject prior.
+ObservationPrior observation_prior(const Domain& domain, const Dataset& data);
 
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
 // subject prior, symbols outside the domain).
-Learned learn_from_dataset(const Domain& domain, const Dataset& data, const LearningOptions& options,
+// Learned as `hbirl learn` learns (app::learn) with these settings, the same data and
+// prior: so a run learned live and the same data learned offline give the same theta. One
+// E-step at a time (the same bits whatever the thread count); the workers get each pass's
+// learned eta with the request (estep_service.hpp).
+Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app::LearnSettings& settings,
                            std::shared_ptr<const BlockExecutor> executor = nullptr, ProgressFn progress = nullptr);
 
 }  // namespace hbirl::services

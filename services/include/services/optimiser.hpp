@@ -24,7 +24,7 @@ struct OptimiserOptions {
   // The domain learned on; null: the built-in domain the EPISODE markers name (a domain
   // file must be given: a name off the bus never opens a file).
   std::shared_ptr<const Domain> domain;
-  LearningOptions learning;
+  app::LearnSettings learning;  // how it learns (app/learn_settings.hpp)
   BusExecutorOptions executor;
   int workers = 0;              // wait for this many sampler workers before learning
   int wait_workers_ms = 10000;
@@ -90,7 +90,7 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters);
 // Learns offline from a recorded log (hbirl learn --log): the same data set and the same
 // learning as the live optimiser, computed here. `domain` as OptimiserOptions::domain.
 // Throws InputError for unusable logs.
-OptimiserResult learn_from_log(const RecordedRun& run, const LearningOptions& options, Counters& counters,
+OptimiserResult learn_from_log(const RecordedRun& run, const app::LearnSettings& settings, Counters& counters,
                                std::shared_ptr<const Domain> domain = nullptr);
 
 // The domain a data set was collected in: `given` when not null (the markers must name

@@ -1,0 +1,74 @@
+#pragma once
+// learn(): the one way hbirl learns a reward. `hbirl learn`, the Python estimators and the
+// optimiser service all call it, so what they learn from the same data and settings is
+// the same by construction: the prior as the settings have it, the catch-all source for
+// unlisted confounders (docs/MODEL.md), every observation checked possible, the E-step
+// (its engine, and where its blocks are computed), HiddenDataEM with the MaxCausalEnt
+// M-step (learner/hidden_data_em.hpp), and the learned observation model and eta.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/learn_settings.hpp"
+#include "learner/estep_observations.hpp"
+#include "learner/hidden_data_em.hpp"
+
+namespace hbirl::app {
+
+// One accepted EM iterate, as a front end shows progress.
+struct Iterate {
+  int restart = 0;
+  int iteration = 0;  // 1, 2, ...
+  double objective = 0.0;
+  const Eigen::VectorXd& theta;
+  const EStepResult& estep;
+  const ObservationPrior* refined;  // the observation model's learned parameters; null when O is not learned
+  const ObservationEStep* observed;  // the E-step (null when learning from true trajectories)
+};
+
+struct LearnHooks {
+  // Where the E-step's blocks are computed (null: here): the optimiser's sampler workers.
+  std::shared_ptr<const BlockExecutor> executor;
+  int watch = -1;  // keep this trajectory's posterior from every pass (EStepResult::watched)
+  std::function<void(const Iterate&)> on_iteration;
+  // How the front end names trajectory i of its data, for an error about it ("observations[i]").
+  std::function<std::string(int)> trajectory_name;
+};
+
+struct Learned {
+  LearnResult em;                 // theta, the log-likelihood and every restart
+  std::unique_ptr<EStep> estep;   // what EM learned with
+  const ObservationEStep* observed = nullptr;  // the same, when learned from observations
+  // Learned from observations:
+  ObservationPrior given;    // the prior with the settings applied, before the catch-all
+  ObservationPrior refined;  // the selected restart's learned parameters (else the E-step's prior, catch-all included)
+  ObservationModel model;    // their Dirichlet mean
+  std::optional<LearnedEta> learned_eta;
+  std::uint64_t seed = 1;
+
+  const RestartResult& best() const { return em.restarts[static_cast<size_t>(em.selected_restart)]; }
+  // The E-step at the learned theta and model (the policy of theta; learned eta when eta is
+  // learned): expected counts and, for MCMC, its convergence diagnostics.
+  EStepStatistics final_statistics(const Mdp& mdp) const;
+};
+
+// InputError("prior") unless the prior's shapes are the MDP's.
+void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior);
+
+// The posterior engine the settings name (engine, mcmc_*).
+EngineFactory engine_factory(const LearnSettings& settings);
+
+// Throws InputError naming the setting, the prior or the observation (by
+// hooks.trajectory_name) when the data cannot be learned from. `mdp` must outlive the result.
+Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, ObservationPrior prior,
+              const LearnSettings& settings, const LearnHooks& hooks = {});
+
+// MaxCausalEnt IRL on the expert's true steps (`hbirl learn --from truth`, MaxCausalEntIRL):
+// HiddenDataEM whose E-step is the truth.
+Learned learn_from_truth(const Mdp& mdp, std::vector<Trajectory> truth, const LearnSettings& settings,
+                         const LearnHooks& hooks = {});
+
+}  // namespace hbirl::app

@@ -1,0 +1,110 @@
+#include "app/learn.hpp"
+
+#include "learner/input_error.hpp"
+#include "learner/observation_support.hpp"
+#include "learner/soft_value_iteration.hpp"
+
+namespace hbirl::app {
+
+namespace {
+
+// HiddenDataEM's options: the settings', SQUAREM only with a deterministic E-step.
+LearnOptions em_options(const LearnSettings& settings) {
+  LearnOptions options = settings.em;
+  options.accelerate = settings.engine != "mcmc";
+  return options;
+}
+
+// Every iterate handed to the hook, with the E-step it came from.
+IterationReport report_of(const LearnHooks& hooks, const ObservationEStep* observed) {
+  if (!hooks.on_iteration) return nullptr;
+  return [&hooks, observed](int restart, int iteration, double objective, const Eigen::VectorXd& theta, const EStepResult& e,
+                            const ObservationPrior* alpha) {
+    hooks.on_iteration(Iterate{restart, iteration, objective, theta, e, alpha, observed});
+  };
+}
+
+// Every observation must be one some source can make (observation_support.hpp): otherwise
+// the data have probability 0 under every reward, and EM would say nothing useful.
+void check_possible(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const ObservationPrior& prior,
+                    const LearnHooks& hooks) {
+  const auto impossible = first_impossible_observation(mdp, observations, prior);
+  if (!impossible) return;
+  std::string where = hooks.trajectory_name ? hooks.trajectory_name(impossible->trajectory)
+                                            : "observations[" + std::to_string(impossible->trajectory) + "]";
+  where += ".steps[" + std::to_string(impossible->step) + "]";
+  if (impossible->observation >= 0) where += ".observations[" + std::to_string(impossible->observation) + "]";
+  throw InputError(where, "impossible under the observation model: " + impossible->why);
+}
+
+}  // namespace
+
+void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior) {
+  if (prior.subject_alpha.rows() != mdp.num_pairs() || prior.subject_alpha.cols() != prior.num_symbols ||
+      prior.confounder_alpha.rows() != prior.num_confounders || prior.confounder_alpha.cols() != prior.num_symbols) {
+    throw InputError("prior", "was made for another MDP (" + std::to_string(prior.subject_alpha.rows()) +
+                                  " state-action pairs, this one " + std::to_string(mdp.num_pairs()) + ")");
+  }
+}
+
+EngineFactory engine_factory(const LearnSettings& settings) {
+  return settings.engine == "mcmc" ? mcmc_engine_factory(settings.mcmc) : exact_engine_factory();
+}
+
+Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, ObservationPrior prior,
+              const LearnSettings& settings, const LearnHooks& hooks) {
+  check_prior_fits(mdp, prior);
+  if (observations.empty()) throw InputError("observations", "none given");
+  Learned out;
+  out.seed = settings.em.seed;
+  apply_to_prior(settings, prior);
+  out.given = prior;
+  // The catch-all for unlisted confounders widens every eta: a copy only then.
+  std::optional<std::vector<ObservedTrajectory>> widened;
+  if (adds_unlisted_source(prior)) {
+    widened = observations;
+    add_unlisted_source(prior, *widened);  // before the check: the catch-all can produce anything
+  }
+  const std::vector<ObservedTrajectory>& seen = widened ? *widened : observations;
+  check_possible(mdp, seen, prior, hooks);
+  ObservationEStepOptions estep_options;
+  estep_options.engine = engine_factory(settings);
+  estep_options.alpha_tolerance = settings.alpha_tolerance;
+  estep_options.max_alpha_iterations = settings.max_alpha_iterations;
+  // Restarts run in parallel; a single restart spreads its E-step over the threads instead.
+  estep_options.threads = settings.em.restarts == 1 ? settings.em.threads : 1;
+  estep_options.executor = hooks.executor;
+  estep_options.watch = hooks.watch;
+  auto estep = std::make_unique<ObservationEStep>(mdp, seen, std::move(prior), estep_options);
+  widened.reset();  // the E-step holds its own (merged) copy
+  out.observed = estep.get();
+  out.em = learn_reward(mdp, *estep, em_options(settings), report_of(hooks, out.observed));
+  out.refined = out.best().alpha ? *out.best().alpha : estep->prior();
+  out.model = dirichlet_mean(out.refined);
+  out.learned_eta = estep->learned_eta_report(out.refined);
+  out.estep = std::move(estep);
+  return out;
+}
+
+Learned learn_from_truth(const Mdp& mdp, std::vector<Trajectory> truth, const LearnSettings& settings,
+                         const LearnHooks& hooks) {
+  Learned out;
+  out.seed = settings.em.seed;
+  out.estep = std::make_unique<TruthEStep>(mdp, std::move(truth));
+  out.em = learn_reward(mdp, *out.estep, em_options(settings), report_of(hooks, nullptr));
+  return out;
+}
+
+EStepStatistics Learned::final_statistics(const Mdp& mdp) const {
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(em.theta));
+  if (observed == nullptr) {
+    EStepState state = estep->initial_state(0);
+    EStepStatistics out;
+    out.counts = estep->expect(policy, state).counts;
+    return out;
+  }
+  const std::optional<RowMatrix> eta = observed->learned_eta(refined);
+  return observed->statistics(policy, model, seed, eta ? &*eta : nullptr);
+}
+
+}  // namespace hbirl::app
