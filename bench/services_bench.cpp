@@ -169,7 +169,7 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     double smallest = 1.0, largest = 0.0;
     const auto first = spy.take();
     for (int w = 0; w < n; ++w) {
-      const auto it = first.find(channels::trajectory_channel("bench-sampler-" + std::to_string(w)));
+      const auto it = first.find(channels::trajectory_channel("bench-sampler-" + std::to_string(w)).name);
       const double share = it == first.end() ? 0.0 : static_cast<double>(it->second) / static_cast<double>(executor->stats().bytes_sent);
       smallest = std::min(smallest, share);
       largest = std::max(largest, share);

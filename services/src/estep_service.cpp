@@ -139,10 +139,10 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& 
   std::random_device entropy;
   request_id_ = static_cast<std::int64_t>((static_cast<std::uint64_t>(entropy()) << 32 | entropy()) >> 1);
   numerics_ = numerics_fingerprint();
-  subs_.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kStatus, counters_,
                                                      [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000));
   // Every block of a pass may arrive between two handle() calls.
-  subs_.add(bus_, subscribe<hbirl::estep_result_t>(bus_, channels::kEStepResult, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kEStepResult, counters_,
                                                    [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000));
 }
 
@@ -215,7 +215,7 @@ void BusBlockExecutor::pump_blocks(const ObservationEStep& estep) const {
   for (; k < to_send_.size() && (in_flight == 0 || in_flight < options_.send_window_bytes); ++k) {
     const auto& [b, id] = to_send_[k];
     const std::uint64_t digest = block_digests_[static_cast<size_t>(b)];
-    const std::string channel = channels::trajectory_channel(id);
+    const Channel<hbirl::trajectory_t> channel = channels::trajectory_channel(id);
     std::int64_t bytes = 0;
     const int end = std::min(n, (b + 1) * ObservationEStep::kBlockSize);
     for (int i = b * ObservationEStep::kBlockSize; i < end; ++i) {
@@ -365,7 +365,7 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) const {
     if (!same_statistics(*slot, s, 0.0)) {
       ++stats_.conflicts;
       doubted_.insert(m.worker);
-      counters_.bad(channels::kEStepResult, "two different answers to block " + std::to_string(m.block) + " under the name '" +
+      counters_.bad(channels::kEStepResult.name, "two different answers to block " + std::to_string(m.block) + " under the name '" +
                                                 m.worker + "' (one forged?): its blocks of this pass are computed here");
       forget_answers_of(m.worker);
       return;
@@ -537,7 +537,7 @@ void BusBlockExecutor::check_spot(int block, const EStepStatistics& here) const 
 void BusBlockExecutor::distrust(const std::string& worker, const std::string& why) const {
   ++stats_.liars;
   workers_[worker].distrusted = true;
-  counters_.bad(channels::kEStepResult,
+  counters_.bad(channels::kEStepResult.name,
                 "worker '" + worker + "' " + why + ": it gets no more work, and its blocks of this pass are computed here");
   forget_answers_of(worker);
 }

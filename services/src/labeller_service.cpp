@@ -9,7 +9,7 @@ namespace hbirl::services {
 
 LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
     : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
-  subs_.add(bus_, subscribe<hbirl::detections_t>(bus_, channels::kDetections, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kDetections, counters_,
                                                  [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
 }
 

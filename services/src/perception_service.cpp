@@ -9,7 +9,7 @@ namespace hbirl::services {
 
 PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), counters_(counters) {
   // Frames come at camera rate; a queue of a few seconds' worth rides out a slow moment.
-  subs_.add(bus_, subscribe<hbirl::camera_frame_t>(bus_, channels::kCamera, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kCamera, counters_,
                                                    [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000));
 }
 

@@ -31,14 +31,14 @@ constexpr auto kQuietBeforeServing = std::chrono::milliseconds(200);
 
 SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
     : bus_(bus), id_(std::move(id)), counters_(counters), max_dataset_bytes_(max_dataset_bytes) {
-  subs_.add(bus_, subscribe<hbirl::mdp_t>(bus_, channels::kMdp, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kMdp, counters_,
                                           [this](const hbirl::mdp_t& m, const Message& raw) {
                                             bus_.sign_for_run(raw.run);  // a worker of any run answers each in its own
                                             on_mdp(m);
                                           },
                                           10000));
   // A whole share may arrive between two handle() calls; only the newest requests matter.
-  subs_.add(bus_, subscribe<hbirl::trajectory_t>(bus_, channels::trajectory_channel(id_), counters_,
+  subs_.add(bus_, subscribe(bus_, channels::trajectory_channel(id_), counters_,
                                                  [this](const hbirl::trajectory_t& m, const Message& raw) {
                                                    bus_.sign_for_run(raw.run);
                                                    on_trajectory(m, raw.size);
@@ -46,12 +46,12 @@ SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::
                                                  100000));
   // A worker of every run of a shared key that starts after an optimiser sent its MDP: it
   // answers the optimiser it hears (its heartbeats then reach it, and it sends the MDP).
-  subs_.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kStatus, counters_,
                                                      [this](const hbirl::service_status_t& m, const Message& raw) {
                                                        if (m.service == "optimiser" && !mdp_ && request_run_ == 0) bus_.sign_for_run(raw.run);
                                                      },
                                                      100));
-  subs_.add(bus_, subscribe<hbirl::estep_request_t>(bus_, channels::kEStepRequest, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kEStepRequest, counters_,
                                                     [this](const hbirl::estep_request_t& m, const Message& raw) {
                                                       bus_.sign_for_run(raw.run);
                                                       on_request(m, raw.run);
@@ -69,7 +69,7 @@ int SamplerWorker::handle(int timeout_ms) {
     try {
       serve(false);
     } catch (const InputError& e) {  // a request that does not fit what arrived: counted, dropped
-      counters_.bad(channels::kEStepRequest, e.what());
+      counters_.bad(channels::kEStepRequest.name, e.what());
       pending_.clear();
     }
   }

@@ -53,7 +53,7 @@ SimDriver::SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulati
                      Counters& counters)
     : bus_(bus), options_(o), counters_(counters), domain_(std::move(domain_name)), run_(std::move(run)) {
   if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
-  subs_.add(bus_, subscribe<hbirl::frame_request_t>(bus_, channels::kFrameRequest, counters_,
+  subs_.add(bus_, subscribe(bus_, channels::kFrameRequest, counters_,
                                                     [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
 }
 
@@ -202,10 +202,10 @@ bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
   for (const auto& l : listeners()) waiting.insert(l);
   bool learned = false;
   Subscriptions subs;
-  subs.add(bus_, subscribe<hbirl::service_status_t>(bus_, channels::kStatus, counters_,
+  subs.add(bus_, subscribe(bus_, channels::kStatus, counters_,
                                                     [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); },
                                                     1000));
-  subs.add(bus_, subscribe<hbirl::reward_t>(bus_, channels::kReward, counters_,
+  subs.add(bus_, subscribe(bus_, channels::kReward, counters_,
                                             [&learned, this](const hbirl::reward_t& r, const Message&) {
                                               // Another run's optimiser (another domain) does not end this one.
                                               if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");

@@ -329,7 +329,7 @@ TEST(DashboardState, BadMessagesOnTheBusAreCounted) {
   DashboardState state;
   state.subscribe(bus, counters);
   const char garbage[] = "garbage garbage garbage";
-  for (const auto* channel : {&services::channels::kCamera, &services::channels::kPosterior, &services::channels::kStatus}) {
+  for (const std::string* channel : {&services::channels::kCamera.name, &services::channels::kPosterior.name, &services::channels::kStatus.name}) {
     sender.publish(*channel, garbage, sizeof garbage);
   }
   hbirl::observation_model_t m{};

@@ -42,11 +42,12 @@ inline const std::string kFuzzSampler = "sampler-fuzz";
 inline const std::string& channel(int k) {
   namespace ch = services::channels;
   // Trajectories go to one sampler's own channel: the fuzzed one's (fuzz_service_handlers).
-  static const std::string trajectories = ch::trajectory_channel(kFuzzSampler);
-  static const std::string* const names[] = {&ch::kCamera,     &ch::kDetections,   &ch::kObservations, &ch::kEpisode,
-                                             &ch::kGroundTruth, &ch::kMdp,         &trajectories,      &ch::kEStepRequest,
-                                             &ch::kEStepResult, &ch::kEmProgress,  &ch::kObservationModel,
-                                             &ch::kPosterior,   &ch::kReward,      &ch::kFrameRequest, &ch::kStatus};
+  static const std::string trajectories = ch::trajectory_channel(kFuzzSampler).name;
+  static const std::string* const names[] = {
+      &ch::kCamera.name,       &ch::kDetections.name, &ch::kObservations.name,     &ch::kEpisode.name,
+      &ch::kGroundTruth.name,  &ch::kMdp.name,        &trajectories,               &ch::kEStepRequest.name,
+      &ch::kEStepResult.name,  &ch::kEmProgress.name, &ch::kObservationModel.name, &ch::kPosterior.name,
+      &ch::kReward.name,       &ch::kFrameRequest.name, &ch::kStatus.name};
   static_assert(sizeof(names) / sizeof(names[0]) == kNumChannels);
   return *names[k];
 }

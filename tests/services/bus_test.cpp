@@ -146,13 +146,13 @@ TEST(MemoryBus, DeliversTypedMessagesInOrder) {
   MemoryBus a(hub), b(hub);
   Counters out = quiet_counters(), in = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe<hbirl::observations_t>(b, "OBS.*", in, [&](const hbirl::observations_t& m, const Message& raw) {
+  subscribe(b, Channel<hbirl::observations_t>{"OBS.*"}, in, [&](const hbirl::observations_t& m, const Message& raw) {
     EXPECT_EQ(raw.channel.substr(0, 3), "OBS");
     EXPECT_EQ(m.eta.size(), static_cast<size_t>(m.n));
     seen.push_back(m.seq);
   });
-  for (int s = 1; s <= 5; ++s) EXPECT_TRUE(publish(a, s % 2 ? "OBSERVATIONS" : "OBS_B", observations(s, s), out));
-  EXPECT_TRUE(publish(a, "XOBSERVATIONS", observations(9, 1), out));  // not a whole-name match
+  for (int s = 1; s <= 5; ++s) EXPECT_TRUE(publish(a, s % 2 ? channels::kObservations : Channel<hbirl::observations_t>{"OBS_B"}, observations(s, s), out));
+  EXPECT_TRUE(publish(a, Channel<hbirl::observations_t>{"XOBSERVATIONS"}, observations(9, 1), out));  // not a whole-name match
   EXPECT_EQ(b.handle(0), 5);
   EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 3, 4, 5}));
   EXPECT_EQ(in.messages_in, 5);
@@ -162,30 +162,61 @@ TEST(MemoryBus, DeliversTypedMessagesInOrder) {
 
 // Garbage, another type, a truncated message and a message its handler rejects are each
 // counted once and dropped; the good messages around them still arrive.
+// A channel carries its type: publishing another type on it does not compile.
+template <class C, class M>
+concept Publishable = requires(Bus& bus, const C& channel, const M& message, Counters& counters) {
+  publish(bus, channel, message, counters);
+};
+static_assert(Publishable<Channel<hbirl::observations_t>, hbirl::observations_t>);
+static_assert(!Publishable<Channel<hbirl::observations_t>, hbirl::service_status_t>);
+static_assert(!Publishable<decltype(channels::kStatus), hbirl::reward_t>);
+static_assert(!Publishable<std::string, hbirl::reward_t>);  // no untyped channel names either
+
+// Every reader validates a message by its type before its handler sees it (messages.hpp):
+// an eta that is not a distribution never reaches the handler, whichever reader subscribes.
+TEST(TypedSubscribe, ValidatesByTypeBeforeTheHandler) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub);
+  Counters c = quiet_counters(), out = quiet_counters();
+  int handled = 0;
+  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t&, const Message&) { ++handled; });
+  hbirl::observations_t bad = observations(1, 2);
+  bad.eta[1] = {2.0, 0.0};
+  publish(bus, channels::kObservations, bad, out);
+  bad = observations(2, 2);
+  bad.symbol[0] = 22;  // outside the 22-symbol alphabet
+  publish(bus, channels::kObservations, bad, out);
+  publish(bus, channels::kObservations, observations(3, 2), out);
+  bus.handle(0);
+  EXPECT_EQ(handled, 1);
+  EXPECT_EQ(c.bad_messages, 2);
+  EXPECT_NE(c.last_problem.find("observations.symbol[0]"), std::string::npos) << c.last_problem;
+}
+
 TEST(MemoryBus, BadMessagesAreCountedNotFatal) {
   auto hub = std::make_shared<MemoryHub>();
   MemoryBus bus(hub);
   Counters c = quiet_counters();
   int good = 0;
-  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) {
+  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) {
     if (m.num_sources < 1) throw InputError("num_sources", "must be at least 1");
     ++good;
   });
   Counters out = quiet_counters();
-  publish(bus, "OBSERVATIONS", observations(1, 3), out);
+  publish(bus, channels::kObservations, observations(1, 3), out);
   const char garbage[] = "definitely not an LCM message";
   bus.publish("OBSERVATIONS", garbage, sizeof garbage);
   hbirl::service_status_t status{};  // a valid message of the wrong type
   status.service = "sampler";
-  publish(bus, "OBSERVATIONS", status, out);
+  publish(bus, Channel<hbirl::service_status_t>{"OBSERVATIONS"}, status, out);  // another type on the channel
   const std::vector<std::uint8_t> whole = encode(observations(2, 3));
   bus.publish("OBSERVATIONS", whole.data(), static_cast<int>(whole.size()) - 5);  // truncated
   hbirl::observations_t bad = observations(3, 1);
   bad.num_sources = 0;
   bad.eta = {{}};
-  publish(bus, "OBSERVATIONS", bad, out);
+  publish(bus, channels::kObservations, bad, out);
   bus.publish("OBSERVATIONS", nullptr, 0);  // empty
-  publish(bus, "OBSERVATIONS", observations(4, 2), out);
+  publish(bus, channels::kObservations, observations(4, 2), out);
   EXPECT_EQ(bus.handle(0), 7);
   EXPECT_EQ(good, 2);
   EXPECT_EQ(c.messages_in, 2);
@@ -199,9 +230,8 @@ TEST(MemoryBus, QueueCapacityDropsTheOldest) {
   MemoryBus bus(hub);
   Counters c = quiet_counters(), out = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe<hbirl::observations_t>(
-      bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); }, 3);
-  for (int s = 1; s <= 5; ++s) publish(bus, "OBSERVATIONS", observations(s, 1), out);
+  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); }, 3);
+  for (int s = 1; s <= 5; ++s) publish(bus, channels::kObservations, observations(s, 1), out);
   EXPECT_EQ(bus.handle(0), 3);
   EXPECT_EQ(seen, (std::vector<std::int64_t>{3, 4, 5}));
   EXPECT_EQ(hub->dropped(), 2);
@@ -213,10 +243,10 @@ TEST(MemoryBus, WaitsAcrossThreadsAndEnds) {
   MemoryBus a(hub), b(hub);
   Counters c = quiet_counters(), out = quiet_counters();
   int got = 0;
-  subscribe<hbirl::observations_t>(b, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++got; });
+  subscribe(b, channels::kObservations, c, [&](const hbirl::observations_t&, const Message&) { ++got; });
   std::thread sender([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    publish(a, "OBSERVATIONS", observations(1, 1), out);
+    publish(a, channels::kObservations, observations(1, 1), out);
   });
   int handled = 0;
   for (int i = 0; i < 200 && handled == 0; ++i) handled = b.handle(50);
@@ -225,7 +255,7 @@ TEST(MemoryBus, WaitsAcrossThreadsAndEnds) {
   EXPECT_EQ(got, 1);
   b.disconnect();
   EXPECT_EQ(b.handle(10), -1);
-  publish(a, "OBSERVATIONS", observations(2, 1), out);  // no one to deliver to: fine
+  publish(a, channels::kObservations, observations(2, 1), out);  // no one to deliver to: fine
 }
 
 TEST(SequenceTracker, CountsSkippedNumbers) {
@@ -243,12 +273,12 @@ TEST(LcmBus, RoundTripOverMemq) {
   LcmBus bus("memq://");
   Counters c = quiet_counters(), out = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c,
+  subscribe(bus, channels::kObservations, c,
                                    [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
-  publish(bus, "OBSERVATIONS", observations(7, 2), out);
+  publish(bus, channels::kObservations, observations(7, 2), out);
   const char garbage[] = "noise";
   bus.publish("OBSERVATIONS", garbage, sizeof garbage);
-  publish(bus, "OBSERVATIONS", observations(8, 2), out);
+  publish(bus, channels::kObservations, observations(8, 2), out);
   int handled = 0;
   for (int i = 0; i < 10 && handled < 3; ++i) handled += std::max(0, bus.handle(100));
   EXPECT_EQ(seen, (std::vector<std::int64_t>{7, 8}));
@@ -279,16 +309,16 @@ TEST(Bus, SubscriptionsEndWithTheirOwner) {
   for (Bus* bus : std::vector<Bus*>{&memory, &lcm, &log}) {
     Counters c = quiet_counters(), out = quiet_counters();
     int kept = 0, ended = 0;
-    subscribe<hbirl::observations_t>(*bus, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++kept; });
+    subscribe(*bus, channels::kObservations, c, [&](const hbirl::observations_t&, const Message&) { ++kept; });
     {
       Subscriptions owner;
-      owner.add(*bus, subscribe<hbirl::observations_t>(*bus, "OBS.*", c, [&](const hbirl::observations_t&, const Message&) { ++ended; }));
+      owner.add(*bus, subscribe(*bus, Channel<hbirl::observations_t>{"OBS.*"}, c, [&](const hbirl::observations_t&, const Message&) { ++ended; }));
       Bus& to = bus == &memory ? sender : *bus;
-      publish(to, "OBSERVATIONS", observations(1, 1), out);
+      publish(to, channels::kObservations, observations(1, 1), out);
       for (int i = 0; i < 5 && kept < 1; ++i) bus->handle(50);
     }
     Bus& to = bus == &memory ? sender : *bus;
-    publish(to, "OBSERVATIONS", observations(2, 1), out);
+    publish(to, channels::kObservations, observations(2, 1), out);
     for (int i = 0; i < 5 && kept < 2; ++i) bus->handle(50);
     EXPECT_EQ(kept, 2) << bus->url();
     EXPECT_EQ(ended, 1) << bus->url();
@@ -334,7 +364,7 @@ TEST(LogBus, FollowsALogAsItGrows) {
   bus.follow(true);
   Counters c = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
   EXPECT_EQ(bus.handle(0), 1);
   EXPECT_EQ(bus.handle(30), 0);  // the end, for now
   const std::string second = event_bytes(2);
@@ -395,7 +425,7 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
     LogBus bus(path);
     Counters c = quiet_counters();
     std::vector<std::int64_t> seen;
-    subscribe<hbirl::observations_t>(bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
     EXPECT_EQ(bus.handle(0), 1);
     try {
       bus.handle(0);
@@ -409,7 +439,7 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
     LogBus following(path);
     following.follow(true);
     seen.clear();
-    subscribe<hbirl::observations_t>(following, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    subscribe(following, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
     for (int k = 0; k < 4; ++k) following.handle(0);
     EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2})) << says;
     EXPECT_GE(following.damaged(), 1) << says;
@@ -419,7 +449,7 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
   LogBus cut(path);
   Counters c = quiet_counters();
   int seen = 0;
-  subscribe<hbirl::observations_t>(cut, "OBSERVATIONS", c, [&](const hbirl::observations_t&, const Message&) { ++seen; });
+  subscribe(cut, channels::kObservations, c, [&](const hbirl::observations_t&, const Message&) { ++seen; });
   EXPECT_EQ(cut.handle(0), 1);
   EXPECT_EQ(cut.handle(0), -1);
   EXPECT_EQ(seen, 1);
@@ -450,10 +480,10 @@ TEST(LogBus, ReplaysARecordedLogDeterministically) {
   std::unique_ptr<Bus> bus = open_bus("log:" + path + "?out=" + out_path);
   Counters c = quiet_counters(), out = quiet_counters();
   std::vector<std::int64_t> seen, stamps;
-  subscribe<hbirl::observations_t>(*bus, "OBSERVATIONS", c, [&](const hbirl::observations_t& m, const Message& raw) {
+  subscribe(*bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message& raw) {
     seen.push_back(m.seq);
     stamps.push_back(raw.recv_utime);
-    publish(*bus, "ECHO", m, out);
+    publish(*bus, Channel<hbirl::observations_t>{"ECHO"}, m, out);
   });
   int handled = 0;
   while (bus->handle(0) > 0) ++handled;

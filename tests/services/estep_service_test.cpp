@@ -302,11 +302,11 @@ TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
   MemoryBus front(hub), back(behind);
   std::atomic<int> forged{0};
   const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
-  for (const std::string& channel : {channels::kEStepRequest, channels::kMdp, channels::trajectory_channel("sampler-a")}) {
+  for (const std::string& channel : {channels::kEStepRequest.name, channels::kMdp.name, channels::trajectory_channel("sampler-a").name}) {
     front.subscribe(channel, forward_to(back), 100000);
   }
-  back.subscribe(channels::kStatus, forward_to(front), 1000);
-  back.subscribe(channels::kEStepResult, [&](const Message& m) {
+  back.subscribe(channels::kStatus.name, forward_to(front), 1000);
+  back.subscribe(channels::kEStepResult.name, [&](const Message& m) {
     front.publish(m.channel, m.data, m.size);
     hbirl::estep_result_t r;
     if (r.decode(m.data, 0, m.size) < 0 || r.block != 0 || r.counts.empty()) return;
@@ -390,14 +390,14 @@ TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
   MemoryBus front(hub), back(behind);
   std::atomic<int> dropped{0};
   const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
-  front.subscribe(channels::kEStepRequest, [&](const Message& m) {
+  front.subscribe(channels::kEStepRequest.name, [&](const Message& m) {
     if (dropped++ == 0) return;  // the first request never reaches it
     back.publish(m.channel, m.data, m.size);
   }, 100000);
-  front.subscribe(channels::kMdp, forward_to(back), 100000);
-  front.subscribe(channels::trajectory_channel("sampler-b"), forward_to(back), 100000);
-  back.subscribe(channels::kStatus, forward_to(front), 1000);
-  back.subscribe(channels::kEStepResult, forward_to(front), 100000);
+  front.subscribe(channels::kMdp.name, forward_to(back), 100000);
+  front.subscribe(channels::trajectory_channel("sampler-b").name, forward_to(back), 100000);
+  back.subscribe(channels::kStatus.name, forward_to(front), 1000);
+  back.subscribe(channels::kEStepResult.name, forward_to(front), 100000);
   std::atomic<bool> stop{false};
   std::thread relay([&] {
     while (!stop) {
@@ -441,7 +441,7 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   MemoryBus meddler(hub);
   Counters meddler_counters = quiet("meddler");
   std::atomic<bool> stop{false};
-  subscribe<hbirl::estep_result_t>(meddler, channels::kEStepResult, meddler_counters,
+  subscribe(meddler, channels::kEStepResult, meddler_counters,
                                    [&](const hbirl::estep_result_t& m, const Message&) {
                                      if (m.worker == "meddler") return;
                                      hbirl::estep_result_t copy = m;
@@ -450,8 +450,8 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
                                      copy.request_id -= 1;
                                      publish(meddler, channels::kEStepResult, copy, meddler_counters);
                                      const char garbage[] = "garbage";
-                                     for (const std::string& ch : {channels::kEStepResult, channels::kEStepRequest,
-                                                                   channels::trajectory_channel("sampler-a"), channels::kStatus}) {
+                                     for (const std::string& ch : {channels::kEStepResult.name, channels::kEStepRequest.name,
+                                                                   channels::trajectory_channel("sampler-a").name, channels::kStatus.name}) {
                                        meddler.publish(ch, garbage, sizeof garbage);
                                      }
                                    },
@@ -487,7 +487,7 @@ TEST(SamplerWorker, AWorkerOfEveryRunFollowsTheOptimiserItHears) {
   KeyedBus worker_bus(std::make_unique<MemoryBus>(hub), shared, cw, KeyUse::kWorker);
   KeyedBus optimiser_bus(std::make_unique<MemoryBus>(hub), run_a, co);
   std::vector<std::string> heard;
-  subscribe<hbirl::service_status_t>(optimiser_bus, channels::kStatus, co,
+  subscribe(optimiser_bus, channels::kStatus, co,
                                      [&](const hbirl::service_status_t& m, const Message&) { heard.push_back(m.id); });
   SamplerWorker worker(worker_bus, "sampler-late", cw);
   worker.publish_status();
@@ -515,7 +515,7 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   MemoryBus bus(hub), sender(hub);
   Counters counters = quiet("sampler"), out = quiet("sender");
   SamplerWorker worker(bus, "sampler-a", counters, std::int64_t{1} << 20);
-  const std::string channel = channels::trajectory_channel("sampler-a");
+  const Channel<hbirl::trajectory_t> channel = channels::trajectory_channel("sampler-a");
   hbirl::trajectory_t claim = to_message(task().observed[0], 5, 10'000'000, 42, "sampler-a");
   const long before = max_rss_kb();
   publish(sender, channel, claim, out);
@@ -646,7 +646,7 @@ TEST(EStepService, ForgedAnswersDoNotChangeTheta) {
     MemoryBus forger(hub);
     Counters forger_counters = quiet("forger");
     std::atomic<bool> stop{false};
-    subscribe<hbirl::estep_request_t>(forger, channels::kEStepRequest, forger_counters,
+    subscribe(forger, channels::kEStepRequest, forger_counters,
                                       [&](const hbirl::estep_request_t& m, const Message&) {
                                         for (int b = 0; b < m.num_blocks; ++b) {
                                           const std::string& to = m.assigned_worker[static_cast<size_t>(b)];
@@ -755,7 +755,7 @@ TEST(EStepService, FakeWorkersWithoutAKeyCostABoundedNumberOfPasses) {
     MemoryBus forger(hub);
     Counters fc = quiet("forger");
     hbirl::service_status_t real{};
-    forger.subscribe(channels::kStatus, [&](const Message& m) {
+    forger.subscribe(channels::kStatus.name, [&](const Message& m) {
       hbirl::service_status_t s{};
       if (!decode(m, s) && s.id == "sampler-a") real = s;
     });

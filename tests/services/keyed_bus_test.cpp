@@ -47,7 +47,7 @@ TEST(KeyedBus, OnlyMessagesSignedWithTheKeyArrive) {
   KeyedBus stranger(std::make_unique<MemoryBus>(hub), other, stranger_counters);
   MemoryBus raw(hub);
   std::vector<int> seen;
-  subscribe<hbirl::episode_marker_t>(receiver, "EPISODE|OTHER", in,
+  subscribe(receiver, Channel<hbirl::episode_marker_t>{"EPISODE|OTHER"}, in,
                                      [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
   // What the raw endpoint sees of the sender's messages: to tamper with and replay.
   std::vector<std::vector<std::uint8_t>> wire;
@@ -60,9 +60,9 @@ TEST(KeyedBus, OnlyMessagesSignedWithTheKeyArrive) {
   ASSERT_GE(wire.size(), 1u);
   std::vector<std::uint8_t> tampered = wire.front();
   tampered[20] ^= 1;  // inside the encoded marker
-  raw.publish(channels::kEpisode, tampered.data(), static_cast<int>(tampered.size()));
+  raw.publish(channels::kEpisode.name, tampered.data(), static_cast<int>(tampered.size()));
   raw.publish("OTHER", wire.front().data(), static_cast<int>(wire.front().size()));  // signed for EPISODE
-  raw.publish(channels::kEpisode, wire.front().data(), static_cast<int>(wire.front().size()));  // replayed as is
+  raw.publish(channels::kEpisode.name, wire.front().data(), static_cast<int>(wire.front().size()));  // replayed as is
   EXPECT_EQ(receiver.handle(0), 3);
   EXPECT_EQ(seen, (std::vector<int>{1, 1}));  // the original and its replay (replays: docs/RELIABILITY.md)
   EXPECT_EQ(receiver.rejected(), 4);
@@ -78,7 +78,7 @@ TEST(KeyedBus, UnkeyedReaderSaysGiveTheKey) {
   KeyedBus sender(std::make_unique<MemoryBus>(hub), RunKey::generate(), out);
   MemoryBus reader(hub);
   int seen = 0;
-  subscribe<hbirl::episode_marker_t>(reader, "EPISODE", in, [&](const hbirl::episode_marker_t&, const Message&) { ++seen; });
+  subscribe(reader, channels::kEpisode, in, [&](const hbirl::episode_marker_t&, const Message&) { ++seen; });
   publish(sender, channels::kEpisode, marker(1), out);
   reader.handle(0);
   EXPECT_EQ(seen, 0);
@@ -161,10 +161,10 @@ TEST(KeyedBus, AKeySharedByRunsKeepsEachRunsMessagesApart) {
   KeyedBus reader(std::make_unique<MemoryBus>(hub), shared, cr, KeyUse::kReader);
   std::vector<int> seen_a, seen_b, seen_reader;
   std::vector<std::pair<int, RunId>> seen_worker;
-  subscribe<hbirl::episode_marker_t>(a, "EPISODE|ANSWER", ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen_a.push_back(m.episode); });
-  subscribe<hbirl::episode_marker_t>(b, "EPISODE|ANSWER", cb, [&](const hbirl::episode_marker_t& m, const Message&) { seen_b.push_back(m.episode); });
-  subscribe<hbirl::episode_marker_t>(reader, "EPISODE", cr, [&](const hbirl::episode_marker_t& m, const Message&) { seen_reader.push_back(m.episode); });
-  subscribe<hbirl::episode_marker_t>(worker, "EPISODE", cw, [&](const hbirl::episode_marker_t& m, const Message& raw) {
+  subscribe(a, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen_a.push_back(m.episode); });
+  subscribe(b, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, cb, [&](const hbirl::episode_marker_t& m, const Message&) { seen_b.push_back(m.episode); });
+  subscribe(reader, channels::kEpisode, cr, [&](const hbirl::episode_marker_t& m, const Message&) { seen_reader.push_back(m.episode); });
+  subscribe(worker, channels::kEpisode, cw, [&](const hbirl::episode_marker_t& m, const Message& raw) {
     seen_worker.emplace_back(m.episode, raw.run);
   });
   publish(a, channels::kEpisode, marker(1), ca);
@@ -182,16 +182,16 @@ TEST(KeyedBus, AKeySharedByRunsKeepsEachRunsMessagesApart) {
   EXPECT_EQ(reader.run(), *run_a.run());
   // The worker answers each run in its own: A hears the answer signed for A, B the one for B.
   worker.sign_for_run(*run_b.run());
-  publish(worker, "ANSWER", marker(20), cw);
+  publish(worker, Channel<hbirl::episode_marker_t>{"ANSWER"}, marker(20), cw);
   worker.sign_for_run(*run_a.run());
-  publish(worker, "ANSWER", marker(10), cw);
+  publish(worker, Channel<hbirl::episode_marker_t>{"ANSWER"}, marker(10), cw);
   a.handle(0);
   b.handle(0);
   EXPECT_EQ(seen_a, (std::vector<int>{1, 10}));
   EXPECT_EQ(seen_b, (std::vector<int>{2, 20}));
   // A service bus ignores sign_for_run: it signs for its own run only.
   a.sign_for_run(*run_b.run());
-  publish(a, "ANSWER", marker(11), ca);
+  publish(a, Channel<hbirl::episode_marker_t>{"ANSWER"}, marker(11), ca);
   b.handle(0);
   EXPECT_EQ(seen_b, (std::vector<int>{2, 20}));
 }
@@ -207,15 +207,15 @@ TEST(KeyedBus, AWorkerOfEveryRunSignsForNoneUntilItHearsOne) {
   KeyedBus worker(std::make_unique<MemoryBus>(hub), shared, cw, KeyUse::kWorker);
   KeyedBus a(std::make_unique<MemoryBus>(hub), run_a, ca);
   std::vector<int> seen;
-  subscribe<hbirl::episode_marker_t>(a, "STATUS", ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
-  subscribe<hbirl::episode_marker_t>(worker, "EPISODE", cw, [](const hbirl::episode_marker_t&, const Message&) {});
-  publish(worker, "STATUS", marker(1), cw);  // before any run: not sent
+  subscribe(a, Channel<hbirl::episode_marker_t>{"STATUS"}, ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
+  subscribe(worker, channels::kEpisode, cw, [](const hbirl::episode_marker_t&, const Message&) {});
+  publish(worker, Channel<hbirl::episode_marker_t>{"STATUS"}, marker(1), cw);  // before any run: not sent
   a.handle(0);
   EXPECT_TRUE(seen.empty());
   EXPECT_EQ(ca.bad_messages, 0);
   publish(a, channels::kEpisode, marker(7), ca);
   worker.handle(0);
-  publish(worker, "STATUS", marker(2), cw);
+  publish(worker, Channel<hbirl::episode_marker_t>{"STATUS"}, marker(2), cw);
   a.handle(0);
   EXPECT_EQ(seen, (std::vector<int>{2}));
   EXPECT_EQ(ca.bad_messages, 0);

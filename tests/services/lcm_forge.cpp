@@ -37,7 +37,7 @@ int forge_end_run(lcm::LCM& lcm, int episodes, int after) {
       }
     }
   } watch{&seen, &ended, after};
-  lcm.subscribe(hbirl::services::channels::kEpisode, &Watch::on, &watch);
+  lcm.subscribe(hbirl::services::channels::kEpisode.name, &Watch::on, &watch);
   while (!ended && !g_stop) lcm.handleTimeout(100);
   if (!ended) return 1;
   hbirl::episode_marker_t forged = seen;
@@ -46,7 +46,7 @@ int forge_end_run(lcm::LCM& lcm, int episodes, int after) {
   forged.num_steps = episodes;
   for (int k = 0; k < 5; ++k) {  // repeated, as the simulator repeats its own
     forged.seq = seen.seq + 1 + k;
-    lcm.publish(hbirl::services::channels::kEpisode, &forged);
+    lcm.publish(hbirl::services::channels::kEpisode.name, &forged);
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::printf("forged END_RUN of %d episodes (5 times) after episode %d ended (%s)\n", episodes, seen.episode, seen.domain.c_str());
@@ -69,8 +69,8 @@ int ghosts(lcm::LCM& lcm, int count, double hz) {
     }
     void on_reward(const lcm::ReceiveBuffer*, const std::string&, const hbirl::reward_t* r) { *learned = *learned || r->final; }
   } watch{&real, &have, &learned};
-  lcm.subscribe(hbirl::services::channels::kStatus, &Watch::on_status, &watch);
-  lcm.subscribe(hbirl::services::channels::kReward, &Watch::on_reward, &watch);
+  lcm.subscribe(hbirl::services::channels::kStatus.name, &Watch::on_status, &watch);
+  lcm.subscribe(hbirl::services::channels::kReward.name, &Watch::on_reward, &watch);
   const auto period = std::chrono::duration<double>(1.0 / hz);
   long sent = 0;
   auto next = std::chrono::steady_clock::now();
@@ -83,7 +83,7 @@ int ghosts(lcm::LCM& lcm, int count, double hz) {
       ghost.id = "ghost-" + std::to_string(k);
       ghost.seq = sent;
       ghost.restarts = 0;
-      lcm.publish(hbirl::services::channels::kStatus, &ghost);
+      lcm.publish(hbirl::services::channels::kStatus.name, &ghost);
       ++sent;
     }
   }

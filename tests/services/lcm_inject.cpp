@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
     // TRAJECTORY:ID: the trajectory samples on the channel of the sampler worker ID.
     const std::string arg = argv[c];
     const bool trajectories = arg.rfind("TRAJECTORY:", 0) == 0;
-    const std::string channel = trajectories ? hbirl::services::channels::trajectory_channel(arg.substr(11)) : arg;
+    const std::string channel = trajectories ? hbirl::services::channels::trajectory_channel(arg.substr(11)).name : arg;
     const std::string samples_of = trajectories ? "TRAJECTORY" : arg;
     for (int k = 0; k < 3; ++k) {
       sent += lcm.publish(channel, junk.data(), static_cast<unsigned>(junk.size() - static_cast<size_t>(k * 50))) == 0;

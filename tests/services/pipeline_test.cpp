@@ -218,7 +218,7 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   const Mdp mdp = onion::make_onion_mdp();
   auto hub = std::make_shared<MemoryHub>();
   hub->set_loss([](const std::string& channel, const std::uint8_t* data, int size) {
-    if (channel != channels::kCamera) return false;
+    if (channel != channels::kCamera.name) return false;
     hbirl::camera_frame_t f;
     return f.decode(data, 0, size) > 0 && f.seq % 6 == 0;
   });
@@ -361,7 +361,7 @@ TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
     auto hub = std::make_shared<MemoryHub>();
     if (lossy) {
       hub->set_loss([](const std::string& channel, const std::uint8_t* data, int size) {
-        if (channel != channels::kGroundTruth) return false;
+        if (channel != channels::kGroundTruth.name) return false;
         hbirl::ground_truth_t t;
         return t.decode(data, 0, size) > 0 && t.seq % 5 == 0;
       });
@@ -388,9 +388,9 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   MemoryBus sim_bus(hub), watch_bus(hub);
   Counters sim_counters = quiet("sim_driver"), watch_counters = quiet("watch");
   std::atomic<int> progress{0}, rewards{0};
-  subscribe<hbirl::em_progress_t>(watch_bus, channels::kEmProgress, watch_counters,
+  subscribe(watch_bus, channels::kEmProgress, watch_counters,
                                   [&](const hbirl::em_progress_t&, const Message&) { ++progress; });
-  subscribe<hbirl::reward_t>(watch_bus, channels::kReward, watch_counters, [&](const hbirl::reward_t&, const Message&) { ++rewards; });
+  subscribe(watch_bus, channels::kReward, watch_counters, [&](const hbirl::reward_t&, const Message&) { ++rewards; });
   std::atomic<bool> done{false};
   std::thread watch([&] {
     while (!done) watch_bus.handle(10);
@@ -458,7 +458,10 @@ TEST(DatasetBuilder, ContextsAreAllOrNoneAndInRange) {
     o.context = {3, 65535};
     b.on_observations(o);
     const auto refused = [&b](const hbirl::observations_t& m, const std::string& field) {
-      hbirl::testing::expect_refused([&] { b.on_observations(m); }, field);
+      hbirl::testing::expect_refused([&] {  // as the bus hands it over (typed subscribe)
+        validate(m);
+        b.on_observations(m);
+      }, field);
     };
     o.step = 1;
     hbirl::observations_t bad = o;
@@ -1032,7 +1035,7 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   PerceptionService perception(perception_bus, pc);
   LabellerService labeller(labeller_bus, lc);
   int detections = 0;
-  subscribe<hbirl::detections_t>(test_bus, channels::kDetections, tc, [&](const hbirl::detections_t& d, const Message&) {
+  subscribe(test_bus, channels::kDetections, tc, [&](const hbirl::detections_t& d, const Message&) {
     detections += d.height == 240;  // perception's, not the bad one this test sends
   });
   hbirl::camera_frame_t f{};
@@ -1047,8 +1050,8 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   f.encoding = "gif";
   publish(test_bus, channels::kCamera, f, tc);
   const char garbage[] = "xxxxxxxxxxxxxxxxxxxxxxxxxx";
-  test_bus.publish(channels::kCamera, garbage, sizeof garbage);
-  test_bus.publish(channels::kDetections, garbage, sizeof garbage);
+  test_bus.publish(channels::kCamera.name, garbage, sizeof garbage);
+  test_bus.publish(channels::kDetections.name, garbage, sizeof garbage);
   hbirl::detections_t bad{};
   bad.width = 320;
   bad.height = 100;  // not the camera's shape

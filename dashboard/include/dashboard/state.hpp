@@ -42,7 +42,8 @@ class DashboardState {
   // Subscribes to every channel it shows; bad messages are counted in `counters`.
   void subscribe(services::Bus& bus, services::Counters& counters);
 
-  // The handlers (each validates its message and throws InputError naming the field).
+  // The handlers (each validates its message -- beyond its type's validate(), which typed
+  // subscribe() has called: services/messages.hpp -- and throws InputError naming the field).
   // `now_utime` is the wall clock when it arrived (for heartbeat ages).
   void on_camera(const hbirl::camera_frame_t& m);
   void on_detections(const hbirl::detections_t& m);

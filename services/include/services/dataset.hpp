@@ -51,7 +51,8 @@ class DatasetBuilder {
   // set past it is refused (InputError naming --max-dataset-mb) and not kept, whoever
   // floods the bus with made-up frames.
   void limit(std::int64_t max_bytes) { max_bytes_ = max_bytes; }
-  // Each throws InputError naming the field of a message that does not fit.
+  // Each throws InputError naming the field of a message that does not fit. Messages come
+  // as typed subscribe() hands them over: having passed their type's validate() (messages.hpp).
   void on_marker(const hbirl::episode_marker_t& m);
   void on_observations(const hbirl::observations_t& m);
   void on_truth(const hbirl::ground_truth_t& m);

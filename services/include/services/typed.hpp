@@ -9,10 +9,13 @@
 #include <exception>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "learner/input_error.hpp"
 #include "services/bus.hpp"
+#include "services/channels.hpp"
+#include "services/messages.hpp"
 
 namespace hbirl::services {
 
@@ -98,25 +101,26 @@ std::vector<std::uint8_t> encode(const T& msg) {
   return bytes;
 }
 
+// T is the channel's message type and the message's: another type does not compile.
 template <class T>
-bool publish(Bus& bus, const std::string& channel, const T& msg, Counters& counters) {
+bool publish(Bus& bus, const Channel<T>& channel, const std::type_identity_t<T>& msg, Counters& counters) {
   const std::vector<std::uint8_t> bytes = encode(msg);
-  if (!bus.publish(channel, bytes.data(), static_cast<int>(bytes.size()))) {
+  if (!bus.publish(channel.name, bytes.data(), static_cast<int>(bytes.size()))) {
     ++counters.send_failures;
-    counters.last_problem = channel + ": could not publish";
+    counters.last_problem = channel.name + ": could not publish";
     return false;
   }
   ++counters.messages_out;
   return true;
 }
 
-// Calls handler(msg, message) for every message on `channel` that decodes as a T. A
-// handler throws InputError (or any std::exception) to reject a message: it is counted
-// as bad, reported, and dropped.
+// Calls handler(msg, message) for every message on `channel` (a name or a pattern) that
+// decodes as its type T and passes its validate() when it has one (messages.hpp). A handler throws InputError (or any std::exception) to reject a
+// message: it is counted as bad, reported, and dropped.
 template <class T, class Handler>
-SubscriptionId subscribe(Bus& bus, const std::string& channel, Counters& counters, Handler handler, int queue_capacity = 0) {
+SubscriptionId subscribe(Bus& bus, const Channel<T>& channel, Counters& counters, Handler handler, int queue_capacity = 0) {
   return bus.subscribe(
-      channel,
+      channel.name,
       [&counters, handler](const Message& m) mutable {
         T msg;
         if (const auto why = decode(m, msg)) {
@@ -125,6 +129,7 @@ SubscriptionId subscribe(Bus& bus, const std::string& channel, Counters& counter
           return;
         }
         try {
+          if constexpr (requires { validate(msg); }) validate(msg);  // the type's own rules (messages.hpp)
           handler(msg, m);
           ++counters.messages_in;
         } catch (const std::exception& e) {
