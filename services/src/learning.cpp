@@ -37,7 +37,7 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data) {
 }
 
 Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app::LearnSettings& settings,
-                           std::shared_ptr<const BlockExecutor> executor, ProgressFn progress) {
+                           std::shared_ptr<BlockExecutor> executor, ProgressFn progress) {
   const Mdp& mdp = domain.mdp();
   if (data.observed.empty()) throw InputError("demonstrations", "none received");
   app::LearnSettings one_at_a_time = settings;

@@ -58,7 +58,7 @@ const Task& task() {
   return t;
 }
 
-LearnResult learn(const Task& t, std::shared_ptr<const BlockExecutor> executor) {
+LearnResult learn(const Task& t, std::shared_ptr<BlockExecutor> executor) {
   ObservationEStepOptions options;
   options.executor = std::move(executor);
   const ObservationEStep estep(t.task.mdp, t.observed, t.prior, options);
@@ -69,7 +69,7 @@ LearnResult learn(const Task& t, std::shared_ptr<const BlockExecutor> executor) 
   return learn_reward(t.task.mdp, estep, learn);
 }
 
-LearnResult learn(std::shared_ptr<const BlockExecutor> executor) { return learn(task(), std::move(executor)); }
+LearnResult learn(std::shared_ptr<BlockExecutor> executor) { return learn(task(), std::move(executor)); }
 
 // The task with learned eta (the service set's default): with contexts given (five, made
 // up from the observations) or, without, each distinct eta its own context.
@@ -366,12 +366,12 @@ BusExecutorOptions short_timeout() {
 // The task's E-step over an optimiser's workers and the same E-step's pass in one process,
 // at the true reward and the prior's mean O.
 struct RemoteAndLocal {
-  explicit RemoteAndLocal(std::shared_ptr<const BlockExecutor> executor, const Task& t = task())
+  explicit RemoteAndLocal(std::shared_ptr<BlockExecutor> executor, const Task& t = task())
       : there(t.task.mdp, t.observed, t.prior, with_executor(std::move(executor))),
         model(dirichlet_mean(t.prior)),
         policy(soft_value_iteration(t.task.mdp, t.task.mdp.reward(t.task.true_weights))),
         here(ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5)) {}
-  static ObservationEStepOptions with_executor(std::shared_ptr<const BlockExecutor> executor) {
+  static ObservationEStepOptions with_executor(std::shared_ptr<BlockExecutor> executor) {
     ObservationEStepOptions o;
     o.executor = std::move(executor);
     return o;

@@ -31,7 +31,7 @@ struct Iterate {
 
 struct LearnHooks {
   // Where the E-step's blocks are computed (null: here): the optimiser's sampler workers.
-  std::shared_ptr<const BlockExecutor> executor;
+  std::shared_ptr<BlockExecutor> executor;
   int watch = -1;  // keep this trajectory's posterior from every pass (EStepResult::watched)
   std::function<void(const Iterate&)> on_iteration;
   // How the front end names trajectory i of its data, for an error about it ("observations[i]").

@@ -61,13 +61,14 @@ class ObservationEStep;
 // (services/). run() must return, for every block b in [0, estep.num_blocks()), exactly
 // what estep.block_statistics(policy, model, seed, {b}, 1, eta) returns, in block order;
 // the pass then sums them in that order, so the result is bit-identical to a local pass.
-// `eta`: learned eta, one row per context of the E-step (null: the stated eta).
+// `eta`: learned eta, one row per context of the E-step (null: the stated eta). run() is
+// not const: a pass changes the executor (what it sent, whom it trusts).
 class BlockExecutor {
  public:
   virtual ~BlockExecutor() = default;
   virtual std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy,
                                            const ObservationModel& model, std::uint64_t seed,
-                                           const RowMatrix* eta = nullptr) const = 0;
+                                           const RowMatrix* eta = nullptr) = 0;
 };
 
 struct ObservationEStepOptions {
@@ -87,7 +88,7 @@ struct ObservationEStepOptions {
   // sums differ from that E-step's in the last bits. Unset: decided from the data.
   std::optional<bool> kind_table;
   // Where the blocks of a pass are computed: null = here, on `threads` threads.
-  std::shared_ptr<const BlockExecutor> executor;
+  std::shared_ptr<BlockExecutor> executor;
   // Keep this trajectory's posterior from every pass (the exact engine; -1: none): what a
   // display shows of the E-step without computing it again (EStepResult::watched).
   int watch = -1;
@@ -157,6 +158,8 @@ class ObservationEStep final : public EStep {
   static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
   // Whether the exact engine's passes use one emission per observation kind (see max_kinds).
   bool uses_kind_table() const { return kinds_.has_value(); }
+  // Whether its engine is the exact one (what sampler workers compute with).
+  bool exact_engine() const { return exact_engine_; }
   const ObservationPrior& prior() const { return prior_; }
   const ObservationEStepOptions& options() const { return options_; }
 
@@ -170,6 +173,7 @@ class ObservationEStep final : public EStep {
   const Mdp& mdp_;
   std::vector<ObservedTrajectory> trajectories_;
   std::optional<ObservationKinds> kinds_;
+  bool exact_engine_ = false;
   RowMatrix context_eta_;
   Eigen::VectorXd context_observations_;
   std::uint64_t input_digest_ = 0;

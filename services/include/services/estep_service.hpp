@@ -28,8 +28,11 @@
 // computes what is still missing itself: learning never stalls. Answers to other
 // requests, for blocks it already has, or computed on other trajectories are counted
 // and ignored. A worker answers a block once it holds the trajectories of its digest.
-// Here: the messages both sides share and the optimiser's side (BusBlockExecutor); the
-// workers' side is sampler_worker.hpp.
+// Here: the optimiser's side, the pass (BusBlockExecutor), made of its parts: the messages
+// both sides share (estep_wire.hpp), the workers it hears from (worker_roster.hpp), which
+// block goes to which (block_placement.hpp), the paced sending of their trajectories
+// (send_window.hpp) and the spot checks (worker_trust.hpp). The workers' side is
+// sampler_worker.hpp.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -46,30 +49,17 @@
 #include "hbirl/estep_request_t.hpp"
 #include "hbirl/estep_result_t.hpp"
 #include "hbirl/service_status_t.hpp"
-#include "hbirl/trajectory_t.hpp"
 #include "learner/estep_observations.hpp"
 #include "services/bus.hpp"
 #include "services/channels.hpp"
+#include "services/estep_wire.hpp"
 #include "services/mdp_message.hpp"
+#include "services/send_window.hpp"
 #include "services/typed.hpp"
+#include "services/worker_roster.hpp"
+#include "services/worker_trust.hpp"
 
 namespace hbirl::services {
-
-// Trajectories on the bus: trajectory `index` of a data set of `count`, in the block
-// whose trajectories have `block_digest`, sent to `worker`. from_message throws
-// InputError naming the bad field.
-hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
-                               const std::string& worker);
-ObservedTrajectory from_message(const hbirl::trajectory_t& m);
-// The trajectories of block `b` of `trajectories` (ObservationEStep::kBlockSize each), in place.
-std::span<const ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b);
-
-
-// A fingerprint of this build's floating-point results: the bits of a fixed small E-step
-// pass (a four-state task written here, exact engine). Workers built or run differently (another compiler,
-// flags, CPU features, Eigen version) compute sums that differ in the last bits; their
-// fingerprints then differ, and theta is no longer bit-identical to a one-process run.
-std::uint64_t numerics_fingerprint();
 
 // Thrown by BusBlockExecutor::run when its `stop` says so: learning ends there.
 struct Stopped : std::runtime_error {
@@ -115,13 +105,13 @@ class BusBlockExecutor final : public BlockExecutor {
   // those of its blocks when it is first given them.
   BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters, BusExecutorOptions options = {});
   std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
-                                   std::uint64_t seed, const RowMatrix* eta = nullptr) const override;
+                                   std::uint64_t seed, const RowMatrix* eta = nullptr) override;
 
   // Publishes the MDP now.
-  void publish_mdp() const;
+  void publish_mdp();
   // Handles the bus until `count` workers with this MDP are live, or timeout_ms passes;
   // returns how many are.
-  int wait_for_workers(int count, int timeout_ms) const;
+  int wait_for_workers(int count, int timeout_ms);
 
   struct Stats {
     std::int64_t requests = 0, attempts = 0, retried_blocks = 0, local_blocks = 0, remote_blocks = 0;
@@ -142,88 +132,61 @@ class BusBlockExecutor final : public BlockExecutor {
   Stats stats() const;
 
  private:
-  struct Worker {
-    std::uint64_t mdp_digest = 0;
-    std::set<std::uint64_t> held;  // the blocks it holds (their digests), as its last heartbeat said
-    struct Sent {
-      std::chrono::steady_clock::time_point when;
-      std::int64_t bytes = 0;
-    };
-    std::map<std::uint64_t, Sent> sent;  // blocks sent to it, not yet seen held
-    std::chrono::steady_clock::time_point last_seen;
-    std::uint64_t numerics = 0;
-    bool suspect = false;  // left blocks unanswered; gets work again once heard from (a heartbeat after suspect_since)
-    std::chrono::steady_clock::time_point suspect_since;
-    bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
-    std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
-    bool ever_answered = false;  // answered a block in this run (answers is reset by silence, this is not)
-    bool checked = false;      // one of its answers matched the optimiser's own computation
-    // Per block sent to it: how many heartbeats after its sending said it was not held (lost
-    // on the way, or refused: over its --max-dataset-mb, a digest that did not match). Twice,
-    // and the block goes to other workers (for this data set, and for a minute after the
-    // last such failure, lest a lossy start keep a worker out for good).
-    std::map<std::uint64_t, int> unheld;
-    std::chrono::steady_clock::time_point last_unheld;
-    bool can_hold(std::uint64_t digest) const {
-      const auto it = unheld.find(digest);
-      return it == unheld.end() || it->second < 2;
-    }
-    int blocks_it_cannot_hold() const {
-      return static_cast<int>(std::count_if(unheld.begin(), unheld.end(), [](const auto& u) { return u.second >= 2; }));
-    }
+  // The data set last given to workers, by blocks: the E-step it was read from, and each
+  // block's digest. Read again only when the E-step is another (or holds other data).
+  struct Blocks {
+    const ObservationEStep* estep = nullptr;
+    std::uint64_t input = 0;
+    int contexts = -1;
+    bool kinds = false;
+    std::vector<std::uint64_t> digests;
+    std::set<std::uint64_t> current;  // the same, to look up
+    std::uint64_t data_digest = 0;
   };
-  void on_status(const hbirl::service_status_t& m) const;
-  void on_result(const hbirl::estep_result_t& m) const;
-  std::vector<std::string> live_workers() const;
-  std::vector<std::string> assignment(const std::vector<int>& todo, std::vector<std::string> workers) const;
-  std::vector<int> spot_blocks(const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
-  void check_spot(int block, const EStepStatistics& here) const;
-  void distrust(const std::string& worker, const std::string& why) const;
-  void forget_answers_of(const std::string& worker) const;
-  void prepare_blocks(const ObservationEStep& estep) const;
-  void send_blocks(const ObservationEStep& estep, const std::vector<int>& todo, const std::vector<std::string>& assigned) const;
-  void pump_blocks(const ObservationEStep& estep) const;
-  std::int64_t bytes_in_flight() const;
+  // The pass in flight: what came back, from whom, and who was given what.
+  struct Pass {
+    ResultShape shape;
+    std::vector<std::optional<EStepStatistics>> received;
+    std::set<std::string> answered;                // workers that answered this request
+    std::vector<std::set<std::string>> assigned;   // per block: the workers it was given to (any attempt)
+    std::vector<std::string> answered_by;          // per block: who answered it
+    std::set<std::string> doubted;                 // names that gave two different answers to a block in this pass
+    std::vector<int> missing() const;
+  };
+
+  void on_status(const hbirl::service_status_t& m);
+  void on_result(const hbirl::estep_result_t& m);
+  void take_answer(const hbirl::estep_result_t& m, EStepStatistics s);
+  void prepare_blocks(const ObservationEStep& estep);
+  std::vector<EStepStatistics> compute_here(const ObservationEStep& estep, const SoftSolution& policy,
+                                            const ObservationModel& model, std::uint64_t seed, const RowMatrix* eta);
+  std::vector<std::string> workers_for(int attempt);
+  void wait_for_answers(const ObservationEStep& estep, const std::vector<std::string>& assigned);
+  void judge_silence(const std::vector<std::string>& assigned);
+  void check_spots(const std::vector<int>& spots, std::vector<EStepStatistics>& here, const std::vector<std::string>& given);
+  void distrust(const std::string& worker, const std::string& why);
+  void forget_answers_of(const std::string& worker);
+  int pump(const ObservationEStep& estep);
 
   Bus& bus_;
   std::vector<hbirl::mdp_t> mdp_messages_;
   std::uint64_t mdp_digest_;
-  std::uint64_t numerics_ = 0;       // numerics_fingerprint() here
-  // The data set of the E-step last given to workers, by blocks: the E-step it was read
-  // from, and each block's digest.
-  mutable const ObservationEStep* prepared_ = nullptr;
-  mutable std::uint64_t prepared_input_ = 0;
-  mutable int prepared_contexts_ = -1;
-  mutable bool prepared_kinds_ = false;
-  mutable std::vector<std::uint64_t> block_digests_;
-  mutable std::set<std::uint64_t> current_blocks_;  // the same, to look up
-  mutable std::uint64_t data_digest_ = 0;
-  // Per block: the worker it was last given to. It stays there while that worker is live
-  // (assignment()), so the worker is sent its trajectories once.
-  mutable std::vector<std::string> owner_;
-  // Blocks waiting for room in the send window: (block, worker), in order.
-  mutable std::vector<std::pair<int, std::string>> to_send_;
-  mutable std::int64_t progress_ = 0;  // answers taken and blocks acknowledged: what keeps a pass waiting
   Counters& counters_;
   BusExecutorOptions options_;
-  mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held
-  mutable std::map<std::string, Worker> workers_;
-  mutable std::set<std::string> other_numerics_;  // workers reported with another fingerprint
-  mutable std::chrono::steady_clock::time_point last_mdp_sent_{};
-  // The pass in flight.
-  mutable std::int64_t request_id_ = 0;
-  mutable int pairs_ = 0, symbols_ = 0, confounders_ = 0, blocks_ = 0, contexts_ = 0;
-  mutable int watch_ = -1, watch_steps_ = 0;  // the pass's watched trajectory and its length
-  mutable std::vector<std::optional<EStepStatistics>> received_;
-  mutable std::set<std::string> answered_;  // workers that answered this request
-  mutable std::vector<std::set<std::string>> assigned_;  // per block: the workers it was given to (any attempt)
-  mutable std::vector<std::string> answered_by_;         // per block: who answered it
-  mutable bool said_too_many_contexts_ = false;
-  mutable std::set<std::string> doubted_;  // names that gave two different answers to a block in this pass
-  // Which block of checked workers is spot-checked: unpredictable to them (the request's
-  // seed is not), and it never changes a result (a checked block's bits are the same either way).
-  mutable std::mt19937_64 spot_rng_{std::random_device{}()};
-  mutable Stats stats_;
+  WorkerRoster roster_;
+  SendWindow window_;
+  SpotChecks spot_checks_;
+  Blocks blocks_;
+  // Per block: the worker it was last given to. It stays there while that worker is live
+  // (place_blocks), so the worker is sent its trajectories once.
+  std::vector<std::string> owners_;
+  std::int64_t progress_ = 0;  // answers taken and blocks acknowledged: what keeps a pass waiting
+  std::chrono::steady_clock::time_point last_mdp_sent_{};
+  std::int64_t request_id_ = 0;
+  Pass pass_;
+  bool said_too_many_contexts_ = false;
+  Stats stats_;
+  mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held; stats() reads under it
   Subscriptions subs_;  // last: ends first
 };
 

@@ -52,6 +52,6 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data);
 // E-step at a time (the same bits whatever the thread count); the workers get each pass's
 // learned eta with the request (estep_service.hpp).
 Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app::LearnSettings& settings,
-                           std::shared_ptr<const BlockExecutor> executor = nullptr, ProgressFn progress = nullptr);
+                           std::shared_ptr<BlockExecutor> executor = nullptr, ProgressFn progress = nullptr);
 
 }  // namespace hbirl::services
