@@ -47,8 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
   marker.num_steps = 1;
   marker.frames_per_step = 1;
-  publish(bus, "EPISODE", marker, counters);
-  publish(bus, "CAMERA", m, counters);
+  publish(bus, channels::kEpisode, marker, counters);
+  publish(bus, channels::kCamera, m, counters);
   // CAMERA -> DETECTIONS -> OBSERVATIONS, each reaching the dashboard.
   for (int round = 0; round < 4 && bus.handle(0) > 0; ++round) {
   }
