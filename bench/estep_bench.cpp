@@ -45,7 +45,8 @@ void BM_ExactPosterior(benchmark::State& state) {
   const Setup s = setup(1, 10, static_cast<int>(state.range(0)));
   const ObservationModel model = dirichlet_mean(s.prior);
   ExactEngine engine(s.task.mdp);
-  for (auto _ : state) benchmark::DoNotOptimize(engine.posterior(s.policy, model, s.observations.trajectories[0]).log_likelihood);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(engine.posterior(s.policy, model, s.observations.trajectories[0]).log_likelihood);
 }
 BENCHMARK(BM_ExactPosterior)->Arg(4)->Arg(40)->Unit(benchmark::kMicrosecond);
 
@@ -85,11 +86,13 @@ void estep_pass(benchmark::State& state, int trajectories, int length, int per_s
   const ObservationModel model = dirichlet_mean(s.prior);
   for (auto _ : state) benchmark::DoNotOptimize(estep.statistics(s.policy, model, 1).log_likelihood);
   state.counters["observations"] = static_cast<double>(trajectories) * length * per_step;
-  state.counters["obs_per_s"] =
-      benchmark::Counter(static_cast<double>(trajectories) * length * per_step, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["obs_per_s"] = benchmark::Counter(static_cast<double>(trajectories) * length * per_step,
+                                                   benchmark::Counter::kIsIterationInvariantRate);
 }
 
-void BM_EStepObservationsPerStep(benchmark::State& state) { estep_pass(state, 1, 10, static_cast<int>(state.range(0))); }
+void BM_EStepObservationsPerStep(benchmark::State& state) {
+  estep_pass(state, 1, 10, static_cast<int>(state.range(0)));
+}
 BENCHMARK(BM_EStepObservationsPerStep)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 
 void BM_EStepLength(benchmark::State& state) { estep_pass(state, 1, static_cast<int>(state.range(0)), 40); }

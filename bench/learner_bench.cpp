@@ -53,8 +53,15 @@ void BM_Gradient(benchmark::State& state) {
   }
   state.counters["states"] = t.mdp.num_states;
 }
-BENCHMARK(BM_Gradient)->Args({5, 10})->Args({5, 30})->Args({10, 30})->Args({20, 30})->Args({45, 30})->Args({100, 30})
-    ->Args({200, 30})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Gradient)
+    ->Args({5, 10})
+    ->Args({5, 30})
+    ->Args({10, 30})
+    ->Args({20, 30})
+    ->Args({45, 30})
+    ->Args({100, 30})
+    ->Args({200, 30})
+    ->Unit(benchmark::kMicrosecond);
 
 // A full MaxCausalEnt solve on the 5x5 gridworld with 20 trajectories of 10 steps: the
 // whole of `hbirl learn --from truth` but for reading the file (one thread).
@@ -149,4 +156,3 @@ BENCHMARK(BM_ValueIteration)->Arg(45)->Arg(100)->Arg(200)->Unit(benchmark::kMill
 
 }  // namespace
 }  // namespace hbirl
-

@@ -29,7 +29,8 @@ void BM_RenderFrame(benchmark::State& state) {
     benchmark::DoNotOptimize(frame.data);
     ++i;
   }
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_RenderFrame)->Arg(320)->Arg(640);
 
@@ -54,7 +55,8 @@ void BM_PerceiveFrame(benchmark::State& state) {
     benchmark::DoNotOptimize(observations.data());
     ++i;
   }
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_PerceiveFrame)->Arg(320)->Arg(640);
 

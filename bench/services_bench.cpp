@@ -33,18 +33,18 @@ struct Data {
 };
 
 Data make_data(int trajectories) {
-    Rng rng(1);
-    Data out{make_gridworld_task({}, trajectories, 10, rng), {}, {}};
-    GridworldObservationOptions options;  // 40 observations per step, 3 confounders, plausible eta
-    out.observed = observe_gridworld(out.task.mdp, out.task.trajectories, gridworld_subject_observation_model(5, 1.0),
-                                     random_confounder_observation_model(3, rng), options, rng)
-                       .trajectories;
-    out.prior.num_symbols = 4;
-    out.prior.num_confounders = 3;
-    out.prior.subject_alpha = Eigen::MatrixXd::Ones(out.task.mdp.num_pairs(), 4);
-    out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
-    out.prior.learn_eta = false;  // eta as stated: the pass's cost without the contexts' counts
-    return out;
+  Rng rng(1);
+  Data out{make_gridworld_task({}, trajectories, 10, rng), {}, {}};
+  GridworldObservationOptions options;  // 40 observations per step, 3 confounders, plausible eta
+  out.observed = observe_gridworld(out.task.mdp, out.task.trajectories, gridworld_subject_observation_model(5, 1.0),
+                                   random_confounder_observation_model(3, rng), options, rng)
+                     .trajectories;
+  out.prior.num_symbols = 4;
+  out.prior.num_confounders = 3;
+  out.prior.subject_alpha = Eigen::MatrixXd::Ones(out.task.mdp.num_pairs(), 4);
+  out.prior.confounder_alpha = Eigen::MatrixXd::Ones(3, 4);
+  out.prior.learn_eta = false;  // eta as stated: the pass's cost without the contexts' counts
+  return out;
 }
 
 const Data& data() {
@@ -98,10 +98,13 @@ PassOverBus pass_over_bus(Bus& bus, Counters& counters, const Data& d, const Bus
 class BusSpy {
  public:
   explicit BusSpy(const std::string& url) : bus_(open_bus(url)) {
-    bus_->subscribe(".*", [this](const Message& m) {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      bytes_[m.channel] += m.size;
-    }, 100000);
+    bus_->subscribe(
+        ".*",
+        [this](const Message& m) {
+          const std::lock_guard<std::mutex> lock(mutex_);
+          bytes_[m.channel] += m.size;
+        },
+        100000);
     thread_ = std::thread([this] {
       while (!stop_) bus_->handle(10);
     });
@@ -162,7 +165,8 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     const auto& [executor, estep, policy, model] = pass;
     const auto start = std::chrono::steady_clock::now();
     estep->statistics(policy, model, 1);
-    state.counters["first_pass_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    state.counters["first_pass_ms"] =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     state.counters["share_MB"] = static_cast<double>(executor->stats().bytes_sent) / 1e6;
     // What each worker's channel carried in that first pass, as a share of all the
     // trajectories sent: its share of the data set (1 / workers when even).
@@ -170,7 +174,8 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
     const auto first = spy.take();
     for (int w = 0; w < n; ++w) {
       const auto it = first.find(channels::trajectory_channel("bench-sampler-" + std::to_string(w)).name);
-      const double share = it == first.end() ? 0.0 : static_cast<double>(it->second) / static_cast<double>(executor->stats().bytes_sent);
+      const double share =
+          it == first.end() ? 0.0 : static_cast<double>(it->second) / static_cast<double>(executor->stats().bytes_sent);
       smallest = std::min(smallest, share);
       largest = std::max(largest, share);
     }
@@ -196,7 +201,14 @@ void BM_EStepPassOverLcm(benchmark::State& state) {
   for (pid_t pid : pids) kill(pid, SIGTERM);
   for (pid_t pid : pids) waitpid(pid, nullptr, 0);
 }
-BENCHMARK(BM_EStepPassOverLcm)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->ArgName("workers")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EStepPassOverLcm)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->ArgName("workers")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Arguments: workers; then 0: as before issue 14 (no spot check, no key), 1: the default
 // (the optimiser spot-checks one block per pass), 2: the default with every message signed

@@ -56,7 +56,8 @@ nlohmann::ordered_json mcmc_diagnostics_json(const McmcDiagnostics& diagnostics)
   nlohmann::ordered_json out;
   const bool checked = diagnostics.quantities > 0;
   out["worst_rhat"] = checked ? nlohmann::ordered_json(diagnostics.worst_rhat) : nlohmann::ordered_json(nullptr);
-  out["worst_bulk_ess"] = checked ? nlohmann::ordered_json(diagnostics.worst_bulk_ess) : nlohmann::ordered_json(nullptr);
+  out["worst_bulk_ess"] =
+      checked ? nlohmann::ordered_json(diagnostics.worst_bulk_ess) : nlohmann::ordered_json(nullptr);
   out["quantities"] = diagnostics.quantities;
   out["chains"] = diagnostics.chains;
   return out;
@@ -73,7 +74,8 @@ void warn_if_not_converged(const McmcDiagnostics& diagnostics) {
     separator = ", ";
   }
   if (!(diagnostics.worst_bulk_ess >= kBulkEssThreshold)) {
-    line << separator << "bulk ESS " << std::setprecision(0) << diagnostics.worst_bulk_ess << " < " << kBulkEssThreshold;
+    line << separator << "bulk ESS " << std::setprecision(0) << diagnostics.worst_bulk_ess << " < "
+         << kBulkEssThreshold;
   }
   line << " (worst of " << diagnostics.quantities << " pair marginals, " << diagnostics.chains
        << " chains each); raise --mcmc-samples or --mcmc-chains\n";
@@ -85,7 +87,8 @@ void warn_if_not_converged(const McmcDiagnostics& diagnostics) {
 namespace hbirl::cli {
 
 CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
-  const std::map<std::string, AlphaUpdate> names{{"posterior", AlphaUpdate::kPosterior}, {"paper", AlphaUpdate::kPaper}};
+  const std::map<std::string, AlphaUpdate> names{{"posterior", AlphaUpdate::kPosterior},
+                                                 {"paper", AlphaUpdate::kPaper}};
   return cmd
       ->add_option("--alpha-update", update,
                    "How the observation model is learned: 'posterior' (the Dirichlet posterior of the prior and the "

@@ -56,8 +56,9 @@ std::vector<GridworldMethod> parse_methods(const std::string& text) {
   while (std::getline(in, item, ',')) {
     GridworldMethod m;
     if (!parse_method(item, m)) {
-      throw InputError("--methods", "unknown method \"" + item +
-                                        "\" (true_trajectories, true_observation_function, uniform_eta, plausible_eta, ignore_ce)");
+      throw InputError("--methods",
+                       "unknown method \"" + item +
+                           "\" (true_trajectories, true_observation_function, uniform_eta, plausible_eta, ignore_ce)");
     }
     methods.push_back(m);
   }
@@ -121,7 +122,8 @@ struct ExperimentOutput {
 };
 
 void write_experiment(const std::string& out, const ExperimentOutput& spec, const std::string& runs_csv,
-                      const std::vector<std::string>& methods, const std::vector<int>& xs, const std::vector<double>& values) {
+                      const std::vector<std::string>& methods, const std::vector<int>& xs,
+                      const std::vector<double>& values) {
   const std::filesystem::path dir(out);
   write_file(dir / (spec.stem + "_runs.csv"), runs_csv);
   const std::vector<SummaryRow> rows = summarise(methods, xs, values);
@@ -134,8 +136,9 @@ void write_experiment(const std::string& out, const ExperimentOutput& spec, cons
   const std::string problem = draw_figure(rows, figure);
   if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
   std::cout << md.str();
-  std::cerr << "hbirl: wrote " << (dir / (spec.stem + "_runs.csv")).string() << ", " << spec.stem << "_summary.csv, " << spec.stem
-            << "_summary.md" << (problem.empty() ? ", " + spec.stem + ".png, " + spec.stem + ".svg" : "") << " in " << out << "\n";
+  std::cerr << "hbirl: wrote " << (dir / (spec.stem + "_runs.csv")).string() << ", " << spec.stem << "_summary.csv, "
+            << spec.stem << "_summary.md" << (problem.empty() ? ", " + spec.stem + ".png, " + spec.stem + ".svg" : "")
+            << " in " << out << "\n";
 }
 
 void make_folder(const std::string& out) {
@@ -158,7 +161,8 @@ Collected collect(const std::vector<Run>& runs, Label label, X x, Where where) {
   Collected c;
   for (const auto& r : runs) {
     if (!r.error.empty()) {
-      if (++c.failed <= 5) std::cerr << "hbirl: warning: run " << r.run << " (" << where(r) << ") failed: " << r.error << "\n";
+      if (++c.failed <= 5)
+        std::cerr << "hbirl: warning: run " << r.run << " (" << where(r) << ") failed: " << r.error << "\n";
       continue;
     }
     c.methods.push_back(label(r));
@@ -189,9 +193,13 @@ void add_shared_options(CLI::App* cmd, std::string& out, int& runs, AlphaUpdate&
   cmd->add_option("--c", c, "The paper's step size, alpha = c alpha_dot + (1 - c) alpha (--alpha-update paper only)")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
-  cmd->add_option("--restarts", restarts, "Restarts per learning run")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--restarts", restarts, "Restarts per learning run")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   cmd->add_option("--seed", seed, "Seed of every random choice")->capture_default_str();
-  cmd->add_option("--threads", threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  cmd->add_option("--threads", threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
 }
 
 // Runs an experiment with a progress bar on stderr; its runs and the seconds it took.
@@ -202,7 +210,8 @@ auto run_with_progress(const std::string& what, Options& o, Runner runner) {
   const auto start = std::chrono::steady_clock::now();
   auto runs = runner(o);
   o.progress = nullptr;
-  return std::make_pair(std::move(runs), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return std::make_pair(std::move(runs),
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
@@ -213,7 +222,8 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   const auto [runs, seconds] = run_with_progress("runs", o, run_gridworld_experiment);
 
   const Collected c = collect(
-      runs, [](const GridworldRun& r) { return method_label(r.method); }, [](const GridworldRun& r) { return r.confounders; },
+      runs, [](const GridworldRun& r) { return method_label(r.method); },
+      [](const GridworldRun& r) { return r.confounders; },
       [](const GridworldRun& r) { return method_key(r.method) + ", |E| = " + std::to_string(r.confounders); });
   ExperimentOutput spec;
   spec.stem = "gridworld";
@@ -221,10 +231,10 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   spec.x_name = "confounders";
   spec.x_header = "|E|";
   std::ostringstream footer;
-  footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, " << o.per_step
-         << " observations per step, " << update_description(o.update, o.c) << ", seed " << o.seed << "; " << runs.size() << " learning runs in "
-         << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
-         << " threads" << failed_note(c.failed) << ".";
+  footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, "
+         << o.per_step << " observations per step, " << update_description(o.update, o.c) << ", seed " << o.seed << "; "
+         << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+         << (o.threads > 0 ? o.threads : default_thread_count()) << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
   spec.figure.title = "Gridworld: ILE vs confounding elements (" + std::to_string(o.runs) + " runs per point, 95% CI)";
   spec.figure.x_label = "Number of confounding elements |E|";
@@ -241,8 +251,9 @@ std::vector<onion::OnionMethod> parse_onion_methods(const std::string& text) {
   for (std::string item; std::getline(in, item, ',');) {
     onion::OnionMethod m;
     if (!onion::parse_method(item, m)) {
-      throw InputError("--methods", "unknown method \"" + item +
-                                        "\" (true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta)");
+      throw InputError("--methods",
+                       "unknown method \"" + item +
+                           "\" (true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta)");
     }
     methods.push_back(m);
   }
@@ -274,7 +285,9 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   const Collected c = collect(
       runs, [](const onion::OnionRun& r) { return onion::method_label(r.method); },
       [](const onion::OnionRun& r) { return r.trajectories; },
-      [](const onion::OnionRun& r) { return onion::method_key(r.method) + ", " + std::to_string(r.trajectories) + " trajectories"; });
+      [](const onion::OnionRun& r) {
+        return onion::method_key(r.method) + ", " + std::to_string(r.trajectories) + " trajectories";
+      });
   ExperimentOutput spec;
   spec.stem = "onion";
   const std::string scene_note = o.scene.elements() == "all" ? "" : " (scene: " + o.scene.elements() + ")";
@@ -283,12 +296,13 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   spec.x_header = "trajectories";
   std::ostringstream footer;
   footer << o.runs << " runs per point, from frames rendered at " << o.scene.width << " px, " << o.scene.fps
-         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts << " sorts; " << update_description(o.update, o.c) << ", seed " << o.seed
-         << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
-         << (o.threads > 0 ? o.threads : default_thread_count()) << " threads"
-         << failed_note(c.failed) << ".";
+         << " fps, scene: " << o.scene.elements() << "; subject prior from a controlled run of " << o.controlled_sorts
+         << " sorts; " << update_description(o.update, o.c) << ", seed " << o.seed << "; " << runs.size()
+         << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+         << (o.threads > 0 ? o.threads : default_thread_count()) << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
-  spec.figure.title = "Onion sorting" + scene_note + ": ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
+  spec.figure.title =
+      "Onion sorting" + scene_note + ": ILE vs trajectories (" + std::to_string(o.runs) + " runs per point, 95% CI)";
   spec.figure.x_label = "Number of trajectories";
   spec.figure.y_label = "ILE";
   write_experiment(args.out, spec, onion::onion_runs_csv(runs), c.methods, c.xs, c.ile);
@@ -324,10 +338,10 @@ int run_random_tasks_command(RandomTasksArgs& args) {
     const auto [ran, seconds] = run_with_progress("learning runs", o, run_random_tasks);
     runs = ran;
     write_file(dir / "random_tasks_runs.csv", random_task_runs_csv(runs));
-    footer << o.tasks << " tasks (seeds " << o.first_seed << "-" << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1
-           << ") x " << o.draws << " data sets each; " << runs.size() << " learning runs in "
-           << static_cast<long>(seconds + 0.5) << " s on " << (o.threads > 0 ? o.threads : default_thread_count())
-           << " threads.";
+    footer << o.tasks << " tasks (seeds " << o.first_seed << "-"
+           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ") x " << o.draws << " data sets each; "
+           << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+           << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
   }
   footer << " Reproduce one: `hbirl generate random-task --seed S --draw D > task.json`, then `hbirl learn --problem "
          << "task.json`.";
@@ -343,18 +357,23 @@ int run_random_tasks_command(RandomTasksArgs& args) {
 
 // The Gridworld as the eta experiments watch it: --trajectories, --length, --per-step, --seed.
 void add_scenario_options(CLI::App* cmd, GridworldScenarioOptions& s) {
-  cmd->add_option("--trajectories", s.trajectories, "Demonstrations per run")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--trajectories", s.trajectories, "Demonstrations per run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_option("--length", s.length, "Steps per demonstration")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--per-step", s.per_step, "Observations per step")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cmd->add_option("--per-step", s.per_step, "Observations per step")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   cmd->add_option("--seed", s.seed, "Seed of every random choice")->capture_default_str();
 }
 
-std::string run_footer(const std::string& what, size_t runs, int per_cell, const GridworldScenarioOptions& s, double seconds,
-                       int threads) {
+std::string run_footer(const std::string& what, size_t runs, int per_cell, const GridworldScenarioOptions& s,
+                       double seconds, int threads) {
   std::ostringstream footer;
-  footer << per_cell << " runs per cell, " << s.trajectories << " demonstrations of " << s.length << " steps, " << s.per_step
-         << " observations per step, posterior update, seed " << s.seed << "; " << runs << " " << what << " in "
-         << static_cast<long>(seconds + 0.5) << " s on " << (threads > 0 ? threads : default_thread_count()) << " threads.";
+  footer << per_cell << " runs per cell, " << s.trajectories << " demonstrations of " << s.length << " steps, "
+         << s.per_step << " observations per step, posterior update, seed " << s.seed << "; " << runs << " " << what
+         << " in " << static_cast<long>(seconds + 0.5) << " s on " << (threads > 0 ? threads : default_thread_count())
+         << " threads.";
   return footer.str();
 }
 
@@ -391,7 +410,8 @@ int run_eta_sensitivity_command(EtaSensitivityArgs& args) {
   EtaSensitivityOptions& o = args.options;
   o.confounders = parse_int_list(args.confounders, "--confounders");
   for (int e : o.confounders) {
-    if (e < 1) throw InputError("--confounders", "needs at least one element per entry (a labeller picks between sources)");
+    if (e < 1)
+      throw InputError("--confounders", "needs at least one element per entry (a labeller picks between sources)");
   }
   o.masses = parse_numbers(args.masses, "--masses", 0.01, 1.0);
   o.accuracies = parse_numbers(args.accuracies, "--accuracies", 0.0, 1.0);
@@ -400,8 +420,8 @@ int run_eta_sensitivity_command(EtaSensitivityArgs& args) {
   const auto [runs, seconds] = run_with_progress("learning runs", o, run_eta_sensitivity);
   write_file(dir / "eta_sensitivity_runs.csv", eta_runs_csv(runs));
   const std::string summary = eta_sensitivity_summary(
-      runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) +
-                " eta_prior_strength " + std::to_string(o.eta_prior_strength).substr(0, 4) + ".");
+      runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) + " eta_prior_strength " +
+                std::to_string(o.eta_prior_strength).substr(0, 4) + ".");
   write_file(dir / "eta_sensitivity_summary.md", summary);
   const std::string problem = draw_eta_sensitivity_figure(runs, (dir / "eta_sensitivity").string());
   if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
@@ -428,14 +448,14 @@ int run_unlisted_command(UnlistedArgs& args) {
   write_file(dir / "unlisted_runs.csv", unlisted_runs_csv(runs));
   std::ostringstream eps;
   eps << " The catch-all's share of eta: " << o.unlisted_eta << ".";
-  const std::string summary =
-      unlisted_summary(runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) + eps.str());
+  const std::string summary = unlisted_summary(
+      runs, run_footer("learning runs", runs.size(), o.runs, o.scenario, seconds, o.threads) + eps.str());
   write_file(dir / "unlisted_summary.md", summary);
   const std::string problem = draw_unlisted_figure(runs, (dir / "unlisted").string());
   if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
   std::cout << summary;
-  std::cerr << "hbirl: wrote unlisted_runs.csv, unlisted_summary.md" << (problem.empty() ? ", unlisted.png, unlisted.svg" : "")
-            << " in " << args.out << "\n";
+  std::cerr << "hbirl: wrote unlisted_runs.csv, unlisted_summary.md"
+            << (problem.empty() ? ", unlisted.png, unlisted.svg" : "") << " in " << args.out << "\n";
   return 0;
 }
 
@@ -459,10 +479,11 @@ int run_onion_regimes_command(OnionRegimesArgs& args) {
   const auto [runs, seconds] = run_with_progress("learning runs", o, onion::run_onion_regimes);
   write_file(dir / "onion_regimes_runs.csv", onion::onion_regimes_csv(runs));
   std::ostringstream footer;
-  footer << o.base.runs << " runs per point, " << args.trajectories << " sorts each, frames rendered at " << o.base.scene.width
-         << " px, " << o.base.scene.fps << " fps, with the blue-shirt person and the other onions; subject prior from a controlled run of "
-         << o.base.controlled_sorts << " sorts; posterior update (eta learned per context by Plausible eta), seed " << o.base.seed << "; "
-         << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+  footer << o.base.runs << " runs per point, " << args.trajectories << " sorts each, frames rendered at "
+         << o.base.scene.width << " px, " << o.base.scene.fps
+         << " fps, with the blue-shirt person and the other onions; subject prior from a controlled run of "
+         << o.base.controlled_sorts << " sorts; posterior update (eta learned per context by Plausible eta), seed "
+         << o.base.seed << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.base.threads > 0 ? o.base.threads : default_thread_count()) << " threads.";
   const std::string summary = onion::onion_regimes_summary(runs, footer.str());
   write_file(dir / "onion_regimes_summary.md", summary);
@@ -480,28 +501,40 @@ Command add_experiment(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(kExperiment.name, kExperiment.description);
   cmd->require_subcommand(1);
   auto g = std::make_shared<GridworldExperimentArgs>();
-  CLI::App* grid = cmd->add_subcommand(
-      "gridworld",
-      "The paper's Gridworld figure: ILE of five methods (True Trajectories, True Observation\n"
-      "Function, Uniform eta, Plausible eta, Ignore CE) vs the number of confounding\n"
-      "elements. Writes gridworld_runs.csv (one row per run), gridworld_summary.csv and .md\n"
-      "(mean and 95% CI) and gridworld.png/.svg (needs gnuplot) to --out, and prints the\n"
-      "summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(grid, g->out, g->options.runs, g->options.update, g->options.c, g->options.restarts, g->options.seed, g->options.threads);
-  grid->add_option("--confounders", g->confounders, "Numbers of confounding elements, comma-separated")->capture_default_str();
-  grid->add_option("--methods", g->methods,
-                   "Comma-separated: true_trajectories, true_observation_function, uniform_eta, plausible_eta, ignore_ce; or all")
+  CLI::App* grid =
+      cmd->add_subcommand("gridworld",
+                          "The paper's Gridworld figure: ILE of five methods (True Trajectories, True Observation\n"
+                          "Function, Uniform eta, Plausible eta, Ignore CE) vs the number of confounding\n"
+                          "elements. Writes gridworld_runs.csv (one row per run), gridworld_summary.csv and .md\n"
+                          "(mean and 95% CI) and gridworld.png/.svg (needs gnuplot) to --out, and prints the\n"
+                          "summary. Runs in parallel; the numbers do not depend on --threads.");
+  add_shared_options(grid, g->out, g->options.runs, g->options.update, g->options.c, g->options.restarts,
+                     g->options.seed, g->options.threads);
+  grid->add_option("--confounders", g->confounders, "Numbers of confounding elements, comma-separated")
       ->capture_default_str();
-  grid->add_option("--trajectories", g->options.trajectories, "Trajectories per run")->check(CLI::Range(1, 100000))->capture_default_str();
-  grid->add_option("--length", g->options.length, "Steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
-  grid->add_option("--per-step", g->options.per_step, "Observations per step")->check(CLI::Range(0, 1000000))->capture_default_str();
-  grid->add_option("--max-alpha-iterations", g->options.max_alpha_iterations, "Observation-model refinements per E-step")
+  grid->add_option("--methods", g->methods,
+                   "Comma-separated: true_trajectories, true_observation_function, uniform_eta, plausible_eta, "
+                   "ignore_ce; or all")
+      ->capture_default_str();
+  grid->add_option("--trajectories", g->options.trajectories, "Trajectories per run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  grid->add_option("--alpha-tolerance", g->options.alpha_tolerance, "The observation model has converged below this change")
+  grid->add_option("--length", g->options.length, "Steps per trajectory")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  grid->add_option("--per-step", g->options.per_step, "Observations per step")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  grid->add_option("--max-alpha-iterations", g->options.max_alpha_iterations,
+                   "Observation-model refinements per E-step")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  grid->add_option("--alpha-tolerance", g->options.alpha_tolerance,
+                   "The observation model has converged below this change")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  grid->add_option("--theta-tolerance", g->options.theta_tolerance, "EM stops when theta moves less than this (relative)")
+  grid->add_option("--theta-tolerance", g->options.theta_tolerance,
+                   "EM stops when theta moves less than this (relative)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   grid->add_option("--likelihood-tolerance", g->options.likelihood_tolerance,
@@ -510,27 +543,38 @@ Command add_experiment(CLI::App& app) {
       ->capture_default_str();
   grid->add_flag("!--plain-em", g->options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
   auto n = std::make_shared<OnionExperimentArgs>();
-  CLI::App* onion_cmd = cmd->add_subcommand(
-      "onion",
-      "The paper's onion-sorting figure, from rendered frames: ILE of five methods (True\n"
-      "Trajectories, ML Trajectories, ML Observations, Plausible eta, Uniform eta) vs the\n"
-      "number of demonstrated sorts, in a scene with three confounding elements and a\n"
-      "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
-      "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.update, n->options.c, n->options.restarts, n->options.seed, n->options.threads);
-  onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")->capture_default_str();
-  onion_cmd->add_option("--methods", n->methods,
-                        "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
+  CLI::App* onion_cmd =
+      cmd->add_subcommand("onion",
+                          "The paper's onion-sorting figure, from rendered frames: ILE of five methods (True\n"
+                          "Trajectories, ML Trajectories, ML Observations, Plausible eta, Uniform eta) vs the\n"
+                          "number of demonstrated sorts, in a scene with three confounding elements and a\n"
+                          "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
+                          "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
+  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.update, n->options.c, n->options.restarts,
+                     n->options.seed, n->options.threads);
+  onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")
       ->capture_default_str();
-  onion_cmd->add_option("--controlled-sorts", n->options.controlled_sorts, "Sorts in the controlled run that gives the subject prior")
+  onion_cmd
+      ->add_option(
+          "--methods", n->methods,
+          "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
+      ->capture_default_str();
+  onion_cmd
+      ->add_option("--controlled-sorts", n->options.controlled_sorts,
+                   "Sorts in the controlled run that gives the subject prior")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  onion_cmd->add_option("--config,-c", n->scene,
-                        "Demonstrations' scene: all (three confounding elements and the mirror), controlled, or a "
-                        "comma-separated list of blue-shirt, other-onions, foreground, mirror")
+  onion_cmd
+      ->add_option("--config,-c", n->scene,
+                   "Demonstrations' scene: all (three confounding elements and the mirror), controlled, or a "
+                   "comma-separated list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
-  onion_cmd->add_option("--width", n->options.scene.width, "Frame width in pixels")->check(CLI::Range(160, 4096))->capture_default_str();
-  onion_cmd->add_option("--fps", n->options.scene.fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  onion_cmd->add_option("--width", n->options.scene.width, "Frame width in pixels")
+      ->check(CLI::Range(160, 4096))
+      ->capture_default_str();
+  onion_cmd->add_option("--fps", n->options.scene.fps, "Frames per simulated second")
+      ->check(CLI::Range(1, 240))
+      ->capture_default_str();
   auto t = std::make_shared<RandomTasksArgs>();
   CLI::App* tasks_cmd = cmd->add_subcommand(
       "random-tasks",
@@ -541,14 +585,21 @@ Command add_experiment(CLI::App& app) {
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
       "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");
   tasks_cmd->add_option("--out,-o", t->out, "Output folder")->capture_default_str();
-  tasks_cmd->add_option("--tasks", t->options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
-  tasks_cmd->add_option("--draws", t->options.draws, "Data sets per task")->check(CLI::Range(1, 1000))->capture_default_str();
-  tasks_cmd->add_option("--first-seed", t->options.first_seed, "Seed of the first task")->capture_default_str();
-  tasks_cmd->add_option("--methods", t->methods,
-                        "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
-                        "posterior_c0.5, posterior_c0.02, posterior_r4; or all")
+  tasks_cmd->add_option("--tasks", t->options.tasks, "Number of tasks")
+      ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  tasks_cmd->add_option("--draws", t->options.draws, "Data sets per task")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  tasks_cmd->add_option("--first-seed", t->options.first_seed, "Seed of the first task")->capture_default_str();
+  tasks_cmd
+      ->add_option("--methods", t->methods,
+                   "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
+                   "posterior_c0.5, posterior_c0.02, posterior_r4; or all")
+      ->capture_default_str();
+  tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
   tasks_cmd->add_option("--summarise", t->runs_csv,
                         "Do not run: summarise and draw the runs of this random_tasks_runs.csv into --out");
   auto es = std::make_shared<EtaSensitivityArgs>();
@@ -560,31 +611,49 @@ Command add_experiment(CLI::App& app) {
       "tables, paired comparisons, how much of the gap to the perfect labeller learned eta closes, learned vs true\n"
       "calibration) and eta_sensitivity.png/.svg to --out. The numbers do not depend on --threads.");
   eta_cmd->add_option("--out,-o", es->out, "Output folder")->capture_default_str();
-  eta_cmd->add_option("--runs", es->options.runs, "Runs per cell")->check(CLI::Range(1, 1000000))->capture_default_str();
-  eta_cmd->add_option("--confounders", es->confounders, "Numbers of confounding elements, comma-separated")->capture_default_str();
-  eta_cmd->add_option("--masses", es->masses, "The labeller's share of eta for its pick, comma-separated")->capture_default_str();
-  eta_cmd->add_option("--accuracies", es->accuracies, "How often its pick is the true source, comma-separated")->capture_default_str();
-  eta_cmd->add_option("--eta-prior-strength", es->options.eta_prior_strength, "kappa of learned eta (observation_model.eta_prior_strength)")
+  eta_cmd->add_option("--runs", es->options.runs, "Runs per cell")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  eta_cmd->add_option("--confounders", es->confounders, "Numbers of confounding elements, comma-separated")
+      ->capture_default_str();
+  eta_cmd->add_option("--masses", es->masses, "The labeller's share of eta for its pick, comma-separated")
+      ->capture_default_str();
+  eta_cmd->add_option("--accuracies", es->accuracies, "How often its pick is the true source, comma-separated")
+      ->capture_default_str();
+  eta_cmd
+      ->add_option("--eta-prior-strength", es->options.eta_prior_strength,
+                   "kappa of learned eta (observation_model.eta_prior_strength)")
       ->check(CLI::Range(1e-6, 1e12))
       ->capture_default_str();
   add_scenario_options(eta_cmd, es->options.scenario);
-  eta_cmd->add_option("--threads", es->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  eta_cmd->add_option("--threads", es->options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
   auto un = std::make_shared<UnlistedArgs>();
   CLI::App* unlisted_cmd = cmd->add_subcommand(
       "unlisted",
-      "Beyond the paper: the Gridworld with --confounders true elements of which the learner is told --told (0: eta over\n"
+      "Beyond the paper: the Gridworld with --confounders true elements of which the learner is told --told (0: eta "
+      "over\n"
       "the subject alone). Methods: as told, with the catch-all unlisted source (eta fixed, eta learned), and the\n"
       "oracle told every element. Writes unlisted_runs.csv, unlisted_summary.md (ILE and subject-or-not label\n"
       "accuracy per |E|) and unlisted.png/.svg to --out. The numbers do not depend on --threads.");
   unlisted_cmd->add_option("--out,-o", un->out, "Output folder")->capture_default_str();
-  unlisted_cmd->add_option("--runs", un->options.runs, "Runs per point")->check(CLI::Range(1, 1000000))->capture_default_str();
-  unlisted_cmd->add_option("--confounders", un->confounders, "True numbers of elements, comma-separated")->capture_default_str();
-  unlisted_cmd->add_option("--told", un->told, "How many of them the learner is told, comma-separated")->capture_default_str();
-  unlisted_cmd->add_option("--unlisted-eta", un->options.unlisted_eta, "The catch-all's share of every eta (observation_model.unlisted_source.eta)")
+  unlisted_cmd->add_option("--runs", un->options.runs, "Runs per point")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  unlisted_cmd->add_option("--confounders", un->confounders, "True numbers of elements, comma-separated")
+      ->capture_default_str();
+  unlisted_cmd->add_option("--told", un->told, "How many of them the learner is told, comma-separated")
+      ->capture_default_str();
+  unlisted_cmd
+      ->add_option("--unlisted-eta", un->options.unlisted_eta,
+                   "The catch-all's share of every eta (observation_model.unlisted_source.eta)")
       ->check(CLI::Range(1e-6, 1.0 - 1e-6))
       ->capture_default_str();
   add_scenario_options(unlisted_cmd, un->options.scenario);
-  unlisted_cmd->add_option("--threads", un->options.threads, "Threads (0 = one per core)")->check(CLI::Range(0, 4096))->capture_default_str();
+  unlisted_cmd->add_option("--threads", un->options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
   auto rg = std::make_shared<OnionRegimesArgs>();
   rg->options.base.runs = 20;
   CLI::App* regimes_cmd = cmd->add_subcommand(
@@ -596,16 +665,25 @@ Command add_experiment(CLI::App& app) {
       "to --out. The numbers do not depend on --threads.");
   add_shared_options(regimes_cmd, rg->out, rg->options.base.runs, rg->options.base.update, rg->options.base.c,
                      rg->options.base.restarts, rg->options.base.seed, rg->options.base.threads);
-  regimes_cmd->add_option("--shares", rg->shares, "Foreground person's shares of the time in front, comma-separated, in [0, 0.95]")
+  regimes_cmd
+      ->add_option("--shares", rg->shares,
+                   "Foreground person's shares of the time in front, comma-separated, in [0, 0.95]")
       ->capture_default_str();
-  regimes_cmd->add_option("--eta-powers", rg->eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
+  regimes_cmd
+      ->add_option("--eta-powers", rg->eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
       ->capture_default_str();
-  regimes_cmd->add_option("--trajectories", rg->trajectories, "Sorts learned from")->check(CLI::Range(1, 1000))->capture_default_str();
-  regimes_cmd->add_option("--controlled-sorts", rg->options.base.controlled_sorts, "Sorts in the controlled run that gives the subject prior")
+  regimes_cmd->add_option("--trajectories", rg->trajectories, "Sorts learned from")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  regimes_cmd
+      ->add_option("--controlled-sorts", rg->options.base.controlled_sorts,
+                   "Sorts in the controlled run that gives the subject prior")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  regimes_cmd->add_option("--methods", rg->methods,
-                          "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
+  regimes_cmd
+      ->add_option(
+          "--methods", rg->methods,
+          "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
       ->capture_default_str();
   return [g, grid, n, onion_cmd, t, tasks_cmd, es, eta_cmd, un, unlisted_cmd, rg, regimes_cmd] {
     if (regimes_cmd->parsed()) return run_onion_regimes_command(*rg);

@@ -26,7 +26,8 @@ int run_export(const ExportArgs& args) {
   services::Counters counters;
   counters.service = "hbirl export";
   counters.quiet = true;
-  const services::OptimiserResult r = services::collect_from_log({args.log, args.key_file, args.allow_incomplete}, counters);
+  const services::OptimiserResult r =
+      services::collect_from_log({args.log, args.key_file, args.allow_incomplete}, counters);
   const std::shared_ptr<const Domain> domain = services::domain_of(r.data, app::open_domain_args(args.domain, "hbirl"));
   if (r.data.observed.empty()) throw InputError(args.log, "the log holds no demonstrations");
   Problem problem;
@@ -48,14 +49,16 @@ int run_export(const ExportArgs& args) {
   }
   problem.true_weights = services::true_weights_of(*domain, r.data);
   nlohmann::ordered_json doc = problem_to_json(problem);
-  doc["comment"] = "Exported by hbirl export from " + args.log + " (domain " + domain->name() + "): " +
-                   std::to_string(problem.demonstration.size()) + " demonstrations; the " +
-                   std::to_string(r.data.controlled_observed.size()) +
-                   " controlled-run episodes are in observation_model.subject_alpha (the prior the optimiser learned from)";
+  doc["comment"] =
+      "Exported by hbirl export from " + args.log + " (domain " + domain->name() +
+      "): " + std::to_string(problem.demonstration.size()) + " demonstrations; the " +
+      std::to_string(r.data.controlled_observed.size()) +
+      " controlled-run episodes are in observation_model.subject_alpha (the prior the optimiser learned from)";
   emit(format_json(doc), args.out);
-  std::cerr << "hbirl export: " << problem.demonstration.size() << " demonstrations, " << r.data.controlled_observed.size()
-            << " controlled episodes (in the prior), " << r.missing_frames << " frames missing, " << counters.bad_messages
-            << " bad messages" << (args.out.empty() ? "" : " -> " + args.out) << "\n";
+  std::cerr << "hbirl export: " << problem.demonstration.size() << " demonstrations, "
+            << r.data.controlled_observed.size() << " controlled episodes (in the prior), " << r.missing_frames
+            << " frames missing, " << counters.bad_messages << " bad messages"
+            << (args.out.empty() ? "" : " -> " + args.out) << "\n";
   return 0;
 }
 
@@ -66,7 +69,8 @@ Command add_export(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(kExport.name, kExport.description);
   cmd->add_option("--log", args->log, "The run's LCM log (lcm-logger)")->required();
   cmd->add_option("--out,-o", args->out, "Problem file to write (default: stdout)");
-  app::add_domain_options(cmd, args->domain, "The run's domain file, when it ran on one (built-in domains are named by the run)");
+  app::add_domain_options(cmd, args->domain,
+                          "The run's domain file, when it ran on one (built-in domains are named by the run)");
   app::add_key_option(cmd, args->key_file, app::kRecordingKeyHelp);
   cmd->add_flag("--allow-incomplete", args->allow_incomplete,
                 "Export a recording whose run never reached its end (END_RUN): the episodes that finished");

@@ -42,8 +42,8 @@ int run_in_full() {
 
 Command add_forwarded(CLI::App& app, const FullCommand& command) {
   CLI::App* cmd = app.add_subcommand(command.name, command.description);
-  cmd->set_help_flag();    // --help too goes to hbirl-full, which has the command's options
-  cmd->prefix_command();   // every argument after the command, as given
+  cmd->set_help_flag();   // --help too goes to hbirl-full, which has the command's options
+  cmd->prefix_command();  // every argument after the command, as given
   return [] { return run_in_full(); };
 }
 

@@ -16,9 +16,7 @@ inline constexpr FullCommand kValidate{
     "trajectories, steps, observations, occluded steps; a domain's names and sensor). Problems\n"
     "are reported as one line on stderr naming the field and position, with exit status 2;\n"
     "unknown keys only warn."};
-inline constexpr FullCommand kExperiment{
-    "experiment",
-    "Reproduce the paper's experiments (runs, summary, figure)."};
+inline constexpr FullCommand kExperiment{"experiment", "Reproduce the paper's experiments (runs, summary, figure)."};
 inline constexpr FullCommand kRender{
     "render",
     "Render frames of the simulated onion-sorting camera (paper §Experiments B): the expert sorting\n"

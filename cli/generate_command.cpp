@@ -23,8 +23,9 @@ int run_gridworld(const GridworldArgs& args) {
   if (o.confounders >= 0) {
     std::ostringstream comment;
     comment << "hbirl generate gridworld: " << o.confounders << " confounding element(s), " << o.per_step
-            << " observations per step; the labeller gives its pick " << o.labeller.mass << " of eta but picks the true source with probability "
-            << o.labeller.accuracy << " (its pick is each observation's context); the first " << o.controlled
+            << " observations per step; the labeller gives its pick " << o.labeller.mass
+            << " of eta but picks the true source with probability " << o.labeller.accuracy
+            << " (its pick is each observation's context); the first " << o.controlled
             << " trajectories are the controlled run (the subject alone) that gives the subject prior.";
     doc["comment"] = comment.str();
   }
@@ -61,11 +62,12 @@ int run_random_task(const RandomTaskArgs& args) {
   problem.true_weights = task.true_weights;
   nlohmann::ordered_json doc;
   std::ostringstream comment;
-  comment << "hbirl generate random-task --seed " << args.seed << " --draw " << args.draw << ": a " << task.layout << " of "
-          << task.mdp.num_states << " states and " << task.mdp.num_actions << " actions, " << task.goals << " goal(s), "
-          << task.traps << " trap(s), discount " << task.mdp.discount << ", expert decisiveness " << task.decisiveness << "; " << task.num_symbols << " symbols, "
-          << task.num_confounders << " confounding elements, subject informativeness " << task.informativeness
-          << ", subject share " << task.subject_share << ", " << eta_kind_name(task.eta) << " eta, " << task.per_step
+  comment << "hbirl generate random-task --seed " << args.seed << " --draw " << args.draw << ": a " << task.layout
+          << " of " << task.mdp.num_states << " states and " << task.mdp.num_actions << " actions, " << task.goals
+          << " goal(s), " << task.traps << " trap(s), discount " << task.mdp.discount << ", expert decisiveness "
+          << task.decisiveness << "; " << task.num_symbols << " symbols, " << task.num_confounders
+          << " confounding elements, subject informativeness " << task.informativeness << ", subject share "
+          << task.subject_share << ", " << eta_kind_name(task.eta) << " eta, " << task.per_step
           << " observations per step, " << task.occlusion << " of steps occluded; " << task.demonstrations.size()
           << " demonstrations of at most " << task.length << " steps; subject prior from a controlled run of "
           << task.controlled.size() << " trajectories (symbol counts per (s, a) plus 1).";
@@ -80,8 +82,7 @@ int run_random_task(const RandomTaskArgs& args) {
 
 Command add_generate(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
-      "generate",
-      "Write a problem file for a built-in domain (a starting point for your own files).");
+      "generate", "Write a problem file for a built-in domain (a starting point for your own files).");
   cmd->require_subcommand(1);
   auto g = std::make_shared<GridworldArgs>();
   CLI::App* grid = cmd->add_subcommand(
@@ -94,7 +95,9 @@ Command add_generate(CLI::App& app) {
   grid->add_option("--trajectories", g->problem.trajectories, "Number of trajectories")
       ->check(CLI::Range(1, 10000000))
       ->capture_default_str();
-  grid->add_option("--length", g->problem.length, "Steps per trajectory")->check(CLI::Range(1, 1000000))->capture_default_str();
+  grid->add_option("--length", g->problem.length, "Steps per trajectory")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   grid->add_option("--goal", g->problem.goal,
                    "Goal corner: 0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right (default: drawn from the seed)")
       ->check(CLI::Range(0, 3));
@@ -109,12 +112,16 @@ Command add_generate(CLI::App& app) {
       ->check(CLI::Range(0.0, 0.999999))
       ->capture_default_str();
   grid->add_option("--seed", g->problem.seed, "Seed of the goal and the demonstrations")->capture_default_str();
-  grid->add_option("--confounders", g->problem.confounders,
-                   "Watch the demonstrations through the paper's sensor with this many confounding elements (default: true "
-                   "steps only): observations, a labeller's eta with its pick as context, and a controlled run for the prior")
+  grid->add_option(
+          "--confounders", g->problem.confounders,
+          "Watch the demonstrations through the paper's sensor with this many confounding elements (default: true "
+          "steps only): observations, a labeller's eta with its pick as context, and a controlled run for the prior")
       ->check(CLI::Range(0, 64));
-  grid->add_option("--per-step", g->problem.per_step, "With --confounders: observations per step")->check(CLI::Range(1, 10000))->capture_default_str();
-  grid->add_option("--labeller-mass", g->problem.labeller.mass, "With --confounders: the share of eta the labeller gives its pick (what it claims)")
+  grid->add_option("--per-step", g->problem.per_step, "With --confounders: observations per step")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  grid->add_option("--labeller-mass", g->problem.labeller.mass,
+                   "With --confounders: the share of eta the labeller gives its pick (what it claims)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   grid->add_option("--labeller-accuracy", g->problem.labeller.accuracy,
@@ -140,11 +147,14 @@ Command add_generate(CLI::App& app) {
   task->add_option("--informativeness", t->overrides.informativeness,
                    "Fix the subject sensor's informativeness (0: symbols say nothing of the state, 1: the most)")
       ->check(CLI::Range(0.0, 1.0));
-  task->add_option("--confounders", t->overrides.confounders, "Fix the number of confounding elements")->check(CLI::Range(0, 64));
-  task->add_option("--occlusion", t->overrides.occlusion, "Fix the share of occluded steps")->check(CLI::Range(0.0, 1.0));
+  task->add_option("--confounders", t->overrides.confounders, "Fix the number of confounding elements")
+      ->check(CLI::Range(0, 64));
+  task->add_option("--occlusion", t->overrides.occlusion, "Fix the share of occluded steps")
+      ->check(CLI::Range(0.0, 1.0));
   task->add_option("--demonstrations", t->overrides.demonstrations, "Fix the number of demonstrations")
       ->check(CLI::Range(1, 100000));
-  task->add_option("--eta", t->overrides.eta, "Fix eta: plausible or uniform")->check(CLI::IsMember({"plausible", "uniform"}));
+  task->add_option("--eta", t->overrides.eta, "Fix eta: plausible or uniform")
+      ->check(CLI::IsMember({"plausible", "uniform"}));
   task->add_option("--out,-o", t->out, "Write the problem file here instead of stdout");
   return [g, grid, t, task] {
     if (grid->parsed()) return run_gridworld(*g);

@@ -12,7 +12,7 @@ namespace hbirl::cli {
 struct LearnArgs {
   std::string problem;
   std::string log;
-  std::string key_file;       // --log: the run's key
+  std::string key_file;  // --log: the run's key
   bool allow_incomplete = false;
   app::DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
   std::string from = "observations";

@@ -21,14 +21,14 @@ namespace hbirl::cli {
 
 namespace {
 
-
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
 // What a problem file gives to learn from observations: the demonstrations' observations,
 // the observation prior and, for messages, each trajectory's demonstration index.
 ProblemObservations observations_of(const Problem& problem, const LearnArgs& args) {
   if (!problem.observation_model) {
-    throw in_file(args.problem, InputError("observation_model", "missing; learning from observations needs it (or use --from truth)"));
+    throw in_file(args.problem, InputError("observation_model",
+                                           "missing; learning from observations needs it (or use --from truth)"));
   }
   try {
     return problem_observations(problem);
@@ -41,8 +41,9 @@ ProblemObservations observations_of(const Problem& problem, const LearnArgs& arg
 void report_iterate(const app::Iterate& i) {
   std::ostringstream line;
   line << "hbirl: restart " << i.restart << " EM iteration " << i.iteration << ": objective " << i.objective
-       << ", log-likelihood " << i.estep.log_likelihood << ", theta [" << i.theta.transpose() << "], observation-model updates "
-       << i.estep.alpha_iterations << (i.estep.alpha_converged ? " (converged)" : "");
+       << ", log-likelihood " << i.estep.log_likelihood << ", theta [" << i.theta.transpose()
+       << "], observation-model updates " << i.estep.alpha_iterations
+       << (i.estep.alpha_converged ? " (converged)" : "");
   const ObservationPrior* alpha = i.refined;
   if (alpha && alpha->learn && alpha->update == AlphaUpdate::kPosterior) line << ", prior strength " << alpha->strength;
   line << "\n";
@@ -78,7 +79,8 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
     subject.push_back({r / mdp.num_actions, r % mdp.num_actions, to_vector(row)});
   }
   nlohmann::ordered_json confounders = nlohmann::ordered_json::array();
-  for (int e = 0; e < model.num_confounders(); ++e) confounders.push_back(to_vector(model.confounders.row(e).transpose()));
+  for (int e = 0; e < model.num_confounders(); ++e)
+    confounders.push_back(to_vector(model.confounders.row(e).transpose()));
   return {{"subject", subject}, {"confounders", confounders}};
 }
 
@@ -114,7 +116,9 @@ int run_learn(const LearnArgs& args) {
     const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, learned.theta);
     const InverseLearningError& ile = metrics.ile;
     if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
-      throw in_file(args.problem, InputError("true_weights", "give an ILE that is not a finite number: the true rewards are too large"));
+      throw in_file(
+          args.problem,
+          InputError("true_weights", "give an ILE that is not a finite number: the true rewards are too large"));
     }
     out["ile"] = ile.ile;
     out["ile_relative"] = ile.relative();
@@ -144,7 +148,8 @@ int run_learn(const LearnArgs& args) {
     item["log_likelihood"] = r.log_likelihood;
     item["em_objective"] = r.objective;  // log-likelihood plus the prior's terms (docs/MODEL.md)
     if (r.held_out_log_likelihood) item["held_out_log_likelihood"] = *r.held_out_log_likelihood;
-    if (r.alpha && r.alpha->learn && r.alpha->update == AlphaUpdate::kPosterior) item["prior_strength"] = r.alpha->strength;
+    if (r.alpha && r.alpha->learn && r.alpha->update == AlphaUpdate::kPosterior)
+      item["prior_strength"] = r.alpha->strength;
     item["score"] = r.score;
     item["em_iterations"] = r.em_iterations;
     item["em_evaluations"] = r.em_evaluations;
@@ -173,22 +178,23 @@ int run_learn(const LearnArgs& args) {
 
 Command add_learn(CLI::App& app) {
   auto args = std::make_shared<LearnArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "learn",
-      "Learn the expert's reward weights from a problem file and print them as JSON.\n"
-      "--from truth runs MaxCausalEnt IRL on the true trajectories (the 'True Trajectories'\n"
-      "baseline). The M-step maximises the causal log-likelihood of the demonstrated\n"
-      "state-action visits under the stationary soft policy (see docs/MODEL.md). Output keys:\n"
-      "weights, log_likelihood, feature_count_error, and with true_weights in the file also\n"
-      "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
-      "policy_agreement; then one entry per restart.");
+  CLI::App* cmd =
+      app.add_subcommand("learn",
+                         "Learn the expert's reward weights from a problem file and print them as JSON.\n"
+                         "--from truth runs MaxCausalEnt IRL on the true trajectories (the 'True Trajectories'\n"
+                         "baseline). The M-step maximises the causal log-likelihood of the demonstrated\n"
+                         "state-action visits under the stationary soft policy (see docs/MODEL.md). Output keys:\n"
+                         "weights, log_likelihood, feature_count_error, and with true_weights in the file also\n"
+                         "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
+                         "policy_agreement; then one entry per restart.");
   CLI::Option* problem = cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)");
   cmd->add_option("--log", args->log,
                   "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "
                   "the same data and learning as hbirl-optimiser, so the same theta")
       ->excludes(problem);
-  app::add_domain_options(cmd, args->domain,
-                          "With --log: the domain file the run was on (built-in domains, onion and gridworld, are named in the log)");
+  app::add_domain_options(
+      cmd, args->domain,
+      "With --log: the domain file the run was on (built-in domains, onion and gridworld, are named in the log)");
   app::add_key_option(cmd, args->key_file, "with --log, " + app::kRecordingKeyHelp);
   cmd->add_flag("--allow-incomplete", args->allow_incomplete,
                 "With --log: learn from a recording whose run never reached its end (END_RUN), from the episodes\n"

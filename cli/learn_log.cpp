@@ -16,14 +16,16 @@ int run_learn_from_log(const LearnArgs& args) {
   const std::shared_ptr<const Domain> domain = app::open_domain_args(args.domain, "hbirl");
   const services::OptimiserResult r =
       services::learn_from_log({args.log, args.key_file, args.allow_incomplete}, args.settings, counters, domain);
-  if (!r.incomplete.empty()) std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
+  if (!r.incomplete.empty())
+    std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
   nlohmann::ordered_json out;
   out["log"] = args.log;
   out["domain"] = r.data.domain;
   out["feature_names"] = services::domain_of(r.data, domain)->names(1).features;
   out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
   if (r.data.true_weights) {
-    out["true_weights"] = std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
+    out["true_weights"] =
+        std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
   }
   if (r.learned.ile) out["ile"] = *r.learned.ile;
   out["log_likelihood"] = r.learned.log_likelihood;

@@ -22,8 +22,9 @@ int main(int argc, char** argv) {
   CLI::App app{kDescription, "hbirl"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("hbirl ") + HBIRL_VERSION);
-  app.footer("Run 'hbirl SUBCOMMAND --help' for a subcommand's options.\n"
-             "Exit status: 0 success, 2 bad input or usage, 1 internal error.");
+  app.footer(
+      "Run 'hbirl SUBCOMMAND --help' for a subcommand's options.\n"
+      "Exit status: 0 success, 2 bad input or usage, 1 internal error.");
   std::vector<std::pair<CLI::App*, hbirl::cli::Command>> commands;
   auto remember = [&](hbirl::cli::Command command) {
     commands.emplace_back(app.get_subcommands({}).back(), std::move(command));
@@ -42,7 +43,8 @@ int main(int argc, char** argv) {
 #else
   // These run in hbirl-full: the learning commands need none of what it loads.
   hbirl::cli::remember_arguments(argc, argv);
-  for (const hbirl::cli::FullCommand& command : hbirl::cli::kFullCommands) remember(hbirl::cli::add_forwarded(app, command));
+  for (const hbirl::cli::FullCommand& command : hbirl::cli::kFullCommands)
+    remember(hbirl::cli::add_forwarded(app, command));
 #endif
   try {
     app.parse(argc, argv);

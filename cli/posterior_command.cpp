@@ -54,7 +54,8 @@ int run_posterior(const PosteriorArgs& args) {
   std::vector<ObservedTrajectory> observed;
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     if (!problem.demonstration[i].steps) {
-      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps", "missing; the posterior needs observations"));
+      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps",
+                                             "missing; the posterior needs observations"));
     }
     observed.push_back(*problem.demonstration[i].steps);
   }
@@ -88,11 +89,14 @@ int run_posterior(const PosteriorArgs& args) {
       Eigen::Index best = 0;
       post.marginals.row(t).maxCoeff(&best);
       for (int r = 0; r < mdp.num_pairs(); ++r) {
-        if (post.marginals(t, r) > 0.0) marginals.push_back({r / mdp.num_actions, r % mdp.num_actions, post.marginals(t, r)});
+        if (post.marginals(t, r) > 0.0)
+          marginals.push_back({r / mdp.num_actions, r % mdp.num_actions, post.marginals(t, r)});
       }
       nlohmann::ordered_json sources = nlohmann::ordered_json::array();
-      for (int n = item.steps->step_begin[static_cast<size_t>(t)]; n < item.steps->step_begin[static_cast<size_t>(t) + 1]; ++n) {
-        sources.push_back(std::vector<double>(post.sources.row(n).data(), post.sources.row(n).data() + post.sources.cols()));
+      for (int n = item.steps->step_begin[static_cast<size_t>(t)];
+           n < item.steps->step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        sources.push_back(
+            std::vector<double>(post.sources.row(n).data(), post.sources.row(n).data() + post.sources.cols()));
       }
       nlohmann::ordered_json step;
       step["marginals"] = marginals;
@@ -129,14 +133,14 @@ int run_posterior(const PosteriorArgs& args) {
 
 Command add_posterior(CLI::App& app) {
   auto args = std::make_shared<PosteriorArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "posterior",
-      "Print the posterior of every trajectory given its observations: the log-likelihood,\n"
-      "per step the (s, a) marginals [s, a, p] with p > 0, and per observation the posterior\n"
-      "over its source [p_subject, p_e0, ...]. The policy is the soft policy of --weights\n"
-      "(default all zero); O is the Dirichlet mean of the file's alpha (not refined). With\n"
-      "truth in the file, each step also gets truth_probability and the output map_accuracy\n"
-      "(share of steps whose most probable pair is the true one).");
+  CLI::App* cmd =
+      app.add_subcommand("posterior",
+                         "Print the posterior of every trajectory given its observations: the log-likelihood,\n"
+                         "per step the (s, a) marginals [s, a, p] with p > 0, and per observation the posterior\n"
+                         "over its source [p_subject, p_e0, ...]. The policy is the soft policy of --weights\n"
+                         "(default all zero); O is the Dirichlet mean of the file's alpha (not refined). With\n"
+                         "truth in the file, each step also gets truth_probability and the output map_accuracy\n"
+                         "(share of steps whose most probable pair is the true one).");
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")->required();
   app::add_learn_settings(cmd, args->engine, app::Front::kEngine);
   cmd->add_option("--weights,-w", args->weights, "Reward weights theta as w1,w2,... (default: all zero)");

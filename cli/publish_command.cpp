@@ -52,7 +52,8 @@ int run_publish(const PublishArgs& args) {
   options.max_frames_per_second = args.rate;  // one frame per step
   services::SimDriver driver(*bus, name, std::move(run), options, counters);
   std::cerr << "hbirl publish: " << name << ": " << problem.demonstration.size() << " trajectories (" << controlled
-            << " controlled), " << steps << " steps, to " << (args.url.empty() ? "LCM's default URL" : args.url) << "\n";
+            << " controlled), " << steps << " steps, to " << (args.url.empty() ? "LCM's default URL" : args.url)
+            << "\n";
   // After the run: frames asked for again and the end markers repeated, until the
   // optimiser's reward or --linger seconds.
   std::optional<std::chrono::steady_clock::time_point> published;
@@ -67,8 +68,8 @@ int run_publish(const PublishArgs& args) {
         std::cerr << "hbirl publish: " << s << "\n";
       });
   heartbeat.tick(finished ? "done" : "stopped", true);
-  std::cerr << "hbirl publish: " << (finished ? "done" : "stopped") << "; " << driver.frames_resent() << " steps sent again on request, "
-            << counters.bad_messages << " bad messages\n";
+  std::cerr << "hbirl publish: " << (finished ? "done" : "stopped") << "; " << driver.frames_resent()
+            << " steps sent again on request, " << counters.bad_messages << " bad messages\n";
   return finished ? 0 : 1;
 }
 

@@ -93,9 +93,13 @@ Command add_render(CLI::App& app) {
                   "foreground, mirror")
       ->capture_default_str();
   cmd->add_option("--out,-o", a->out, "Output folder")->required();
-  cmd->add_option("--sorts", a->sorts, "Number of sorts (trajectories) to render")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--sorts", a->sorts, "Number of sorts (trajectories) to render")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   cmd->add_option("--every", a->every, "Write every N-th frame")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--width", a->width, "Frame width in pixels (height = 3/4 of it)")->check(CLI::Range(160, 4096))->capture_default_str();
+  cmd->add_option("--width", a->width, "Frame width in pixels (height = 3/4 of it)")
+      ->check(CLI::Range(160, 4096))
+      ->capture_default_str();
   cmd->add_option("--fps", a->fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
   cmd->add_option("--start", a->start, "Sim time of the first sort, seconds (moves the confounders)")
       ->check(CLI::Range(0.0, 1e7))

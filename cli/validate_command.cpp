@@ -83,9 +83,12 @@ int run_validate_domain(const std::string& path) {
   out["has_observation_model"] = d.observation_model.has_value();
   if (d.sensor) {
     const SensorSpec& s = *d.sensor;
-    out["sensor"] = {{"observations_per_step", s.observations_per_step}, {"eta", s.eta},
-                     {"occlusion", s.occlusion},                         {"trajectories", s.trajectories},
-                     {"length", s.length},                               {"controlled_trajectories", s.controlled_trajectories}};
+    out["sensor"] = {{"observations_per_step", s.observations_per_step},
+                     {"eta", s.eta},
+                     {"occlusion", s.occlusion},
+                     {"trajectories", s.trajectories},
+                     {"length", s.length},
+                     {"controlled_trajectories", s.controlled_trajectories}};
   } else {
     out["sensor"] = nullptr;
   }

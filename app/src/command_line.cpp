@@ -23,7 +23,8 @@ const char* type_name(const Setting& s) {
 // The help text: the setting's, its range, and what unset means.
 std::string help_of(const Setting& s, Front front) {
   std::string help = s.help + " (" + describe_range(s) + ")";
-  if (front == Front::kCommandLine && s.hidden_data && s.group != Setting::Group::kPrior) help += "; not with --from truth";
+  if (front == Front::kCommandLine && s.hidden_data && s.group != Setting::Group::kPrior)
+    help += "; not with --from truth";
   return help;
 }
 
@@ -87,11 +88,14 @@ void add_domain_options(CLI::App* cmd, DomainArgs& args, const std::string& what
 }
 
 void add_key_option(CLI::App* cmd, std::string& key_file, const std::string& what) {
-  cmd->add_option("--key", key_file, "The run's key file (services/launch.sh writes OUT/run.key): " + what + " (docs/RELIABILITY.md)");
+  cmd->add_option("--key", key_file,
+                  "The run's key file (services/launch.sh writes OUT/run.key): " + what + " (docs/RELIABILITY.md)");
 }
 
 void add_url_option(CLI::App* cmd, std::string& url, const std::string& what) {
-  cmd->add_option("--url", url, "LCM URL " + what + " (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
+  cmd->add_option(
+      "--url", url,
+      "LCM URL " + what + " (default: LCM's, udpm://239.255.76.67:7667?ttl=0; add ttl=1 to reach other machines)");
 }
 
 }  // namespace hbirl::app

@@ -18,8 +18,8 @@ LearnOptions em_options(const LearnSettings& settings) {
 // Every iterate handed to the hook, with the E-step it came from.
 IterationReport report_of(const LearnHooks& hooks, const ObservationEStep* observed) {
   if (!hooks.on_iteration) return nullptr;
-  return [&hooks, observed](int restart, int iteration, double objective, const Eigen::VectorXd& theta, const EStepResult& e,
-                            const ObservationPrior* alpha) {
+  return [&hooks, observed](int restart, int iteration, double objective, const Eigen::VectorXd& theta,
+                            const EStepResult& e, const ObservationPrior* alpha) {
     hooks.on_iteration(Iterate{restart, iteration, objective, theta, e, alpha, observed});
   };
 }

@@ -20,7 +20,8 @@ constexpr long double kUnbounded = std::numeric_limits<long double>::infinity();
 // A setting of `type` stored in the `T` that `field` reaches. The const_cast only reads:
 // one accessor serves get and put.
 template <typename T>
-Setting stored_in(Type type, std::string name, std::string flag, std::string help, std::function<T&(LearnSettings&)> field) {
+Setting stored_in(Type type, std::string name, std::string flag, std::string help,
+                  std::function<T&(LearnSettings&)> field) {
   Setting s;
   s.name = std::move(name);
   s.flag = std::move(flag);
@@ -99,11 +100,11 @@ std::vector<Setting> make_schema() {
   // The sampler keeps every kept sweep of every chain (4 bytes a step): a million is
   // ~40 MB per chain of 10 steps.
   add(engine_setting(integer<int>("mcmc_samples", "--mcmc-samples", "MCMC: sweeps kept per chain", 1, 1e6,
-                          [](LearnSettings& l) -> int& { return l.mcmc.samples; })));
+                                  [](LearnSettings& l) -> int& { return l.mcmc.samples; })));
   add(engine_setting(integer<int>("mcmc_burn_in", "--mcmc-burn-in", "MCMC: sweeps discarded per chain", 0, 1e6,
-                          [](LearnSettings& l) -> int& { return l.mcmc.burn_in; })));
-  add(engine_setting(integer<int>("mcmc_chains", "--mcmc-chains", "MCMC: independent chains (R-hat compares them)", 1, 1000,
-                          [](LearnSettings& l) -> int& { return l.mcmc.chains; })));
+                                  [](LearnSettings& l) -> int& { return l.mcmc.burn_in; })));
+  add(engine_setting(integer<int>("mcmc_chains", "--mcmc-chains", "MCMC: independent chains (R-hat compares them)", 1,
+                                  1000, [](LearnSettings& l) -> int& { return l.mcmc.chains; })));
 
   Setting optimizer = choice("optimizer", "--optimizer",
                              "M-step optimiser: 'lbfgs' (L-BFGS) or 'eg' (the paper's adaptive exponentiated gradient)",
@@ -126,33 +127,34 @@ std::vector<Setting> make_schema() {
   add(integer<std::uint64_t>("seed", "--seed", "Seed of every random choice", 0,
                              static_cast<long double>(std::numeric_limits<std::uint64_t>::max()),
                              [](LearnSettings& l) -> std::uint64_t& { return l.em.seed; }));
-  Setting threads = integer<int>("threads", "--threads", "Threads (0 = one per core); the result does not depend on it", 0,
-                                 4096, [](LearnSettings& l) -> int& { return l.em.threads; });
+  Setting threads = integer<int>("threads", "--threads", "Threads (0 = one per core); the result does not depend on it",
+                                 0, 4096, [](LearnSettings& l) -> int& { return l.em.threads; });
   threads.optimiser = false;  // one E-step at a time on the bus
   add(std::move(threads));
   add(integer<int>("max_iterations", "--max-iterations", "Optimiser iteration limit per M-step", 1, 1e8,
                    [](LearnSettings& l) -> int& { return l.em.optimizer.max_iterations; }));
-  add(number("tolerance", "--tolerance", "The M-step has converged when ||gradient|| <= tolerance * max(1, ||theta||)", 0,
-             true, [](LearnSettings& l) -> double& { return l.em.optimizer.gradient_tolerance; }));
+  add(number("tolerance", "--tolerance", "The M-step has converged when ||gradient|| <= tolerance * max(1, ||theta||)",
+             0, true, [](LearnSettings& l) -> double& { return l.em.optimizer.gradient_tolerance; }));
   add(number("eg_radius", "--eg-radius", "EG only: search the L1 ball ||theta||_1 <= radius", 0, true,
              [](LearnSettings& l) -> double& { return l.em.optimizer.eg_radius; }));
   add(number("eg_rate", "--eg-rate", "EG only: learning rate eta (<= 0.25 for its regret bound)", 0, true,
              [](LearnSettings& l) -> double& { return l.em.optimizer.eg_learning_rate; }));
-  add(observations_only(integer<int>(
-      "max_em_iterations", "--max-em-iterations",
-      "HiddenDataEM's budget of E-step + M-step evaluations (SQUAREM's rejected extrapolations count; "
-      "\"em_evaluations\" in the output)",
-      1, 1e6, [](LearnSettings& l) -> int& { return l.em.max_em_iterations; })));
-  add(observations_only(number("em_theta_tolerance", "--em-theta-tolerance",
-                               "EM has converged when max|theta change| <= this * max(1, max|theta|), the log-likelihood "
-                               "has settled (--em-likelihood-tolerance) and O has converged",
-                               0, true, [](LearnSettings& l) -> double& { return l.em.theta_tolerance; })));
+  add(observations_only(
+      integer<int>("max_em_iterations", "--max-em-iterations",
+                   "HiddenDataEM's budget of E-step + M-step evaluations (SQUAREM's rejected extrapolations count; "
+                   "\"em_evaluations\" in the output)",
+                   1, 1e6, [](LearnSettings& l) -> int& { return l.em.max_em_iterations; })));
+  add(observations_only(
+      number("em_theta_tolerance", "--em-theta-tolerance",
+             "EM has converged when max|theta change| <= this * max(1, max|theta|), the log-likelihood "
+             "has settled (--em-likelihood-tolerance) and O has converged",
+             0, true, [](LearnSettings& l) -> double& { return l.em.theta_tolerance; })));
   add(observations_only(number("em_likelihood_tolerance", "--em-likelihood-tolerance",
-                               "EM's log-likelihood has settled when it changes by <= this * max(1, |log-likelihood|)", 0,
-                               true, [](LearnSettings& l) -> double& { return l.em.likelihood_tolerance; })));
+                               "EM's log-likelihood has settled when it changes by <= this * max(1, |log-likelihood|)",
+                               0, true, [](LearnSettings& l) -> double& { return l.em.likelihood_tolerance; })));
   add(observations_only(number("alpha_tolerance", "--alpha-tolerance",
-                               "The observation model has converged when O moves less than this (docs/MODEL.md)", 0, true,
-                               [](LearnSettings& l) -> double& { return l.alpha_tolerance; })));
+                               "The observation model has converged when O moves less than this (docs/MODEL.md)", 0,
+                               true, [](LearnSettings& l) -> double& { return l.alpha_tolerance; })));
   add(observations_only(integer<int>("max_alpha_iterations", "--max-alpha-iterations",
                                      "Observation-model refinements per E-step (EM continues until O has converged)", 1,
                                      1e6, [](LearnSettings& l) -> int& { return l.max_alpha_iterations; })));
@@ -162,18 +164,22 @@ std::vector<Setting> make_schema() {
   learn_o.flag = "--learn-observation-model";
   learn_o.help = "Refine the observation model O inside the E-step (true) or keep the prior's mean (false)";
   learn_o.type = Type::kSwitch;
-  learn_o.get = [](const LearnSettings& l) { return l.learn_observation_model ? json(*l.learn_observation_model) : json(); };
+  learn_o.get = [](const LearnSettings& l) {
+    return l.learn_observation_model ? json(*l.learn_observation_model) : json();
+  };
   learn_o.put = [](LearnSettings& l, const json& v) {
     l.learn_observation_model = v.is_null() ? std::nullopt : std::optional<bool>(v.get<bool>());
   };
   add(unset_means(std::move(learn_o), "as the prior says (true unless it was made with learn false)"));
 
   Setting update = choice("alpha_update", "--alpha-update",
-                               "How the observation model is learned: 'posterior' (the Dirichlet posterior of the prior and "
-                               "the data, the prior's weight chosen from the data; docs/MODEL.md) or 'paper' (alpha = c "
-                               "alpha_dot + (1 - c) alpha, which forgets the prior at its fixed point)",
-                               {"posterior", "paper"});
-  update.get = [](const LearnSettings& l) { return l.alpha_update ? json(alpha_update_name(*l.alpha_update)) : json(); };
+                          "How the observation model is learned: 'posterior' (the Dirichlet posterior of the prior and "
+                          "the data, the prior's weight chosen from the data; docs/MODEL.md) or 'paper' (alpha = c "
+                          "alpha_dot + (1 - c) alpha, which forgets the prior at its fixed point)",
+                          {"posterior", "paper"});
+  update.get = [](const LearnSettings& l) {
+    return l.alpha_update ? json(alpha_update_name(*l.alpha_update)) : json();
+  };
   update.put = [](LearnSettings& l, const json& v) {
     AlphaUpdate u = AlphaUpdate::kPosterior;
     if (v.is_null()) {
@@ -192,19 +198,22 @@ std::vector<Setting> make_schema() {
   c.above_min = true;
   c.max = 1;
   c.get = [](const LearnSettings& l) { return l.c ? json(*l.c) : json(); };
-  c.put = [](LearnSettings& l, const json& v) { l.c = v.is_null() ? std::nullopt : std::optional<double>(v.get<double>()); };
+  c.put = [](LearnSettings& l, const json& v) {
+    l.c = v.is_null() ? std::nullopt : std::optional<double>(v.get<double>());
+  };
   add(unset_means(std::move(c), "the prior's, else 0.1"));
 
   Setting eta = choice("eta", "--eta",
-                            "'stated': take every observation's eta as given; 'learned': learn it per context (the "
-                            "labeller's rule, else each distinct eta; docs/MODEL.md)",
-                            {"stated", "learned"});
+                       "'stated': take every observation's eta as given; 'learned': learn it per context (the "
+                       "labeller's rule, else each distinct eta; docs/MODEL.md)",
+                       {"stated", "learned"});
   eta.get = [](const LearnSettings& l) { return l.learn_eta ? json(*l.learn_eta ? "learned" : "stated") : json(); };
   eta.put = [](LearnSettings& l, const json& v) {
     l.learn_eta = v.is_null() ? std::nullopt : std::optional<bool>(v.get<std::string>() == "learned");
   };
-  add(unset_means(std::move(eta), "the prior's (a problem file's or domain file's observation_model.learn_eta), "
-                                  "else learned with the posterior update"));
+  add(unset_means(std::move(eta),
+                  "the prior's (a problem file's or domain file's observation_model.learn_eta), "
+                  "else learned with the posterior update"));
   return schema;
 }
 
@@ -240,7 +249,8 @@ std::string describe_range(const Setting& s) {
   switch (s.type) {
     case Type::kChoice: {
       std::string out;
-      for (size_t i = 0; i < s.choices.size(); ++i) out += (i == 0 ? "" : i + 1 == s.choices.size() ? " or " : ", ") + s.choices[i];
+      for (size_t i = 0; i < s.choices.size(); ++i)
+        out += (i == 0 ? "" : i + 1 == s.choices.size() ? " or " : ", ") + s.choices[i];
       return out;
     }
     case Type::kSwitch:

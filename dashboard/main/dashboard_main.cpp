@@ -23,19 +23,24 @@ namespace {
 
 int run(int argc, char** argv) {
   using namespace hbirl;
-  CLI::App app("hbirl-dashboard: a live view of a learning run in the browser -- the camera with the\n"
-               "detections coloured by their most likely source, the expert's (s, a) posterior against\n"
-               "ground truth, log-likelihood and ILE per EM iteration, learned against true weights, the\n"
-               "learned observation model, and every service's health.\n"
-               "Reads the bus (--url) or follows a log as lcm-logger writes it (--log, also a finished one).");
+  CLI::App app(
+      "hbirl-dashboard: a live view of a learning run in the browser -- the camera with the\n"
+      "detections coloured by their most likely source, the expert's (s, a) posterior against\n"
+      "ground truth, log-likelihood and ILE per EM iteration, learned against true weights, the\n"
+      "learned observation model, and every service's health.\n"
+      "Reads the bus (--url) or follows a log as lcm-logger writes it (--log, also a finished one).");
   std::string url, log, host = "127.0.0.1", web = HBIRL_DASHBOARD_WEB_DIR;
   int port = 8765;
   double wait_log = 60.0;
   app::add_url_option(&app, url, "to listen on (not with --log)");
   app.add_option("--log", log, "Follow this LCM log (services/launch.sh --record writes OUT/run.lcmlog)");
-  app.add_option("--wait-log", wait_log, "Wait this many seconds for the log to appear")->check(CLI::Range(0.0, 3600.0))->capture_default_str();
+  app.add_option("--wait-log", wait_log, "Wait this many seconds for the log to appear")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.add_option("--host", host, "Address to serve on (127.0.0.1: this machine only)")->capture_default_str();
-  app.add_option("--port", port, "Port to serve on (0: any free one)")->check(CLI::Range(0, 65535))->capture_default_str();
+  app.add_option("--port", port, "Port to serve on (0: any free one)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
   app.add_option("--web", web, "Folder with the page (index.html, dashboard.js, ...)")->capture_default_str();
   dashboard::ServerLimits limits;
   app.add_option("--max-connections", limits.max_connections,
@@ -56,7 +61,8 @@ int run(int argc, char** argv) {
   app.add_option("--max-waiting-per-client", limits.max_waiting_per_client,
                  "Connections one client address (IPv6: one /64) may have waiting for their heads; a new one\n"
                  "beyond this closes that client's OLDEST waiting connection, so a request sent whole is\n"
-                 "still served (at most " + std::to_string(limits.max_waiting) + " wait in all, the oldest closed first)")
+                 "still served (at most " +
+                     std::to_string(limits.max_waiting) + " wait in all, the oldest closed first)")
       ->check(CLI::Range(1, limits.max_waiting))
       ->capture_default_str();
   std::string key_file;
@@ -64,8 +70,9 @@ int run(int argc, char** argv) {
                       "show only messages signed with it, count the rest as bad; without it the dashboard believes\n"
                       "anything on the bus");
   app::DomainArgs domain_args;
-  app::add_domain_options(&app, domain_args,
-                          "The run's domain when it is a domain file (built-in domains, onion and gridworld, are named by the run)");
+  app::add_domain_options(
+      &app, domain_args,
+      "The run's domain when it is a domain file (built-in domains, onion and gridworld, are named by the run)");
   CLI11_PARSE(app, argc, argv);
   const std::shared_ptr<const Domain> domain = app::open_domain_args(domain_args, "hbirl-dashboard");
   if (!url.empty() && !log.empty()) throw InputError("--log", "give --url or --log, not both");
@@ -88,11 +95,13 @@ int run(int argc, char** argv) {
       if (thread.joinable()) thread.join();
     }
   } stop_server{server, serving};
-  std::fprintf(stderr, "hbirl-dashboard: http://%s:%d/  (%s %s; Ctrl-C to stop)\n", host == "0.0.0.0" ? "localhost" : host.c_str(),
-               bound, log.empty() ? "listening on" : "following", log.empty() ? (url.empty() ? "LCM's default URL" : url.c_str()) : log.c_str());
+  std::fprintf(stderr, "hbirl-dashboard: http://%s:%d/  (%s %s; Ctrl-C to stop)\n",
+               host == "0.0.0.0" ? "localhost" : host.c_str(), bound, log.empty() ? "listening on" : "following",
+               log.empty() ? (url.empty() ? "LCM's default URL" : url.c_str()) : log.c_str());
   if (!log.empty()) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                              std::chrono::duration<double>(wait_log));
+    const auto until =
+        std::chrono::steady_clock::now() +
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wait_log));
     while (!std::filesystem::exists(log) && std::chrono::steady_clock::now() < until && !services::stop_requested()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
@@ -105,7 +114,8 @@ int run(int argc, char** argv) {
   }
   state.subscribe(*bus, counters);
   std::unique_ptr<services::Heartbeat> heartbeat;
-  if (log.empty()) heartbeat = std::make_unique<services::Heartbeat>(*bus, counters, "dashboard", services::default_id("dashboard"));
+  if (log.empty())
+    heartbeat = std::make_unique<services::Heartbeat>(*bus, counters, "dashboard", services::default_id("dashboard"));
   while (!services::stop_requested()) {
     if (bus->handle(100) < 0) break;
     if (heartbeat) heartbeat->tick("running");

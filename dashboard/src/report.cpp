@@ -23,11 +23,20 @@ std::string html(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -43,7 +52,8 @@ std::string number(const json& x, int digits = 4) {
 
 std::vector<std::string> names_or_numbers(const json& names, size_t n, const std::string& prefix) {
   std::vector<std::string> out;
-  for (size_t i = 0; i < n; ++i) out.push_back(i < names.size() ? names[i].get<std::string>() : prefix + std::to_string(i));
+  for (size_t i = 0; i < n; ++i)
+    out.push_back(i < names.size() ? names[i].get<std::string>() : prefix + std::to_string(i));
   return out;
 }
 
@@ -75,12 +85,14 @@ void em_figure(const json& s, const std::string& stem, Report& r) {
     const double s_e = e.value("prior_strength", 0.0);
     if (strength && *strength != s_e) data << "\n";
     strength = s_e;
-    data << e["iteration"].get<int>() << " " << (e["log_likelihood"].is_null() ? "NaN" : number(e["log_likelihood"], 12)) << " "
+    data << e["iteration"].get<int>() << " "
+         << (e["log_likelihood"].is_null() ? "NaN" : number(e["log_likelihood"], 12)) << " "
          << (e["ile"].is_null() ? "NaN" : number(e["ile"], 8)) << "\n";
     ile = ile || !e["ile"].is_null();
   }
   data << "EOD\nset title 'Learning: EM objective" << (ile ? " and ILE" : "") << " per EM iteration'\n"
-       << "set xlabel 'EM iteration'\nset ylabel 'log Pr(observations | θ, O) + log prior'\nset grid\nset key bottom right box opaque\n";
+       << "set xlabel 'EM iteration'\nset ylabel 'log Pr(observations | θ, O) + log prior'\nset grid\nset key bottom "
+          "right box opaque\n";
   if (ile) data << "set y2label 'ILE (true reward)'\nset y2tics\nset ytics nomirror\nset y2range [0:*]\n";
   std::string plot = "plot $em using 1:2 with linespoints lw 2 pt 7 ps 0.6 lc rgb '#1565c0' title 'EM objective'";
   if (ile) plot += ", $em using 1:3 axes x1y2 with linespoints lw 2 pt 5 ps 0.6 lc rgb '#d84315' title 'ILE'";
@@ -107,11 +119,14 @@ void theta_figure(const json& s, const std::string& stem, Report& r) {
   const std::vector<double> a = scale(learned), b = scale(truth);
   std::ostringstream data;
   data << "$theta << EOD\n";
-  for (size_t k = 0; k < a.size(); ++k) data << '"' << names[k] << "\" " << a[k] << " " << (k < b.size() ? b[k] : 0.0) << "\n";
-  data << "EOD\nset title 'Reward weights (each scaled to max |w| = 1)'\nset style data histograms\nset style histogram clustered gap 1\n"
+  for (size_t k = 0; k < a.size(); ++k)
+    data << '"' << names[k] << "\" " << a[k] << " " << (k < b.size() ? b[k] : 0.0) << "\n";
+  data << "EOD\nset title 'Reward weights (each scaled to max |w| = 1)'\nset style data histograms\nset style "
+          "histogram clustered gap 1\n"
        << "set style fill solid 0.85 border -1\nset yrange [-1.1:1.1]\nset grid ytics\nset key top right box opaque\n"
        << "set xtics rotate by -20\nset ylabel 'w / max |w|'\n";
-  std::string plot = "plot $theta using 2:xtic(1) lc rgb '#1565c0' title " + gnuplot_quoted(t["final"].get<bool>() ? "learned θ (final)" : "learned θ");
+  std::string plot = "plot $theta using 2:xtic(1) lc rgb '#1565c0' title " +
+                     gnuplot_quoted(t["final"].get<bool>() ? "learned θ (final)" : "learned θ");
   if (!b.empty()) plot += ", '' using 3 lc rgb '#ef6c00' title 'true weights'";
   plot += "\n";
   const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);
@@ -133,11 +148,14 @@ void eta_figure(const json& s, const std::string& stem, Report& r) {
     data << '"' << name << " (" << number(c["observations"], 4) << ")\" " << number(c["stated"][0], 10) << " "
          << number(c["learned"][0], 10) << "\n";
   }
-  data << "EOD\nset title " << gnuplot_quoted("Learned η per context, EM iteration " + std::to_string(e["iteration"].get<int>()))
+  data << "EOD\nset title "
+       << gnuplot_quoted("Learned η per context, EM iteration " + std::to_string(e["iteration"].get<int>()))
        << "\nset style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.85 border -1\n"
-       << "set yrange [0:1.2]\nset ytics 0, 0.2, 1\nset grid ytics\nset key top center horizontal box opaque\nset xtics rotate by -40 font ',8'\n"
+       << "set yrange [0:1.2]\nset ytics 0, 0.2, 1\nset grid ytics\nset key top center horizontal box opaque\nset "
+          "xtics rotate by -40 font ',8'\n"
        << "set ylabel 'η(subject)'\nset bmargin 9\nset rmargin 10\n";
-  const std::string plot = "plot $eta using 2:xtic(1) lc rgb '#9e9e9e' title 'stated', '' using 3 lc rgb '#1565c0' title 'learned'\n";
+  const std::string plot =
+      "plot $eta using 2:xtic(1) lc rgb '#9e9e9e' title 'stated', '' using 3 lc rgb '#1565c0' title 'learned'\n";
   const std::string why = run_gnuplot(stem, data.str(), plot, 1000, 500);
   (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
 }
@@ -161,11 +179,12 @@ void posterior_figure(const json& s, const std::string& stem, Report& r) {
     for (size_t t = 0; t < steps; ++t) data << t << " " << p["truth"][t]["state"].get<int>() << "\n";
     data << "EOD\n";
   }
-  data << "set title " << gnuplot_quoted("Posterior of the expert's state, episode " + std::to_string(p["episode"].get<int>()) +
-                                 ", EM iteration " + std::to_string(p["iteration"].get<int>()))
+  data << "set title "
+       << gnuplot_quoted("Posterior of the expert's state, episode " + std::to_string(p["episode"].get<int>()) +
+                         ", EM iteration " + std::to_string(p["iteration"].get<int>()))
        << "\nset xlabel 'step'\nset cblabel 'Pr(state at step)'\nset cbrange [0:1]\n"
-       << "set palette defined (0 'white', 1 '#1565c0')\nset xrange [-0.5:" << edge(steps) << "]\nset yrange [-0.5:" << edge(states)
-       << "]\nset ytics font ',8'\n";
+       << "set palette defined (0 'white', 1 '#1565c0')\nset xrange [-0.5:" << edge(steps)
+       << "]\nset yrange [-0.5:" << edge(states) << "]\nset ytics font ',8'\n";
   std::vector<std::string> step_names;
   for (size_t t = 0; t < steps; ++t) step_names.push_back(std::to_string(t + 1));
   data << tics("xtics", step_names) << tics("ytics", names);
@@ -184,7 +203,8 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
   const size_t pairs = subject.size(), symbols = subject[0].size();
   const int actions = m["num_actions"];
   const std::vector<std::string> symbol_names = names_or_numbers(s["names"]["symbols"], symbols, "symbol ");
-  const std::vector<std::string> state_names = names_or_numbers(s["names"]["states"], pairs / static_cast<size_t>(actions), "state ");
+  const std::vector<std::string> state_names =
+      names_or_numbers(s["names"]["states"], pairs / static_cast<size_t>(actions), "state ");
   std::vector<std::string> pair_rows;  // a state's name on its first action's row
   for (size_t p = 0; p < pairs; ++p) pair_rows.push_back(state_names[p / static_cast<size_t>(actions)]);
   std::ostringstream data;
@@ -205,12 +225,17 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
   data << "set palette defined (0 'white', 1 '#1565c0')\nset cbrange [0:1]\nset cblabel 'Pr(symbol)'\n";
   std::ostringstream plot;
   plot << "set multiplot layout 1," << (confounders.empty() ? 1 : 2) << "\n"
-       << "set title " << gnuplot_quoted("Subject: O(symbol | state, action), EM iteration " + std::to_string(m["iteration"].get<int>())) << "\n"
-       << tics("xtics rotate by -60 font ',7'", symbol_names) << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions))
-       << "set xrange [-0.5:" << edge(symbols) << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
+       << "set title "
+       << gnuplot_quoted("Subject: O(symbol | state, action), EM iteration " +
+                         std::to_string(m["iteration"].get<int>()))
+       << "\n"
+       << tics("xtics rotate by -60 font ',7'", symbol_names)
+       << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions)) << "set xrange [-0.5:" << edge(symbols)
+       << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
        << "plot $subject matrix with image notitle\n";
   if (!confounders.empty()) {
-    const std::vector<std::string> sources = names_or_numbers(s["names"]["sources"], confounders.size() + 1, "element ");
+    const std::vector<std::string> sources =
+        names_or_numbers(s["names"]["sources"], confounders.size() + 1, "element ");
     plot << "set title 'Confounding elements: O(symbol | element)'\n"
          << tics("ytics font ',8'", std::vector<std::string>(sources.begin() + 1, sources.end()))
          << "set yrange [-0.5:" << edge(confounders.size()) << "]\nplot $elements matrix with image notitle\n";
@@ -241,13 +266,15 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
                                   " messages signed with a run key: give it (launch.sh wrote OUT/run.key)");
   }
   if (counters.messages_in == 0) {
-    throw InputError("--log", "nothing in '" + log_path + "' could be read (" + std::to_string(counters.bad_messages) + " bad messages" +
+    throw InputError("--log", "nothing in '" + log_path + "' could be read (" + std::to_string(counters.bad_messages) +
+                                  " bad messages" +
                                   (counters.last_problem.empty() ? "" : "; the last: " + counters.last_problem) + ")");
   }
   if (counters.other_run > 0 && !services::RunKey::read(key_file).run()) {
     throw InputError("--log", "'" + log_path + "' holds messages of more than one run signed with this key (" +
                                   std::to_string(counters.other_run) +
-                                  " not of the first; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
+                                  " not of the first; a replay recorded with it?): give the key file of the run to "
+                                  "read (OUT/run.key names its run)");
   }
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
@@ -278,13 +305,15 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   page << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hbirl report</title>\n"
        << "<style>body{font-family:system-ui,sans-serif;max-width:1250px;margin:1em auto;padding:0 1em;color:#222}"
        << "img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}td,th{padding:.2em .7em;"
-       << "border-bottom:1px solid #eee;text-align:left}figure{margin:1.2em 0}figcaption{color:#555}</style></head><body>\n"
+       << "border-bottom:1px solid #eee;text-align:left}figure{margin:1.2em "
+          "0}figcaption{color:#555}</style></head><body>\n"
        << "<h1>hbirl report</h1>\n<p>From <code>" << html(log_path) << "</code>: " << report.messages << " messages ("
-       << report.bad_messages << " that did not decode or validate). The data of every figure: <a href=\"state.json\">state.json</a>.</p>\n";
+       << report.bad_messages
+       << " that did not decode or validate). The data of every figure: <a href=\"state.json\">state.json</a>.</p>\n";
   const json& run = s["run"];
   page << "<table><tr><th>domain</th><td>" << html(s["domain"].get<std::string>()) << "</td></tr>"
-       << "<tr><th>episodes</th><td>" << run["episodes_ended"] << "</td></tr><tr><th>camera frames</th><td>" << run["frames"]
-       << "</td></tr><tr><th>EM iterations</th><td>" << s["em"].size() << "</td></tr>";
+       << "<tr><th>episodes</th><td>" << run["episodes_ended"] << "</td></tr><tr><th>camera frames</th><td>"
+       << run["frames"] << "</td></tr><tr><th>EM iterations</th><td>" << s["em"].size() << "</td></tr>";
   if (!s["reward"].is_null()) {
     page << "<tr><th>final log-likelihood</th><td>" << number(s["reward"]["log_likelihood"], 10) << "</td></tr>"
          << "<tr><th>ILE</th><td>" << number(s["reward"]["ile"]) << "</td></tr>";
@@ -292,7 +321,8 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   if (!s["theta"].is_null()) {
     page << "<tr><th>learned θ</th><td>";
     const auto names = names_or_numbers(s["names"]["features"], s["theta"]["learned"].size(), "feature ");
-    for (size_t k = 0; k < names.size(); ++k) page << (k ? ", " : "") << html(names[k]) << " " << number(s["theta"]["learned"][k]);
+    for (size_t k = 0; k < names.size(); ++k)
+      page << (k ? ", " : "") << html(names[k]) << " " << number(s["theta"]["learned"][k]);
     page << "</td></tr>";
   }
   page << "</table>\n";
@@ -303,32 +333,37 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
          << "), each detection boxed in the colour of its most likely source by the labeller's η:";
     const json& sources = s["names"]["sources"];
     for (size_t z = 0; z < sources.size(); ++z) {
-      page << " <span style=\"color:" << s["source_colours"][z % s["source_colours"].size()].get<std::string>() << "\">■</span> "
-           << html(sources[z].get<std::string>());
+      page << " <span style=\"color:" << s["source_colours"][z % s["source_colours"].size()].get<std::string>()
+           << "\">■</span> " << html(sources[z].get<std::string>());
     }
     page << ".</figcaption></figure>\n";
   }
   const std::vector<std::pair<std::string, std::string>> captions = {
       {"em", "Log-likelihood of the observations (and the ILE under the true reward, when known) per EM iteration."},
       {"theta", "Learned reward weights against the expert's true weights."},
-      {"posterior", "The expert's posterior state at each step of the newest demonstration (sources summed out), "
-                    "with the ground truth."},
-      {"observation_model", "The learned observation model: the subject's per (state, action), and each confounding element's."},
-      {"eta", "Learned η: per context (the labeller's rule, else each distinct stated η), the subject's share as stated and as "
-              "learned from the data, for the contexts that cover the most observations (their number in brackets)."}};
+      {"posterior",
+       "The expert's posterior state at each step of the newest demonstration (sources summed out), "
+       "with the ground truth."},
+      {"observation_model",
+       "The learned observation model: the subject's per (state, action), and each confounding element's."},
+      {"eta",
+       "Learned η: per context (the labeller's rule, else each distinct stated η), the subject's share as stated and "
+       "as "
+       "learned from the data, for the contexts that cover the most observations (their number in brackets)."}};
   for (const auto& [stem, caption] : captions) {
     const std::string path = (dir / stem).string();
     if (std::find(report.figures.begin(), report.figures.end(), path) == report.figures.end()) continue;
-    page << "<figure><a href=\"" << stem << ".png\"><img src=\"" << stem << ".svg\" alt=\"" << html(caption) << "\"></a><figcaption>"
-         << html(caption) << " (<a href=\"" << stem << ".png\">PNG</a>, <a href=\"" << stem << ".svg\">SVG</a>, <a href=\"" << stem
-         << ".gp\">gnuplot script</a>)</figcaption></figure>\n";
+    page << "<figure><a href=\"" << stem << ".png\"><img src=\"" << stem << ".svg\" alt=\"" << html(caption)
+         << "\"></a><figcaption>" << html(caption) << " (<a href=\"" << stem << ".png\">PNG</a>, <a href=\"" << stem
+         << ".svg\">SVG</a>, <a href=\"" << stem << ".gp\">gnuplot script</a>)</figcaption></figure>\n";
   }
   page << "<h2>Services</h2>\n<table><tr><th>service</th><th>id</th><th>last state</th><th>messages in</th><th>out</th>"
        << "<th>bad messages</th><th>gaps</th><th>note</th></tr>\n";
   for (const auto& x : s["services"]) {
-    page << "<tr><td>" << html(x["service"].get<std::string>()) << "</td><td>" << html(x["id"].get<std::string>()) << "</td><td>"
-         << html(x["state"].get<std::string>()) << "</td><td>" << x["messages_in"] << "</td><td>" << x["messages_out"] << "</td><td>"
-         << x["bad_messages"] << "</td><td>" << x["gaps"] << "</td><td>" << html(x["detail"].get<std::string>()) << "</td></tr>\n";
+    page << "<tr><td>" << html(x["service"].get<std::string>()) << "</td><td>" << html(x["id"].get<std::string>())
+         << "</td><td>" << html(x["state"].get<std::string>()) << "</td><td>" << x["messages_in"] << "</td><td>"
+         << x["messages_out"] << "</td><td>" << x["bad_messages"] << "</td><td>" << x["gaps"] << "</td><td>"
+         << html(x["detail"].get<std::string>()) << "</td></tr>\n";
   }
   page << "</table>\n";
   for (const auto& p : report.problems) page << "<p>Not drawn: " << html(p) << "</p>\n";

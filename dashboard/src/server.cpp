@@ -58,7 +58,9 @@ namespace http_detail {
 
 using Clock = std::chrono::steady_clock;
 
-Clock::duration seconds(double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); }
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
 
 void close_socket(int fd) {
   ::shutdown(fd, SHUT_RDWR);
@@ -102,7 +104,8 @@ void address_of(const sockaddr_storage& a, std::string& ip, int& port) {
 // or write may wait.
 class DeadlineStream final : public httplib::Stream {
  public:
-  DeadlineStream(int fd, Clock::time_point deadline, Clock::duration each) : fd_(fd), deadline_(deadline), each_(each) {}
+  DeadlineStream(int fd, Clock::time_point deadline, Clock::duration each)
+      : fd_(fd), deadline_(deadline), each_(each) {}
   bool is_readable() const override { return begin_ < end_ || wait_for(fd_, POLLIN, deadline_, each_); }
   bool is_writable() const override { return wait_for(fd_, POLLOUT, deadline_, each_); }
   ssize_t read(char* ptr, size_t size) override {
@@ -345,7 +348,8 @@ class Gate {
         if (!it->complete && (now >= it->deadline || now >= it->idle_until)) drop(it);
         it = next;
       }
-      for (auto it = waiting_.begin(); it != waiting_.end();) {  // complete heads, in order of arrival, while the workers have room
+      for (auto it = waiting_.begin();
+           it != waiting_.end();) {  // complete heads, in order of arrival, while the workers have room
         const auto next = std::next(it);
         if (it->complete) {
           if (!workers_.offer(it->fd)) break;
@@ -534,7 +538,8 @@ struct Server::Impl {
 Server::Server(const DashboardState& state, const std::string& web_dir, ServerLimits limits)
     : impl_(std::make_unique<Impl>(limits)) {
   if (!std::filesystem::exists(std::filesystem::path(web_dir) / "index.html")) {
-    throw InputError("--web", "no index.html in '" + web_dir + "' (the dashboard's page; built into build/dashboard/web)");
+    throw InputError("--web",
+                     "no index.html in '" + web_dir + "' (the dashboard's page; built into build/dashboard/web)");
   }
   httplib::Server& http = impl_->http;
   if (!http.set_mount_point("/", web_dir)) throw InputError("--web", "cannot serve '" + web_dir + "'");
@@ -567,8 +572,11 @@ Server::Server(const DashboardState& state, const std::string& web_dir, ServerLi
 Server::~Server() = default;
 
 int Server::bind(const std::string& host, int port) {
-  const int bound = port == 0 ? impl_->http.bind_to_any_port(host.c_str()) : (impl_->http.bind_to_port(host.c_str(), port) ? port : -1);
-  if (bound < 0) throw InputError("--port", "cannot listen on " + host + ":" + std::to_string(port) + " (in use? try another --port)");
+  const int bound = port == 0 ? impl_->http.bind_to_any_port(host.c_str())
+                              : (impl_->http.bind_to_port(host.c_str(), port) ? port : -1);
+  if (bound < 0)
+    throw InputError("--port",
+                     "cannot listen on " + host + ":" + std::to_string(port) + " (in use? try another --port)");
   impl_->http.lengthen_backlog();
   return bound;
 }
@@ -576,7 +584,8 @@ int Server::bind(const std::string& host, int port) {
 void Server::run() {
   HttpServer& http = impl_->http;
   Wake wake;
-  Workers workers(std::max(1, impl_->limits.max_connections), [&http](int fd) { http.serve(fd); }, wake);
+  Workers workers(
+      std::max(1, impl_->limits.max_connections), [&http](int fd) { http.serve(fd); }, wake);
   Gate gate(impl_->limits, workers, wake);
   http.gate = &gate;
   http.listen_after_bind();  // accepts until stop()

@@ -19,7 +19,7 @@ constexpr int kMaxSymbols = 10000;
 constexpr int kMaxPairs = 1000000;
 constexpr int kMaxSteps = 100000;
 constexpr size_t kPendingFrames = 256;  // frames waiting for their detections and observations
-constexpr size_t kMaxEpisodes = 10000;   // ground truth kept for the newest episodes
+constexpr size_t kMaxEpisodes = 10000;  // ground truth kept for the newest episodes
 constexpr size_t kMaxIterations = 100000;
 constexpr size_t kMaxServices = 1000;
 constexpr double kServiceForgotten_s = 600.0;  // a service not heard from for this long is dropped
@@ -35,7 +35,7 @@ bool pairs_fit(int states, int actions, int pairs) {
 
 // One colour per source, the page's and the annotated frame's: subject first.
 const std::vector<cv::Scalar>& source_colours() {  // BGR
-  static const std::vector<cv::Scalar> c = {{119, 158, 27}, {179, 112, 117}, {2, 95, 217},  {138, 41, 231},
+  static const std::vector<cv::Scalar> c = {{119, 158, 27}, {179, 112, 117}, {2, 95, 217},   {138, 41, 231},
                                             {30, 166, 102}, {2, 171, 230},   {29, 118, 166}, {102, 102, 102}};
   return c;
 }
@@ -48,7 +48,8 @@ template <class Rows>
 void check_rows(const Rows& rows, const std::string& field, double lo, double hi) {
   for (const auto& row : rows) {
     for (double x : row) {
-      if (!(x >= lo && x <= hi)) throw InputError(field, "has a value outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      if (!(x >= lo && x <= hi))
+        throw InputError(field, "has a value outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     }
   }
 }
@@ -66,7 +67,8 @@ nlohmann::json eta_panel_json(const hbirl::observation_model_t& m) {
   }
   const size_t shown = std::min(order.size(), kShownContexts);
   std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(shown), order.end(), [&m](int a, int b) {
-    const double na = m.context_observations[static_cast<size_t>(a)], nb = m.context_observations[static_cast<size_t>(b)];
+    const double na = m.context_observations[static_cast<size_t>(a)],
+                 nb = m.context_observations[static_cast<size_t>(b)];
     return na != nb ? na > nb : a < b;
   });
   nlohmann::json contexts = nlohmann::json::array();
@@ -82,31 +84,33 @@ nlohmann::json eta_panel_json(const hbirl::observation_model_t& m) {
 
 }  // namespace
 
-
 void DashboardState::subscribe(services::Bus& bus, services::Counters& counters) {
   using services::Message;
   namespace ch = services::channels;
   // Frames and observations come at camera rate: only the newest matter, but a whole
   // recorded run may be waiting when the dashboard follows a log.
   constexpr int kQueue = 1 << 16;
-  subs_.add(bus, services::subscribe(bus, ch::kCamera, counters,
-                                                            [this](const auto& m, const Message&) { on_camera(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, ch::kDetections, counters,
-                                                          [this](const auto& m, const Message&) { on_detections(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, ch::kObservations, counters,
-                                                            [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, ch::kEpisode, counters,
-                                                              [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, ch::kGroundTruth, counters,
-                                                            [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, ch::kEmProgress, counters,
-                                                           [this](const auto& m, const Message&) { on_progress(m); }, 10000));
-  subs_.add(bus, services::subscribe(bus, ch::kReward, counters,
-                                                      [this](const auto& m, const Message&) { on_reward(m); }, 100));
-  subs_.add(bus, services::subscribe(bus, ch::kObservationModel, counters,
-                                                                 [this](const auto& m, const Message&) { on_model(m); }, 100));
-  subs_.add(bus, services::subscribe(bus, ch::kPosterior, counters,
-                                                         [this](const auto& m, const Message&) { on_posterior(m); }, 100));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kCamera, counters, [this](const auto& m, const Message&) { on_camera(m); }, kQueue));
+  subs_.add(bus,
+            services::subscribe(
+                bus, ch::kDetections, counters, [this](const auto& m, const Message&) { on_detections(m); }, kQueue));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kObservations, counters, [this](const auto& m, const Message&) { on_observations(m); },
+                     kQueue));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kEpisode, counters, [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kEmProgress, counters, [this](const auto& m, const Message&) { on_progress(m); }, 10000));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kReward, counters, [this](const auto& m, const Message&) { on_reward(m); }, 100));
+  subs_.add(bus,
+            services::subscribe(
+                bus, ch::kObservationModel, counters, [this](const auto& m, const Message&) { on_model(m); }, 100));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kPosterior, counters, [this](const auto& m, const Message&) { on_posterior(m); }, 100));
   subs_.add(bus, services::subscribe(
                      bus, ch::kStatus, counters,
                      [this](const auto& m, const Message&) { on_status(m, services::wall_utime()); }, 10000));
@@ -115,22 +119,28 @@ void DashboardState::subscribe(services::Bus& bus, services::Counters& counters)
 void DashboardState::set_domain(const std::string& domain) {
   if (domain.empty() || domain == domain_) return;
   std::shared_ptr<const Domain> found = given_ && given_->name() == domain ? given_ : builtin_domain(domain);
-  if (!found) throw InputError("episode_marker.domain", "'" + domain + "' is not a built-in domain: start the dashboard with --domain FILE");
+  if (!found)
+    throw InputError("episode_marker.domain",
+                     "'" + domain + "' is not a built-in domain: start the dashboard with --domain FILE");
   domain_object_ = std::move(found);
   domain_ = domain;
 }
 
 void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
-  if (m.episode < 0 || m.step < 0 || m.frame < 0) throw InputError("camera_frame.episode", "episode, step and frame must be >= 0");
-  if (m.encoding != "png" && m.encoding != "jpeg") throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
-  if (m.size <= 0 || m.size > static_cast<int>(m.data.size())) throw InputError("camera_frame.size", "does not match its data");
+  if (m.episode < 0 || m.step < 0 || m.frame < 0)
+    throw InputError("camera_frame.episode", "episode, step and frame must be >= 0");
+  if (m.encoding != "png" && m.encoding != "jpeg")
+    throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
+  if (m.size <= 0 || m.size > static_cast<int>(m.data.size()))
+    throw InputError("camera_frame.size", "does not match its data");
   // frame_png() decodes it: the image's header must state the message's size, within
   // perception's limits, or the decoder allocates what a hostile header says
   // (services/frame_header.hpp).
   const auto stated = services::encoded_frame_size(m.data.data(), static_cast<size_t>(m.size), m.encoding);
   if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096 || !stated || stated->first != m.width ||
       stated->second != m.height) {
-    throw InputError("camera_frame.data", "is not a " + m.encoding + " image of the message's width x height (1x1 to 4096x4096)");
+    throw InputError("camera_frame.data",
+                     "is not a " + m.encoding + " image of the message's width x height (1x1 to 4096x4096)");
   }
   const std::lock_guard<std::mutex> lock(mutex_);
   Pending& p = pending_[{m.episode, m.step, m.frame}];
@@ -176,7 +186,8 @@ void DashboardState::on_observations(const hbirl::observations_t& m) {
     frame_ = Frame{key, it->second.utime, std::move(it->second.image), std::move(*it->second.detections), m};
     ++frame_serial_;
     const std::uint64_t shown = it->second.order;
-    std::erase_if(pending_, [shown](const auto& entry) { return entry.second.order <= shown; });  // older frames: never shown now
+    std::erase_if(pending_,
+                  [shown](const auto& entry) { return entry.second.order <= shown; });  // older frames: never shown now
   }
   changed();
 }
@@ -233,7 +244,8 @@ void DashboardState::on_progress(const hbirl::em_progress_t& m) {
   const std::lock_guard<std::mutex> lock(mutex_);
   // A new run of the optimiser starts again from iteration 1.
   if (!progress_.empty() && m.iteration <= progress_.back().iteration) progress_.clear();
-  if (progress_.size() >= kMaxIterations) throw InputError("em_progress.iteration", "more iterations than the dashboard keeps");
+  if (progress_.size() >= kMaxIterations)
+    throw InputError("em_progress.iteration", "more iterations than the dashboard keeps");
   progress_.push_back(m);
   changed();
 }
@@ -274,14 +286,16 @@ void DashboardState::on_model(const hbirl::observation_model_t& m) {
   }
   check_rows(m.subject, "observation_model.subject", 0.0, 1.0);
   check_rows(m.confounders, "observation_model.confounders", 0.0, 1.0);
-  if (m.num_contexts < 0 || m.num_contexts > kMaxContexts) throw InputError("observation_model.num_contexts", "out of range");
+  if (m.num_contexts < 0 || m.num_contexts > kMaxContexts)
+    throw InputError("observation_model.num_contexts", "out of range");
   if (m.num_contexts > 0 && m.num_sources != 1 + m.num_confounders) {
     throw InputError("observation_model.num_sources", "must be 1 + num_confounders");
   }
   check_rows(m.stated_eta, "observation_model.stated_eta", 0.0, 1.0 + 1e-9);
   check_rows(m.learned_eta, "observation_model.learned_eta", 0.0, 1.0 + 1e-9);
   for (double n : m.context_observations) {
-    if (!(std::isfinite(n) && n >= 0.0)) throw InputError("observation_model.context_observations", "must be finite and >= 0");
+    if (!(std::isfinite(n) && n >= 0.0))
+      throw InputError("observation_model.context_observations", "must be finite and >= 0");
   }
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
@@ -322,8 +336,10 @@ std::vector<unsigned char> DashboardState::frame_png() const {
     const cv::Scalar colour = colours[static_cast<size_t>(source) % colours.size()];
     const cv::Rect box(d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]);
     cv::rectangle(image, box, colour, 2);
-    const std::string label = std::to_string(static_cast<int>(std::lround(100 * o.eta[k][static_cast<size_t>(source)]))) + "%";
-    cv::putText(image, label, cv::Point(box.x, std::max(10, box.y - 3)), cv::FONT_HERSHEY_PLAIN, 0.75, colour, 1, cv::LINE_AA);
+    const std::string label =
+        std::to_string(static_cast<int>(std::lround(100 * o.eta[k][static_cast<size_t>(source)]))) + "%";
+    cv::putText(image, label, cv::Point(box.x, std::max(10, box.y - 3)), cv::FONT_HERSHEY_PLAIN, 0.75, colour, 1,
+                cv::LINE_AA);
   }
   png_ = perception::encode_png(image);
   png_version_ = v;
@@ -337,19 +353,23 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   j["domain"] = domain_;
   DomainNames names;
   if (domain_object_) names = domain_object_->names(num_sources_);
-  j["names"] = {{"states", names.states},     {"actions", names.actions}, {"features", names.features},
-                {"symbols", names.symbols},   {"sources", names.sources}, {"contexts", names.contexts}};
+  j["names"] = {{"states", names.states},   {"actions", names.actions}, {"features", names.features},
+                {"symbols", names.symbols}, {"sources", names.sources}, {"contexts", names.contexts}};
   std::vector<std::string> colours;
   for (const auto& c : source_colours()) {
     char hex[8];
-    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<int>(c[2]), static_cast<int>(c[1]), static_cast<int>(c[0]));
+    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<int>(c[2]), static_cast<int>(c[1]),
+                  static_cast<int>(c[0]));
     colours.emplace_back(hex);
   }
   j["source_colours"] = colours;
-  j["run"] = {{"episode", episode_},        {"step", step_},
-              {"controlled", controlled_},  {"ended", run_ended_},
+  j["run"] = {{"episode", episode_},
+              {"step", step_},
+              {"controlled", controlled_},
+              {"ended", run_ended_},
               {"sim_seconds", static_cast<double>(sim_utime_) * 1e-6},
-              {"frames", frames_},          {"episodes_ended", episodes_ended_}};
+              {"frames", frames_},
+              {"episodes_ended", episodes_ended_}};
 
   // The camera: the latest annotated frame's detections.
   if (frame_) {
@@ -360,12 +380,14 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
       const auto k = static_cast<size_t>(i);
       const int source = most_likely(o.eta[k]);
       const int symbol = o.symbol[k];
-      detections.push_back({{"class", d.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? "gripper" : "onion"},
-                            {"box", {d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]}},
-                            {"symbol", symbol},
-                            {"symbol_name", symbol < static_cast<int>(names.symbols.size()) ? names.symbols[static_cast<size_t>(symbol)] : ""},
-                            {"eta", o.eta[k]},
-                            {"source", source}});
+      detections.push_back(
+          {{"class", d.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? "gripper" : "onion"},
+           {"box", {d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]}},
+           {"symbol", symbol},
+           {"symbol_name",
+            symbol < static_cast<int>(names.symbols.size()) ? names.symbols[static_cast<size_t>(symbol)] : ""},
+           {"eta", o.eta[k]},
+           {"source", source}});
     }
     j["camera"] = {{"episode", std::get<0>(frame_->key)},
                    {"step", std::get<1>(frame_->key)},
@@ -380,11 +402,14 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   // The newest observations (any domain): how many by most likely source, by symbol.
   if (last_observations_) {
     const auto& o = *last_observations_;
-    std::vector<std::vector<int>> counts(static_cast<size_t>(o.num_sources), std::vector<int>(static_cast<size_t>(o.num_symbols)));
+    std::vector<std::vector<int>> counts(static_cast<size_t>(o.num_sources),
+                                         std::vector<int>(static_cast<size_t>(o.num_symbols)));
     for (int i = 0; i < o.n; ++i) {
-      counts[static_cast<size_t>(most_likely(o.eta[static_cast<size_t>(i)]))][static_cast<size_t>(o.symbol[static_cast<size_t>(i)])]++;
+      counts[static_cast<size_t>(most_likely(o.eta[static_cast<size_t>(i)]))]
+            [static_cast<size_t>(o.symbol[static_cast<size_t>(i)])]++;
     }
-    j["observations"] = {{"episode", o.episode}, {"step", o.step}, {"frame", o.frame}, {"n", o.n}, {"by_source_symbol", counts}};
+    j["observations"] = {
+        {"episode", o.episode}, {"step", o.step}, {"frame", o.frame}, {"n", o.n}, {"by_source_symbol", counts}};
   } else {
     j["observations"] = nullptr;
   }
@@ -417,17 +442,19 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
     }
   }
   j["theta"] = theta;
-  j["reward"] = reward_ ? nlohmann::json{{"final", reward_->final != 0},
-                                         {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},
-                                         {"log_likelihood", finite_or_null(reward_->log_likelihood)}}
-                        : nlohmann::json(nullptr);
+  j["reward"] =
+      reward_ ? nlohmann::json{{"final", reward_->final != 0},
+                               {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},
+                               {"log_likelihood", finite_or_null(reward_->log_likelihood)}}
+              : nlohmann::json(nullptr);
 
   if (posterior_) {
     const auto& p = *posterior_;
     nlohmann::json marginals = nlohmann::json::array(), action_marginals = nlohmann::json::array();
     nlohmann::json best = nlohmann::json::array();
     for (const auto& row : p.marginals) {
-      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0), actions(static_cast<size_t>(p.num_actions), 0.0);
+      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0),
+          actions(static_cast<size_t>(p.num_actions), 0.0);
       for (int r = 0; r < p.num_pairs; ++r) {
         states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
         actions[static_cast<size_t>(r % p.num_actions)] += row[static_cast<size_t>(r)];
@@ -435,7 +462,8 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
       marginals.push_back(states);
       action_marginals.push_back(actions);
       const int r = static_cast<int>(std::max_element(row.begin(), row.end()) - row.begin());
-      best.push_back({{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
+      best.push_back(
+          {{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
     }
     nlohmann::json truth = nullptr;
     const auto it = truth_.find(p.episode);
@@ -450,10 +478,13 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
         truth.push_back({{"state", step->second.first}, {"action", step->second.second}});
       }
     }
-    j["posterior"] = {{"episode", p.episode},     {"iteration", p.iteration},
-                      {"steps", p.num_steps},     {"state_marginals", marginals},
+    j["posterior"] = {{"episode", p.episode},
+                      {"iteration", p.iteration},
+                      {"steps", p.num_steps},
+                      {"state_marginals", marginals},
                       {"action_marginals", action_marginals},
-                      {"most_likely", best},      {"truth", truth},
+                      {"most_likely", best},
+                      {"truth", truth},
                       {"log_likelihood", finite_or_null(p.log_likelihood)}};
   } else {
     j["posterior"] = nullptr;
@@ -470,18 +501,19 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   nlohmann::json services = nlohmann::json::array();
   for (const auto& [id, s] : services_) {
     const auto& m = s.status;
-    services.push_back({{"id", id},
-                        {"service", m.service},
-                        {"state", m.state},
-                        {"seconds_since_heartbeat", std::max<double>(0.0, static_cast<double>(now_utime - s.heard_utime) * 1e-6)},
-                        {"messages_in", m.messages_in},
-                        {"messages_out", m.messages_out},
-                        {"bad_messages", m.bad_messages},
-                        {"gaps", m.gaps},
-                        {"trajectories", m.trajectories},
-                        {"restarts", m.restarts},
-                        {"authenticated", m.authenticated != 0},
-                        {"detail", m.detail}});
+    services.push_back(
+        {{"id", id},
+         {"service", m.service},
+         {"state", m.state},
+         {"seconds_since_heartbeat", std::max<double>(0.0, static_cast<double>(now_utime - s.heard_utime) * 1e-6)},
+         {"messages_in", m.messages_in},
+         {"messages_out", m.messages_out},
+         {"bad_messages", m.bad_messages},
+         {"gaps", m.gaps},
+         {"trajectories", m.trajectories},
+         {"restarts", m.restarts},
+         {"authenticated", m.authenticated != 0},
+         {"detail", m.detail}});
   }
   j["services"] = services;
   if (!progress_.empty()) {

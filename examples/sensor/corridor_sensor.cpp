@@ -30,7 +30,9 @@ void mark(lcm::LCM& bus, int episode, std::int8_t kind, int step = 0, int num_st
 
 struct OptimiserHeard {  // the optimiser listens once its heartbeat is heard
   bool heard = false;
-  void on(const lcm::ReceiveBuffer*, const std::string&, const hbirl::service_status_t* s) { heard |= s->service == "optimiser"; }
+  void on(const lcm::ReceiveBuffer*, const std::string&, const hbirl::service_status_t* s) {
+    heard |= s->service == "optimiser";
+  }
 };
 
 }  // namespace
@@ -61,8 +63,8 @@ int main(int argc, char** argv) {
       o.seq = ++seq;
       o.episode = e;
       o.step = t;
-      o.num_symbols = 2;  // 0: a blob far left, 1: a blob near the exit
-      o.num_sources = 2;  // the person, a passer-by
+      o.num_symbols = 2;   // 0: a blob far left, 1: a blob near the exit
+      o.num_sources = 2;   // the person, a passer-by
       if (u(rng) < 0.8) {  // the person, seen where they are (the detector errs 1 time in 5)
         o.symbol.push_back(static_cast<std::int16_t>((cell == 2) != (u(rng) < 0.2)));
         o.eta.push_back({0.8, 0.2});

@@ -84,8 +84,11 @@ void record(const Fit& f, Run& r) {
 }
 
 std::uint64_t run_seed(std::uint64_t seed, int run, int confounders, int cell) {
-  return Rng(seed).split(static_cast<std::uint64_t>(run)).split(3000 + static_cast<std::uint64_t>(confounders)).split(
-      static_cast<std::uint64_t>(cell)).next_u64();
+  return Rng(seed)
+      .split(static_cast<std::uint64_t>(run))
+      .split(3000 + static_cast<std::uint64_t>(confounders))
+      .split(static_cast<std::uint64_t>(cell))
+      .next_u64();
 }
 
 // Runs `work(i)` for every item on the threads, each failure kept as its item's error.
@@ -160,7 +163,8 @@ std::vector<EtaRun> run_eta_sensitivity(const EtaSensitivityOptions& o) {
     ObservationPrior prior = gridworld_prior(s, r.confounders);
     prior.learn_eta = r.method == "learned";
     prior.eta_strength = o.eta_prior_strength;
-    const Fit f = fit(s, std::move(observed.trajectories), prior, run_seed(o.scenario.seed, r.run, r.confounders, cell + 1));
+    const Fit f =
+        fit(s, std::move(observed.trajectories), prior, run_seed(o.scenario.seed, r.run, r.confounders, cell + 1));
     record(f, r);
     r.subject_eta = f.subject_eta;
   });
@@ -170,7 +174,8 @@ std::vector<EtaRun> run_eta_sensitivity(const EtaSensitivityOptions& o) {
 std::string eta_runs_csv(const std::vector<EtaRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,confounders,mass,accuracy,method,ile,ile_relative,goal_recovered,subject_eta,label_accuracy,em_evaluations,seconds,error\n";
+  out << "run,confounders,mass,accuracy,method,ile,ile_relative,goal_recovered,subject_eta,label_accuracy,em_"
+         "evaluations,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << r.confounders << "," << r.mass << "," << r.accuracy << "," << r.method << "," << r.ile << ","
         << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << ",";
@@ -205,7 +210,9 @@ std::vector<UnlistedRun> run_unlisted(const UnlistedOptions& o) {
       prior.unlisted_eta = o.unlisted_eta;
       prior.learn_eta = r.method == "catch_all_learned_eta";
     }
-    record(fit(s, std::move(observed.trajectories), prior, run_seed(o.scenario.seed, r.run, r.confounders, 8000 + r.told)), r);
+    record(
+        fit(s, std::move(observed.trajectories), prior, run_seed(o.scenario.seed, r.run, r.confounders, 8000 + r.told)),
+        r);
   });
   return runs;
 }
@@ -215,9 +222,9 @@ std::string unlisted_runs_csv(const std::vector<UnlistedRun>& runs) {
   out.precision(10);
   out << "run,confounders,told,method,ile,ile_relative,goal_recovered,label_accuracy,em_evaluations,seconds,error\n";
   for (const auto& r : runs) {
-    out << r.run << "," << r.confounders << "," << r.told << "," << r.method << "," << r.ile << "," << r.ile_relative << ","
-        << (r.goal_recovered ? 1 : 0) << "," << r.label_accuracy << "," << r.em_evaluations << "," << r.seconds << ","
-        << csv_text(r.error) << "\n";
+    out << r.run << "," << r.confounders << "," << r.told << "," << r.method << "," << r.ile << "," << r.ile_relative
+        << "," << (r.goal_recovered ? 1 : 0) << "," << r.label_accuracy << "," << r.em_evaluations << "," << r.seconds
+        << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }

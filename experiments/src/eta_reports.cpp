@@ -74,7 +74,8 @@ std::string eta_sensitivity_summary(const std::vector<EtaRun>& runs, const std::
     const auto perfect = ile.find({e, 1.0, 1.0, "perfect"});
     const std::vector<double> perfect_ile = perfect == ile.end() ? std::vector<double>{} : values_of(perfect->second);
     const double reference = mean_and_ci(perfect_ile).mean;
-    md << "\n## |E| = " << e << "\n\nA perfect labeller (all of eta on the true source): ILE " << mean_ci(perfect_ile) << ".\n\n";
+    md << "\n## |E| = " << e << "\n\nA perfect labeller (all of eta on the true source): ILE " << mean_ci(perfect_ile)
+       << ".\n\n";
     md << "| m \\ q |";
     for (double q : accuracies) md << " " << number(q) << " |";
     md << "\n|---|";
@@ -106,8 +107,10 @@ std::string eta_sensitivity_summary(const std::vector<EtaRun>& runs, const std::
     md << "\nLearned eta is better (the 95% CI of the paired difference above 0) in " << better << " of " << cells
        << " cells and worse in " << worse << ". Summed over the cells, the gap to the perfect labeller is "
        << number(fixed_gap) << " with fixed eta and " << number(learned_gap) << " with learned eta: learned eta closes "
-       << (fixed_gap > 0.0 ? number(100.0 * (1.0 - learned_gap / fixed_gap), 3) + "%" : std::string("– (no gap)")) << " of it.\n";
-    md << "\nLearned eta's subject share for the context \"the labeller picked the subject\" (the truth is q):\n\n| m \\ q |";
+       << (fixed_gap > 0.0 ? number(100.0 * (1.0 - learned_gap / fixed_gap), 3) + "%" : std::string("– (no gap)"))
+       << " of it.\n";
+    md << "\nLearned eta's subject share for the context \"the labeller picked the subject\" (the truth is q):\n\n| m "
+          "\\ q |";
     for (double q : accuracies) md << " " << number(q) << " |";
     md << "\n|---|";
     for (size_t i = 0; i < accuracies.size(); ++i) md << "---|";
@@ -122,7 +125,8 @@ std::string eta_sensitivity_summary(const std::vector<EtaRun>& runs, const std::
     }
   }
   md << "\n" << footer;
-  if (const int failed = failed_runs(runs)) md << " " << failed << " runs failed and are left out (see the error column).";
+  if (const int failed = failed_runs(runs))
+    md << " " << failed << " runs failed and are left out (see the error column).";
   md << "\n";
   return md.str();
 }
@@ -135,7 +139,8 @@ std::string draw_eta_sensitivity_figure(const std::vector<EtaRun>& runs, const s
     confounders.insert(r.confounders);
     if (r.method == "perfect") continue;
     if (std::find(masses.begin(), masses.end(), r.mass) == masses.end()) masses.push_back(r.mass);
-    if (std::find(accuracies.begin(), accuracies.end(), r.accuracy) == accuracies.end()) accuracies.push_back(r.accuracy);
+    if (std::find(accuracies.begin(), accuracies.end(), r.accuracy) == accuracies.end())
+      accuracies.push_back(r.accuracy);
   }
   std::sort(masses.begin(), masses.end());
   std::sort(accuracies.begin(), accuracies.end());
@@ -157,25 +162,32 @@ std::string draw_eta_sensitivity_figure(const std::vector<EtaRun>& runs, const s
         data << "\n";
       }
       data << "EOD\n";
-      panels.push_back(block + "|" + "|E| = " + std::to_string(e) + ", eta " + (std::string(method) == "fixed" ? "as stated" : "learned"));
+      panels.push_back(block + "|" + "|E| = " + std::to_string(e) + ", eta " +
+                       (std::string(method) == "fixed" ? "as stated" : "learned"));
     }
   }
   data << "set xtics (";
   for (size_t x = 0; x < accuracies.size(); ++x) data << (x ? ", " : "") << "'" << number(accuracies[x]) << "' " << x;
   data << ")\nset ytics (";
   for (size_t y = 0; y < masses.size(); ++y) data << (y ? ", " : "") << "'" << number(masses[y]) << "' " << y;
-  data << ")\nset xlabel 'q: probability the labeller picks the true source'\nset ylabel 'm: share of eta it gives its pick'\n"
-       << "set cbrange [0:" << std::max(top, 1e-9) << "]\nset cblabel 'mean ILE'\nset palette defined (0 '#f7fbff', 0.5 '#6baed6', 1 '#08306b')\n"
-       << "set xrange [-0.5:" << static_cast<double>(accuracies.size()) - 0.5 << "]\nset yrange [-0.5:" << static_cast<double>(masses.size()) - 0.5 << "]\nunset key\n";
+  data << ")\nset xlabel 'q: probability the labeller picks the true source'\nset ylabel 'm: share of eta it gives its "
+          "pick'\n"
+       << "set cbrange [0:" << std::max(top, 1e-9)
+       << "]\nset cblabel 'mean ILE'\nset palette defined (0 '#f7fbff', 0.5 '#6baed6', 1 '#08306b')\n"
+       << "set xrange [-0.5:" << static_cast<double>(accuracies.size()) - 0.5
+       << "]\nset yrange [-0.5:" << static_cast<double>(masses.size()) - 0.5 << "]\nunset key\n";
   std::ostringstream plot;
-  plot << "set multiplot layout " << confounders.size() << ",2 title 'ILE with a miscalibrated labeller (calibrated on the diagonal m = q)'\n";
+  plot << "set multiplot layout " << confounders.size()
+       << ",2 title 'ILE with a miscalibrated labeller (calibrated on the diagonal m = q)'\n";
   for (const std::string& p : panels) {
     const size_t bar = p.find('|');
-    plot << "set title " << gnuplot_quoted(p.substr(bar + 1)) << "\nplot " << p.substr(0, bar) << " using 1:2:3 with image, "
-         << p.substr(0, bar) << " using 1:2:(sprintf('%.1f', $3)) with labels textcolor rgb '#d95f02'\n";
+    plot << "set title " << gnuplot_quoted(p.substr(bar + 1)) << "\nplot " << p.substr(0, bar)
+         << " using 1:2:3 with image, " << p.substr(0, bar)
+         << " using 1:2:(sprintf('%.1f', $3)) with labels textcolor rgb '#d95f02'\n";
   }
   plot << "unset multiplot\n";
-  return run_gnuplot(path_stem, data.str(), plot.str(), 1000, 420 * static_cast<int>(std::max<size_t>(1, confounders.size())));
+  return run_gnuplot(path_stem, data.str(), plot.str(), 1000,
+                     420 * static_cast<int>(std::max<size_t>(1, confounders.size())));
 }
 
 namespace {
@@ -194,7 +206,7 @@ std::string unlisted_label(const std::string& method) {
 
 // (told, method, |E|) -> values; the oracle under every told (it is told everything).
 std::map<std::tuple<int, std::string, int>, std::vector<double>> unlisted_cells(const std::vector<UnlistedRun>& runs,
-                                                                               double UnlistedRun::*field) {
+                                                                                double UnlistedRun::*field) {
   std::set<int> told;
   for (const UnlistedRun& r : runs) {
     if (r.method != "oracle") told.insert(r.told);
@@ -211,7 +223,9 @@ std::map<std::tuple<int, std::string, int>, std::vector<double>> unlisted_cells(
   return cells;
 }
 
-std::string told_name(int told) { return told == 0 ? "told none (eta over the subject alone)" : "told " + std::to_string(told) + " element(s)"; }
+std::string told_name(int told) {
+  return told == 0 ? "told none (eta over the subject alone)" : "told " + std::to_string(told) + " element(s)";
+}
 
 }  // namespace
 
@@ -224,7 +238,8 @@ std::string unlisted_summary(const std::vector<UnlistedRun>& runs, const std::st
   std::ostringstream md;
   md << "# Unlisted confounders: ILE and label accuracy vs the number of true elements\n";
   for (const auto& [what, field] : {std::pair<std::string, double UnlistedRun::*>{"ILE", &UnlistedRun::ile},
-                                    std::pair<std::string, double UnlistedRun::*>{"label accuracy (subject or not)", &UnlistedRun::label_accuracy}}) {
+                                    std::pair<std::string, double UnlistedRun::*>{"label accuracy (subject or not)",
+                                                                                  &UnlistedRun::label_accuracy}}) {
     const auto cells = unlisted_cells(runs, field);
     for (int t : told) {
       md << "\n## " << what << ", " << told_name(t) << "\n\n| method |";
@@ -253,8 +268,8 @@ std::string draw_unlisted_figure(const std::vector<UnlistedRun>& runs, const std
     if (r.method != "oracle") told.insert(r.told);
   }
   std::ostringstream data, plot;
-  const std::vector<std::pair<std::string, double UnlistedRun::*>> panels = {{"ILE", &UnlistedRun::ile},
-                                                                             {"label accuracy", &UnlistedRun::label_accuracy}};
+  const std::vector<std::pair<std::string, double UnlistedRun::*>> panels = {
+      {"ILE", &UnlistedRun::ile}, {"label accuracy", &UnlistedRun::label_accuracy}};
   for (size_t p = 0; p < panels.size(); ++p) {
     const auto cells = unlisted_cells(runs, panels[p].second);
     for (int t : told) {
@@ -278,10 +293,11 @@ std::string draw_unlisted_figure(const std::vector<UnlistedRun>& runs, const std
     for (int t : told) {
       plot << "set title " << gnuplot_quoted(panels[p].first + ", " + told_name(t)) << "\nset ylabel "
            << gnuplot_quoted(panels[p].first) << "\n"
-           << (p == 0 ? "set yrange [0:*]\nset key top left\n" : "set yrange [0:1.02]\nset key bottom left\n") << "plot ";
+           << (p == 0 ? "set yrange [0:*]\nset key top left\n" : "set yrange [0:1.02]\nset key bottom left\n")
+           << "plot ";
       for (size_t m = 0; m < unlisted_methods().size(); ++m) {
-        plot << (m ? ", " : "") << "$p" << p << "t" << t << "m" << m << " using 1:2:3 with yerrorlines ls " << m + 1 << " title "
-             << gnuplot_quoted(unlisted_label(unlisted_methods()[m]));
+        plot << (m ? ", " : "") << "$p" << p << "t" << t << "m" << m << " using 1:2:3 with yerrorlines ls " << m + 1
+             << " title " << gnuplot_quoted(unlisted_label(unlisted_methods()[m]));
       }
       plot << "\n";
     }

@@ -50,7 +50,8 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
     use_alpha_update(prior, o.update);
     prior.c = o.c;
     prior.subject_alpha = s.controlled_alpha;
-    Rng eta_rng = Rng(o.seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
+    Rng eta_rng =
+        Rng(o.seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
     switch (method) {
       case GridworldMethod::kTrueObservationFunction:
         prior.num_confounders = confounders;
@@ -78,10 +79,12 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
     const ObservationEStep estep(mdp, observations.trajectories, prior, estep_options);
     learned = learn_reward(mdp, estep, learn);
     const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
-    if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) result.strength = best.alpha->strength;
+    if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior)
+      result.strength = best.alpha->strength;
     if (method != GridworldMethod::kIgnoreCE && confounders > 0) {
       const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
-      result.source_accuracy = source_accuracy(mdp, policy, dirichlet_mean(best.alpha ? *best.alpha : prior), observations);
+      result.source_accuracy =
+          source_accuracy(mdp, policy, dirichlet_mean(best.alpha ? *best.alpha : prior), observations);
     }
   }
   const InverseLearningError ile = inverse_learning_error(mdp, s.task.true_weights, learned.theta);
@@ -107,22 +110,32 @@ const std::vector<GridworldMethod>& all_gridworld_methods() {
 
 std::string method_label(GridworldMethod method) {
   switch (method) {
-    case GridworldMethod::kTrueTrajectories: return "True Trajectories";
-    case GridworldMethod::kTrueObservationFunction: return "True Observation Function";
-    case GridworldMethod::kUniformEta: return "Uniform eta";
-    case GridworldMethod::kPlausibleEta: return "Plausible eta";
-    case GridworldMethod::kIgnoreCE: return "Ignore CE";
+    case GridworldMethod::kTrueTrajectories:
+      return "True Trajectories";
+    case GridworldMethod::kTrueObservationFunction:
+      return "True Observation Function";
+    case GridworldMethod::kUniformEta:
+      return "Uniform eta";
+    case GridworldMethod::kPlausibleEta:
+      return "Plausible eta";
+    case GridworldMethod::kIgnoreCE:
+      return "Ignore CE";
   }
   return "?";
 }
 
 std::string method_key(GridworldMethod method) {
   switch (method) {
-    case GridworldMethod::kTrueTrajectories: return "true_trajectories";
-    case GridworldMethod::kTrueObservationFunction: return "true_observation_function";
-    case GridworldMethod::kUniformEta: return "uniform_eta";
-    case GridworldMethod::kPlausibleEta: return "plausible_eta";
-    case GridworldMethod::kIgnoreCE: return "ignore_ce";
+    case GridworldMethod::kTrueTrajectories:
+      return "true_trajectories";
+    case GridworldMethod::kTrueObservationFunction:
+      return "true_observation_function";
+    case GridworldMethod::kUniformEta:
+      return "uniform_eta";
+    case GridworldMethod::kPlausibleEta:
+      return "plausible_eta";
+    case GridworldMethod::kIgnoreCE:
+      return "ignore_ce";
   }
   return "?";
 }
@@ -174,10 +187,12 @@ std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOpti
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,strength,seconds,error\n";
+  out << "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,"
+         "strength,seconds,error\n";
   for (const auto& r : runs) {
     out << r.run << "," << method_key(r.method) << "," << r.confounders << "," << r.goal << "," << r.ile << ","
-        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_evaluations << "," << r.log_likelihood << ",";
+        << r.ile_relative << "," << (r.goal_recovered ? 1 : 0) << "," << r.em_evaluations << "," << r.log_likelihood
+        << ",";
     if (r.source_accuracy >= 0.0) out << r.source_accuracy;
     out << ",";
     if (r.strength >= 0.0) out << r.strength;

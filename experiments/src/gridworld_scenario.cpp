@@ -29,8 +29,8 @@ namespace {
 // distinct one (as the E-step does), and each observation is scored against its own truth.
 template <typename Right>
 double share_right(const Mdp& mdp, const SoftSolution& policy, const ObservationModel& model,
-                   const std::vector<ObservedTrajectory>& trajectories, const std::vector<std::vector<int>>& true_sources,
-                   Right right) {
+                   const std::vector<ObservedTrajectory>& trajectories,
+                   const std::vector<std::vector<int>>& true_sources, Right right) {
   ExactEngine engine(mdp);
   long long hits = 0;
   long long total = 0;

@@ -92,22 +92,32 @@ const std::vector<OnionMethod>& all_onion_methods() {
 
 std::string method_label(OnionMethod m) {
   switch (m) {
-    case OnionMethod::kTrueTrajectories: return "True Trajectories";
-    case OnionMethod::kMlTrajectories: return "ML Trajectories";
-    case OnionMethod::kMlObservations: return "ML Observations";
-    case OnionMethod::kPlausibleEta: return "Plausible eta";
-    case OnionMethod::kUniformEta: return "Uniform eta";
+    case OnionMethod::kTrueTrajectories:
+      return "True Trajectories";
+    case OnionMethod::kMlTrajectories:
+      return "ML Trajectories";
+    case OnionMethod::kMlObservations:
+      return "ML Observations";
+    case OnionMethod::kPlausibleEta:
+      return "Plausible eta";
+    case OnionMethod::kUniformEta:
+      return "Uniform eta";
   }
   return "?";
 }
 
 std::string method_key(OnionMethod m) {
   switch (m) {
-    case OnionMethod::kTrueTrajectories: return "true_trajectories";
-    case OnionMethod::kMlTrajectories: return "ml_trajectories";
-    case OnionMethod::kMlObservations: return "ml_observations";
-    case OnionMethod::kPlausibleEta: return "plausible_eta";
-    case OnionMethod::kUniformEta: return "uniform_eta";
+    case OnionMethod::kTrueTrajectories:
+      return "true_trajectories";
+    case OnionMethod::kMlTrajectories:
+      return "ml_trajectories";
+    case OnionMethod::kMlObservations:
+      return "ml_observations";
+    case OnionMethod::kPlausibleEta:
+      return "plausible_eta";
+    case OnionMethod::kUniformEta:
+      return "uniform_eta";
   }
   return "?";
 }
@@ -137,9 +147,10 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   controlled_scene.step_seconds = scene.step_seconds;
   DemonstrationOptions controlled_options;
   controlled_options.sorts = o.controlled_sorts;
-  const OnionDemonstration controlled = demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
-  const Eigen::MatrixXd subject_alpha =
-      controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols, controlled_prior_options());
+  const OnionDemonstration controlled =
+      demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
+  const Eigen::MatrixXd subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed,
+                                                             perception::kNumSymbols, controlled_prior_options());
   const Eigen::MatrixXd subject_o = dirichlet_mean(subject_alpha);
   const int most = *std::max_element(o.trajectories.begin(), o.trajectories.end());
   const size_t per_run = o.trajectories.size() * o.methods.size();
@@ -150,7 +161,8 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
     DemonstrationOptions options;
     options.sorts = most;
     options.start_time = 1000.0 * run;  // the confounders' clock: each run sees other moments
-    OnionDemonstration demo = demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
+    OnionDemonstration demo =
+        demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
     if (o.eta_power != 1.0) {
       for (ObservedTrajectory& t : demo.observed) t.eta = miscalibrated(t.eta, o.eta_power);
     }
@@ -191,7 +203,8 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
             case OnionMethod::kMlObservations:
               prior.num_confounders = 0;
               prior.confounder_alpha = Eigen::MatrixXd::Zero(0, prior.num_symbols);
-              learned = learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
+              learned =
+                  learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
               break;
             case OnionMethod::kPlausibleEta:
             case OnionMethod::kUniformEta:
@@ -199,7 +212,8 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
               prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
               learned = learn_reward(
                   mdp,
-                  ObservationEStep(mdp, r.method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed, prior, estep_options),
+                  ObservationEStep(mdp, r.method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed,
+                                   prior, estep_options),
                   learn);
               break;
           }
@@ -207,7 +221,8 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
           r.ile = metrics.ile.ile;
           r.ile_relative = metrics.ile.relative();
           r.policy_agreement = metrics.agreement;
-          r.em_evaluations = learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
+          r.em_evaluations =
+              learned.restarts[static_cast<size_t>(learned.selected_restart)].em_evaluations;  // the cost
           r.log_likelihood = learned.log_likelihood;
         } catch (const std::exception& e) {
           r.error = e.what();  // one failed run must not lose the others
@@ -228,7 +243,8 @@ std::string onion_runs_csv(const std::vector<OnionRun>& runs) {
   for (const auto& r : runs) {
     const std::string error = csv_text(r.error);
     out << r.run << "," << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << ","
-        << r.policy_agreement << "," << r.em_evaluations << "," << r.log_likelihood << "," << r.seconds << "," << error << "\n";
+        << r.policy_agreement << "," << r.em_evaluations << "," << r.log_likelihood << "," << r.seconds << "," << error
+        << "\n";
   }
   return out.str();
 }

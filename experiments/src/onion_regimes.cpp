@@ -27,7 +27,8 @@ Cells cells_of(const std::vector<OnionRegimeRun>& runs) {
   Cells cells;
   for (const auto& r : runs) {
     if (!r.run.error.empty()) continue;
-    cells[{r.regime.mirror, r.regime.eta_power}][method_label(r.run.method)][r.regime.foreground_share].push_back(r.run.ile);
+    cells[{r.regime.mirror, r.regime.eta_power}][method_label(r.run.method)][r.regime.foreground_share].push_back(
+        r.run.ile);
   }
   return cells;
 }
@@ -65,11 +66,12 @@ std::vector<OnionRegimeRun> run_onion_regimes(const OnionRegimesOptions& o) {
 std::string onion_regimes_csv(const std::vector<OnionRegimeRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "foreground_share,mirror,eta_power,run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,seconds,error\n";
+  out << "foreground_share,mirror,eta_power,run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,"
+         "seconds,error\n";
   for (const auto& [regime, r] : runs) {
     out << regime.foreground_share << "," << (regime.mirror ? 1 : 0) << "," << regime.eta_power << "," << r.run << ","
-        << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << "," << r.policy_agreement
-        << "," << r.em_evaluations << "," << r.seconds << "," << csv_text(r.error) << "\n";
+        << method_key(r.method) << "," << r.trajectories << "," << r.ile << "," << r.ile_relative << ","
+        << r.policy_agreement << "," << r.em_evaluations << "," << r.seconds << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }
@@ -78,7 +80,8 @@ std::string onion_regimes_summary(const std::vector<OnionRegimeRun>& runs, const
   const Cells cells = cells_of(runs);
   std::ostringstream md;
   md.precision(3);
-  md << "# Onion sorting: where each method breaks\n\nMean ILE ± 95% CI as the foreground person's share of the time in front "
+  md << "# Onion sorting: where each method breaks\n\nMean ILE ± 95% CI as the foreground person's share of the time "
+        "in front "
         "of the expert grows (0: no foreground person).\n";
   for (const auto& [scene, methods] : cells) {
     md << "\n## " << scene_name(scene.first, scene.second) << "\n\n| method |";
@@ -104,7 +107,8 @@ std::string draw_onion_regimes_figure(const std::vector<OnionRegimeRun>& runs, c
   const Cells cells = cells_of(runs);
   std::ostringstream data, plot;
   int panel = 0;
-  plot << "set multiplot layout 2," << (cells.size() + 1) / 2 << " title 'Onion sorting: ILE vs the foreground person''s share (95% CI)'\n";
+  plot << "set multiplot layout 2," << (cells.size() + 1) / 2
+       << " title 'Onion sorting: ILE vs the foreground person''s share (95% CI)'\n";
   for (const auto& [scene, methods] : cells) {
     int m = 0;
     std::ostringstream lines;

@@ -90,7 +90,8 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   r.em_evaluations = best.em_evaluations;  // the cost
   r.converged = best.converged;
   r.log_likelihood = learned.log_likelihood;
-  if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior) r.strength = best.alpha->strength;
+  if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior)
+    r.strength = best.alpha->strength;
   r.theta.assign(learned.theta.data(), learned.theta.data() + learned.theta.size());
 }
 
@@ -135,7 +136,8 @@ std::vector<Group> breakdown() {
 std::vector<std::string> methods_in(const std::vector<RandomTaskRun>& runs) {
   std::vector<std::string> methods;
   for (const auto& m : all_random_task_methods()) {
-    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m.key; })) methods.push_back(m.key);
+    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m.key; }))
+      methods.push_back(m.key);
   }
   return methods;
 }
@@ -143,7 +145,7 @@ std::vector<std::string> methods_in(const std::vector<RandomTaskRun>& runs) {
 struct Cell {
   int n = 0;
   int optimal = 0;
-  int near = 0;  // within 5% of the optimal value
+  int near = 0;             // within 5% of the optimal value
   std::vector<double> ile;  // relative ILE of each run
 };
 
@@ -200,8 +202,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"true_trajectories", "truth", 0.1, 1},    {"fixed_prior", "fixed", 0.1, 1},
       {"paper_c0.5", "paper", 0.5, 1},           {"paper_c0.1", "paper", 0.1, 1},
       {"posterior", "posterior", 0.1, 1},        {"posterior_c0.5", "posterior", 0.5, 1},
-      {"posterior_c0.02", "posterior", 0.02, 1},
-      {"posterior_r4", "posterior", 0.1, 4},
+      {"posterior_c0.02", "posterior", 0.02, 1}, {"posterior_r4", "posterior", 0.1, 4},
   };
   return methods;
 }
@@ -273,15 +274,16 @@ std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
   std::ostringstream out;
   out.precision(10);
   out << "seed,draw,method,layout,states,actions,features,goals,traps,symbols,confounders,per_step,demonstrations,"
-         "controlled,decisiveness,informativeness,subject_share,occlusion,discount,eta,ile,ile_relative,optimal,policy_agreement,"
+         "controlled,decisiveness,informativeness,subject_share,occlusion,discount,eta,ile,ile_relative,optimal,policy_"
+         "agreement,"
          "em_evaluations,converged,log_likelihood,strength,theta,seconds,error\n";
   for (const auto& r : runs) {
     out << r.seed << "," << r.draw << "," << r.method << "," << r.layout << "," << r.states << "," << r.actions << ","
-        << r.features << "," << r.goals << "," << r.traps << "," << r.symbols << "," << r.confounders << "," << r.per_step
-        << "," << r.demonstrations << "," << r.controlled << "," << r.decisiveness << "," << r.informativeness << "," << r.subject_share << ","
-        << r.occlusion << "," << r.discount << "," << r.eta << "," << r.ile << "," << r.ile_relative << ","
-        << (r.optimal ? 1 : 0) << "," << r.policy_agreement << "," << r.em_evaluations << "," << (r.converged ? 1 : 0)
-        << "," << r.log_likelihood << ",";
+        << r.features << "," << r.goals << "," << r.traps << "," << r.symbols << "," << r.confounders << ","
+        << r.per_step << "," << r.demonstrations << "," << r.controlled << "," << r.decisiveness << ","
+        << r.informativeness << "," << r.subject_share << "," << r.occlusion << "," << r.discount << "," << r.eta << ","
+        << r.ile << "," << r.ile_relative << "," << (r.optimal ? 1 : 0) << "," << r.policy_agreement << ","
+        << r.em_evaluations << "," << (r.converged ? 1 : 0) << "," << r.log_likelihood << ",";
     if (r.strength >= 0.0) out << r.strength;
     out << ",";
     for (size_t k = 0; k < r.theta.size(); ++k) out << (k ? ";" : "") << r.theta[k];
@@ -309,8 +311,8 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
     for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
     if (line.back() == ',') f.emplace_back();
     if (f.size() != header.size()) {
-      throw InputError("runs CSV", "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected " +
-                                      std::to_string(header.size()));
+      throw InputError("runs CSV", "line " + std::to_string(number) + ": " + std::to_string(f.size()) +
+                                       " fields, expected " + std::to_string(header.size()));
     }
     try {
       RandomTaskRun r;
@@ -323,7 +325,8 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
                      &r.demonstrations, &r.controlled}) {
         *x = std::stoi(f[i++]);
       }
-      for (double* x : {&r.decisiveness, &r.informativeness, &r.subject_share, &r.occlusion, &r.discount}) *x = std::stod(f[i++]);
+      for (double* x : {&r.decisiveness, &r.informativeness, &r.subject_share, &r.occlusion, &r.discount})
+        *x = std::stod(f[i++]);
       r.eta = f[i++];
       r.ile = std::stod(f[i++]);
       r.ile_relative = std::stod(f[i++]);
@@ -370,8 +373,8 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
       const auto [lo, hi] = wilson(c.optimal, c.n);
       const SummaryRow ile = mean_and_ci(c.ile);
       char buf[160];
-      std::snprintf(buf, sizeof buf, " **%.1f%%** [%.1f, %.1f]<br>ILE %.3f ± %.3f |", 100.0 * c.optimal / c.n, 100.0 * lo,
-                    100.0 * hi, ile.mean, ile.ci95);
+      std::snprintf(buf, sizeof buf, " **%.1f%%** [%.1f, %.1f]<br>ILE %.3f ± %.3f |", 100.0 * c.optimal / c.n,
+                    100.0 * lo, 100.0 * hi, ile.mean, ile.ci95);
       out << buf;
     }
     out << "\n";
@@ -390,15 +393,21 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
   auto compare = [&](const std::string& a, const std::string& b) {
     int both = 0, only_a = 0, only_b = 0, neither = 0;
     paired(runs, a, b, [&](const RandomTaskRun& x, const RandomTaskRun& y) {
-      if (x.optimal && y.optimal) ++both;
-      else if (x.optimal) ++only_a;
-      else if (y.optimal) ++only_b;
-      else ++neither;
+      if (x.optimal && y.optimal)
+        ++both;
+      else if (x.optimal)
+        ++only_a;
+      else if (y.optimal)
+        ++only_b;
+      else
+        ++neither;
     });
     if (both + only_a + only_b + neither == 0) return;
-    out << "| " << a << " vs " << b << " | " << both << " | " << only_a << " | " << only_b << " | " << neither << " |\n";
+    out << "| " << a << " vs " << b << " | " << both << " | " << only_a << " | " << only_b << " | " << neither
+        << " |\n";
   };
-  out << "\n## Paired: the same data, two methods\n\n| methods (a vs b) | both optimal | only a | only b | neither |\n|---|---|---|---|---|\n";
+  out << "\n## Paired: the same data, two methods\n\n| methods (a vs b) | both optimal | only a | only b | neither "
+         "|\n|---|---|---|---|---|\n";
   compare("posterior", "fixed_prior");
   compare("posterior", "paper_c0.5");
   compare("posterior", "paper_c0.1");
@@ -430,15 +439,17 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
       theta_changed += theta_difference(one, four) > kSameThetaTolerance ? 1 : 0;
       if (!same_answer(one, four)) {
         ++changed;
-        if (four.ile_relative < one.ile_relative) ++better;
-        else ++worse;
+        if (four.ile_relative < one.ile_relative)
+          ++better;
+        else
+          ++worse;
       }
     });
     if (n > 0) {
       out << "\n## Do more restarts change the answer?\n\n- posterior with 4 restarts vs 1: theta moved by more than "
-          << kSameThetaTolerance << " in " << theta_changed << " of " << n << " runs; the learned policy's value changed in "
-          << changed << " (" << percent(static_cast<double>(changed) / n) << "): better in " << better << ", worse in "
-          << worse << ".\n";
+          << kSameThetaTolerance << " in " << theta_changed << " of " << n
+          << " runs; the learned policy's value changed in " << changed << " ("
+          << percent(static_cast<double>(changed) / n) << "): better in " << better << ", worse in " << worse << ".\n";
     }
   }
   out << "\n## EM\n\n| method | runs | converged | median EM evaluations | median seconds |\n|---|---|---|---|---|\n";
@@ -458,8 +469,9 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
       return v[v.size() / 2];
     };
     char buf[200];
-    std::snprintf(buf, sizeof buf, "| %s | %zu | %d (%.1f%%) | %.0f | %.3f |\n", m.c_str(), iterations.size(), converged,
-                  100.0 * converged / static_cast<double>(iterations.size()), median(iterations), median(seconds));
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %d (%.1f%%) | %.0f | %.3f |\n", m.c_str(), iterations.size(),
+                  converged, 100.0 * converged / static_cast<double>(iterations.size()), median(iterations),
+                  median(seconds));
     out << buf;
   }
   int failed = 0;
@@ -473,7 +485,8 @@ std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, con
   // The main methods (the c and restart variants are in the summary's tables).
   std::vector<std::string> methods;
   for (const std::string m : {"true_trajectories", "fixed_prior", "paper_c0.5", "paper_c0.1", "posterior"}) {
-    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; })) methods.push_back(m);
+    if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; }))
+      methods.push_back(m);
   }
   // Per group: share optimal and share within 5% of the optimal value, each with its
   // Wilson interval (gnuplot data strings take double quotes).
@@ -493,7 +506,8 @@ std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, con
     data << "EOD\n";
   }
   data << "set style data histograms\nset style histogram errorbars gap 2 lw 1\nset style fill solid 0.85 border -1\n"
-       << "set boxwidth 0.9\nset xtics rotate by -30 left\nset grid ytics\nset key outside right top\nset yrange [0:105]\n"
+       << "set boxwidth 0.9\nset xtics rotate by -30 left\nset grid ytics\nset key outside right top\nset yrange "
+          "[0:105]\n"
        << "set ylabel '% of runs'\nset bmargin 7\n";
   const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"};
   auto panel = [&](const std::string& block, const std::string& title) {
@@ -506,9 +520,10 @@ std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, con
     }
     return plot.str() + "\n";
   };
-  const std::string plot = "set multiplot layout 2,1\n" +
-                           panel("$optimal", "Random tasks: runs whose learned policy is optimal (ILE 0; 95% Wilson interval)") +
-                           panel("$near", "Runs within 5% of the optimal value (ILE <= 0.05 ||V*||_1)") + "unset multiplot\n";
+  const std::string plot =
+      "set multiplot layout 2,1\n" +
+      panel("$optimal", "Random tasks: runs whose learned policy is optimal (ILE 0; 95% Wilson interval)") +
+      panel("$near", "Runs within 5% of the optimal value (ILE <= 0.05 ||V*||_1)") + "unset multiplot\n";
   return run_gnuplot(path_stem, data.str(), plot, 1400, 1100);
 }
 

@@ -1,6 +1,5 @@
 #include "experiments/summary.hpp"
 
-
 #include <boost/math/distributions/students_t.hpp>
 #include <algorithm>
 #include <cmath>
@@ -60,11 +59,13 @@ std::string summary_csv(const std::vector<SummaryRow>& rows, const std::string& 
   std::ostringstream out;
   out.precision(10);
   out << "method," << x_name << ",runs,mean,sd,ci95\n";
-  for (const auto& r : rows) out << r.method << "," << r.x << "," << r.n << "," << r.mean << "," << r.sd << "," << r.ci95 << "\n";
+  for (const auto& r : rows)
+    out << r.method << "," << r.x << "," << r.n << "," << r.mean << "," << r.sd << "," << r.ci95 << "\n";
   return out.str();
 }
 
-std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::string& x_name, const std::string& value_name) {
+std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::string& x_name,
+                             const std::string& value_name) {
   std::vector<std::string> methods;
   std::vector<int> xs;
   for (const auto& r : rows) {
@@ -82,7 +83,8 @@ std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::str
   for (int x : xs) {
     out << "| " << x << " |";
     for (const auto& m : methods) {
-      const auto it = std::find_if(rows.begin(), rows.end(), [&](const SummaryRow& r) { return r.method == m && r.x == x; });
+      const auto it =
+          std::find_if(rows.begin(), rows.end(), [&](const SummaryRow& r) { return r.method == m && r.x == x; });
       if (it == rows.end()) {
         out << " |";
       } else {
@@ -92,7 +94,8 @@ std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::str
     }
     out << "\n";
   }
-  out << "\n" << value_name << ": mean ± 95% confidence half-width over " << (rows.empty() ? 0 : rows.front().n)
+  out << "\n"
+      << value_name << ": mean ± 95% confidence half-width over " << (rows.empty() ? 0 : rows.front().n)
       << " runs per cell.\n";
   return out.str();
 }
@@ -124,8 +127,7 @@ std::string draw_figure(const std::vector<SummaryRow>& rows, const FigureSpec& s
   }
   plot << "\n";
   std::ostringstream settings;
-  settings << data.str()
-           << "set title '" << spec.title << "'\n"
+  settings << data.str() << "set title '" << spec.title << "'\n"
            << "set xlabel '" << spec.x_label << "'\nset ylabel '" << spec.y_label << "'\n"
            << "set key right center box opaque\nset grid\nset yrange [0:*]\n"
            << "set xrange [" << x_min - 0.5 << ":" << x_max + 0.5 << "]\n"

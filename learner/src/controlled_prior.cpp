@@ -29,9 +29,11 @@ void check_layout(const ObservedTrajectory& o) {
 void check_controlled_run(const Mdp& mdp, const std::vector<Trajectory>& truth,
                           const std::vector<ObservedTrajectory>& observed, int num_symbols) {
   if (num_symbols <= 0) throw InputError("observations.num_symbols", "must be positive");
-  if (truth.size() != observed.size()) throw InputError("ground_truth", "not one trajectory of true steps per controlled episode");
+  if (truth.size() != observed.size())
+    throw InputError("ground_truth", "not one trajectory of true steps per controlled episode");
   for (size_t i = 0; i < truth.size(); ++i) {
-    if (static_cast<int>(truth[i].size()) != observed[i].length()) throw InputError("ground_truth", "steps differ from the episode's");
+    if (static_cast<int>(truth[i].size()) != observed[i].length())
+      throw InputError("ground_truth", "steps differ from the episode's");
     for (const StateAction& x : truth[i]) {
       if (x.state < 0 || x.state >= mdp.num_states || x.action < 0 || x.action >= mdp.num_actions) {
         throw InputError("ground_truth", "state or action outside the domain");

@@ -162,7 +162,8 @@ void ExactEngine::emissions(const ObservationModel& model, const ObservedTraject
   log_emission_.setZero(trajectory.length(), mdp_.num_pairs());
   p_.resize(trajectory.num_observations(), mdp_.num_pairs());
   for (int t = 0; t < trajectory.length(); ++t) {
-    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
       mixture(model, trajectory, n);
       log_emission_.row(t).array() += trajectory.weight(n) * p_.row(n).array().log();
     }
@@ -173,7 +174,8 @@ void ExactEngine::emissions(const ObservedTrajectory& trajectory, const std::vec
                             const KindEmissions& table) {
   log_emission_.setZero(trajectory.length(), mdp_.num_pairs());
   for (int t = 0; t < trajectory.length(); ++t) {
-    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
       log_emission_.row(t) += trajectory.weight(n) * table.log_p.row(kinds_of[static_cast<size_t>(n)]);
     }
   }
@@ -191,7 +193,8 @@ double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory&
   return scaled_ ? ll : log_passes(policy, trajectory, with_backward);
 }
 
-double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {
+double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory,
+                                  bool with_backward) {
   const double kNaN = std::numeric_limits<double>::quiet_NaN();
   const int T = trajectory.length();
   const int S = mdp_.num_states;
@@ -407,7 +410,8 @@ TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const Obs
   for (int t = 0; t < T; ++t) {
     marginal(t, out.log_likelihood);
     out.marginals.row(t) = marginal_.transpose();
-    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
       const int w = trajectory.symbols[static_cast<size_t>(n)];
       // gamma / p, with 0 where gamma = 0 (p may be 0 there).
       ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / p_.row(n).transpose().array(), 0.0);
@@ -435,7 +439,8 @@ void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll,
     marginal(t, ll);
     out.counts += marginal_;
     if (watch) out.watched.row(t) = marginal_.transpose();
-    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+    for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
       per_observation(n);
     }
   }
@@ -452,7 +457,8 @@ void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel&
     const double total = weight * ratio_.sum();
     const int context = trajectory.context(n);
     const bool by_context = context >= 0 && out.source_counts.rows() > 0;
-    if (by_context) out.source_counts(context, 0) += weight * trajectory.eta(n, 0) * (ratio_ * model.subject.col(w).array()).sum();
+    if (by_context)
+      out.source_counts(context, 0) += weight * trajectory.eta(n, 0) * (ratio_ * model.subject.col(w).array()).sum();
     for (int e = 0; e < model.num_confounders(); ++e) {
       const double share = trajectory.eta(n, e + 1) * model.confounders(e, w) * total;
       out.alpha_dot.confounders(e, w) += share;
@@ -497,8 +503,9 @@ void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& k
   for (int k : touched) {
     const int w = kinds.symbols[static_cast<size_t>(k)];
     // G / p, with 0 where G = 0 (p may be 0 there).
-    const Eigen::ArrayXd ratio =
-        (kind_gamma.row(k).array() > 0.0).select(kind_gamma.row(k).array() / emissions.p.row(k).array(), 0.0).transpose();
+    const Eigen::ArrayXd ratio = (kind_gamma.row(k).array() > 0.0)
+                                     .select(kind_gamma.row(k).array() / emissions.p.row(k).array(), 0.0)
+                                     .transpose();
     const Eigen::ArrayXd subject = kinds.eta(k, 0) * ratio * model.subject.col(w).array();
     out.subject.col(w).array() += subject;
     const double total = ratio.sum();

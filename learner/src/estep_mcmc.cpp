@@ -36,7 +36,9 @@ class Chain {
   int state(int t) const { return s_[static_cast<size_t>(t)]; }
   int action(int t) const { return a_[static_cast<size_t>(t)]; }
   int pair(int t) const { return mdp_.pair(state(t), action(t)); }
-  int& label_count(int n, int z) { return labels_[static_cast<size_t>(n) * static_cast<size_t>(Z_) + static_cast<size_t>(z)]; }
+  int& label_count(int n, int z) {
+    return labels_[static_cast<size_t>(n) * static_cast<size_t>(Z_) + static_cast<size_t>(z)];
+  }
 
   // Start: every observation blamed on the element that explains it best (or the subject
   // if none can), then a trajectory drawn from the MDP until one has positive probability.
@@ -64,7 +66,8 @@ class Chain {
   // (single_site), then optionally the whole path at once (block).
   void sweep(bool single_site, bool block, Rng& rng) {
     for (int t = 0; t < T_; ++t) {
-      for (int n = tr_.step_begin[static_cast<size_t>(t)]; n < tr_.step_begin[static_cast<size_t>(t) + 1]; ++n) update_labels(n, t, rng);
+      for (int n = tr_.step_begin[static_cast<size_t>(t)]; n < tr_.step_begin[static_cast<size_t>(t) + 1]; ++n)
+        update_labels(n, t, rng);
       if (single_site) {
         update_state(t, rng);
         update_action(t, rng);
@@ -138,7 +141,8 @@ class Chain {
   void update_labels(int n, int t, Rng& rng) {
     const int r = pair(t);
     scratch_labels_.clear();
-    for (int z = 0; z < Z_; ++z) scratch_labels_.insert(scratch_labels_.end(), static_cast<size_t>(label_count(n, z)), z);
+    for (int z = 0; z < Z_; ++z)
+      scratch_labels_.insert(scratch_labels_.end(), static_cast<size_t>(label_count(n, z)), z);
     for (int z : scratch_labels_) {
       const int proposal = rng.uniform_int(Z_);
       if (proposal == z) continue;
@@ -162,7 +166,8 @@ class Chain {
     const int current = action(t);
     if (proposal == current) return;
     // The predecessor term is the same for both actions; log_local includes it harmlessly.
-    if (accept(log_local(t, state(t), proposal) - log_local(t, state(t), current), rng)) a_[static_cast<size_t>(t)] = proposal;
+    if (accept(log_local(t, state(t), proposal) - log_local(t, state(t), current), rng))
+      a_[static_cast<size_t>(t)] = proposal;
   }
 
   // A trajectory from the MDP under the policy; false if it hit a terminal state early.
@@ -256,8 +261,7 @@ McmcDiagnostics path_diagnostics(const std::vector<std::vector<int>>& paths, con
 
 }  // namespace
 
-McmcEngine::McmcEngine(const Mdp& mdp, McmcOptions options)
-    : mdp_(mdp), options_(options), exact_(mdp) {
+McmcEngine::McmcEngine(const Mdp& mdp, McmcOptions options) : mdp_(mdp), options_(options), exact_(mdp) {
   const bool fixed_paths = deterministic(mdp);
   // Deterministic transitions: single-site moves of s or a cannot leave the current path.
   single_site_ = !fixed_paths && options.block != McmcOptions::Block::kOnly;
@@ -291,7 +295,8 @@ bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& mode
         const int r = chain.pair(t);
         marginals(t, r) += 1.0;
         path.push_back(r);
-        for (int n = trajectory.step_begin[static_cast<size_t>(t)]; n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
+        for (int n = trajectory.step_begin[static_cast<size_t>(t)];
+             n < trajectory.step_begin[static_cast<size_t>(t) + 1]; ++n) {
           const int w = trajectory.symbols[static_cast<size_t>(n)];
           for (int z = 0; z < Z; ++z) {
             const int k = chain.label_count(n, z);
@@ -324,7 +329,8 @@ TrajectoryPosterior McmcEngine::posterior(const SoftSolution& policy, const Obse
   if (out.log_likelihood == kNegInf ||
       !sample(policy, model, trajectory, rng, out.marginals, out.sources, alpha_dot, out.mcmc)) {
     out.log_likelihood = kNegInf;
-    out.marginals = RowMatrix::Constant(trajectory.length(), mdp_.num_pairs(), std::numeric_limits<double>::quiet_NaN());
+    out.marginals =
+        RowMatrix::Constant(trajectory.length(), mdp_.num_pairs(), std::numeric_limits<double>::quiet_NaN());
     out.sources = RowMatrix::Constant(trajectory.num_observations(), 1 + model.num_confounders(),
                                       std::numeric_limits<double>::quiet_NaN());
   }
@@ -348,13 +354,16 @@ void McmcEngine::accumulate(const SoftSolution& policy, const ObservationModel& 
   out.alpha_dot += alpha_dot;
   if (out.source_counts.rows() > 0) {
     for (int n = 0; n < trajectory.num_observations(); ++n) {
-      if (trajectory.context(n) >= 0) out.source_counts.row(trajectory.context(n)) += trajectory.weight(n) * sources.row(n);
+      if (trajectory.context(n) >= 0)
+        out.source_counts.row(trajectory.context(n)) += trajectory.weight(n) * sources.row(n);
     }
   }
 }
 
 EngineFactory mcmc_engine_factory(McmcOptions options) {
-  return [options](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<McmcEngine>(mdp, options); };
+  return [options](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> {
+    return std::make_unique<McmcEngine>(mdp, options);
+  };
 }
 
 }  // namespace hbirl

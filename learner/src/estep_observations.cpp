@@ -24,7 +24,8 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
     throw InputError("watch", std::to_string(options_.watch) + " is not a trajectory of the data");
   }
   if (prior_.subject_alpha.rows() != mdp.num_pairs() || prior_.subject_alpha.cols() != prior_.num_symbols ||
-      prior_.confounder_alpha.rows() != prior_.num_confounders || prior_.confounder_alpha.cols() != prior_.num_symbols) {
+      prior_.confounder_alpha.rows() != prior_.num_confounders ||
+      prior_.confounder_alpha.cols() != prior_.num_symbols) {
     throw InputError("observation_model", "alpha has the wrong shape");
   }
   for (size_t i = 0; i < trajectories_.size(); ++i) {
@@ -49,9 +50,8 @@ void ObservationEStep::assign_contexts() {
   if (!(prior_.eta_strength > 0.0)) throw InputError("observation_model.eta_prior_strength", "must be positive");
   // Explicit contexts are numbered from 0; without them each distinct eta is one. A
   // context's stated eta is the weighted mean of its observations' eta.
-  const bool given = std::any_of(trajectories_.begin(), trajectories_.end(), [](const ObservedTrajectory& t) {
-    return !t.contexts.empty();
-  });
+  const bool given = std::any_of(trajectories_.begin(), trajectories_.end(),
+                                 [](const ObservedTrajectory& t) { return !t.contexts.empty(); });
   std::map<std::vector<double>, int> index;
   int contexts = 0;
   for (auto& t : trajectories_) {
@@ -61,7 +61,8 @@ void ObservationEStep::assign_contexts() {
       }
       for (int c : t.contexts) {
         if (c < 0 || c >= kMaxContexts) {
-          throw InputError("demonstration", "context " + std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+          throw InputError("demonstration", "context " + std::to_string(c) + " is outside [0, " +
+                                                std::to_string(kMaxContexts - 1) + "]");
         }
         contexts = std::max(contexts, c + 1);
       }
@@ -84,12 +85,15 @@ void ObservationEStep::assign_contexts() {
     }
   }
   if (!given) {
-    for (const auto& [key, c] : index) context_eta_.row(c) = Eigen::Map<const Eigen::RowVectorXd>(key.data(), context_eta_.cols());
+    for (const auto& [key, c] : index)
+      context_eta_.row(c) = Eigen::Map<const Eigen::RowVectorXd>(key.data(), context_eta_.cols());
     return;
   }
   for (int c = 0; c < contexts; ++c) {
-    if (context_observations_[c] > 0.0) context_eta_.row(c) /= context_observations_[c];
-    else context_eta_.row(c).setConstant(1.0 / static_cast<double>(context_eta_.cols()));
+    if (context_observations_[c] > 0.0)
+      context_eta_.row(c) /= context_observations_[c];
+    else
+      context_eta_.row(c).setConstant(1.0 / static_cast<double>(context_eta_.cols()));
   }
 }
 
@@ -128,9 +132,10 @@ int ObservationEStep::num_blocks() const {
   return (static_cast<int>(trajectories_.size()) + kBlockSize - 1) / kBlockSize;
 }
 
-std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSolution& policy, const ObservationModel& model,
-                                                                std::uint64_t seed, const std::vector<int>& blocks,
-                                                                int threads, const RowMatrix* eta) const {
+std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSolution& policy,
+                                                                const ObservationModel& model, std::uint64_t seed,
+                                                                const std::vector<int>& blocks, int threads,
+                                                                const RowMatrix* eta) const {
   const int n = static_cast<int>(trajectories_.size());
   const int P = mdp_.num_pairs();
   const int E = model.num_confounders();
@@ -144,7 +149,8 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
   std::optional<ObservationKinds> calibrated_kinds;
   if (eta && kinds_) {
     calibrated_kinds = *kinds_;
-    for (int k = 0; k < kinds_->num_kinds(); ++k) calibrated_kinds->eta.row(k) = eta->row(kinds_->contexts[static_cast<size_t>(k)]);
+    for (int k = 0; k < kinds_->num_kinds(); ++k)
+      calibrated_kinds->eta.row(k) = eta->row(kinds_->contexts[static_cast<size_t>(k)]);
   }
   const ObservationKinds* kinds = calibrated_kinds ? &*calibrated_kinds : (kinds_ ? &*kinds_ : nullptr);
   std::optional<KindEmissions> table;
@@ -156,8 +162,8 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
     out = EStepStatistics::zero(P, E, W, num_contexts());
     ExactEngine* exact = table ? engine->exact() : nullptr;
     if (exact) {
-      accumulate_by_kind(*exact, policy, model, trajectories_, b * kBlockSize, std::min(n, (b + 1) * kBlockSize), *kinds,
-                         *table, options_.watch, out);
+      accumulate_by_kind(*exact, policy, model, trajectories_, b * kBlockSize, std::min(n, (b + 1) * kBlockSize),
+                         *kinds, *table, options_.watch, out);
       return;
     }
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
@@ -191,7 +197,8 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
     for (int b = 0; b < num_blocks(); ++b) all[static_cast<size_t>(b)] = b;
     partial = block_statistics(policy, model, seed, all, options_.threads, eta);
   }
-  EStepStatistics total = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols(), num_contexts());
+  EStepStatistics total =
+      EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols(), num_contexts());
   for (const auto& part : partial) total += part;
   return total;
 }
@@ -231,7 +238,8 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
     const Eigen::VectorXd seen = stats.counts.cwiseMin(1.0);
     const Eigen::VectorXd row_change = (next.subject - model.subject).cwiseAbs().rowwise().maxCoeff();
     double change = seen.cwiseProduct(row_change).maxCoeff();
-    if (model.num_confounders() > 0) change = std::max(change, (next.confounders - model.confounders).cwiseAbs().maxCoeff());
+    if (model.num_confounders() > 0)
+      change = std::max(change, (next.confounders - model.confounders).cwiseAbs().maxCoeff());
     change = std::max(change, eta_change);
     model = std::move(next);
     ++result.alpha_iterations;
@@ -266,14 +274,17 @@ double ObservationEStep::log_eta_prior_term(const RowMatrix& eta) const {
 double ObservationEStep::data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
   const ObservationPrior& alpha = state.alpha ? *state.alpha : prior_;
   const std::optional<RowMatrix> eta = learned_eta(alpha);
-  return statistics(policy, dirichlet_mean(alpha), Rng(state.seed, state.calls).next_u64(), eta ? &*eta : nullptr).log_likelihood;
+  return statistics(policy, dirichlet_mean(alpha), Rng(state.seed, state.calls).next_u64(), eta ? &*eta : nullptr)
+      .log_likelihood;
 }
 
-std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSolution& policy, const EStepState& state) const {
+std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSolution& policy,
+                                                                const EStepState& state) const {
   const ObservationPrior& alpha = state.alpha ? *state.alpha : prior_;
   if (!alpha.learn || alpha.update != AlphaUpdate::kPosterior || !alpha.automatic_strength) return std::nullopt;
   std::vector<double> strengths = prior_strength_grid();
-  if (std::find(strengths.begin(), strengths.end(), alpha.strength) == strengths.end()) strengths.push_back(alpha.strength);
+  if (std::find(strengths.begin(), strengths.end(), alpha.strength) == strengths.end())
+    strengths.push_back(alpha.strength);
   const ObservationModel model = dirichlet_mean(alpha);
   const std::optional<RowMatrix> eta = learned_eta(alpha);
   const std::uint64_t seed = Rng(state.seed, state.calls).next_u64();

@@ -59,7 +59,9 @@ class EmMap {
     }
     CausalLikelihood objective(mdp_, step.e.counts, options_.l2, options_.soft_vi);
     objective.warm_start(solver_.solution());  // the E-step solved at x.theta, where the M-step starts
-    const Objective f = [&objective](const Eigen::VectorXd& t, Eigen::VectorXd& g) { return objective.evaluate(t, &g); };
+    const Objective f = [&objective](const Eigen::VectorXd& t, Eigen::VectorXd& g) {
+      return objective.evaluate(t, &g);
+    };
     step.m = maximize(f, x.theta, options_.optimizer);
     step.next.theta = step.m.x;
     optimizer_iterations_ += step.m.iterations;
@@ -197,7 +199,7 @@ RestartResult run_restart(const Mdp& mdp, const EStep& estep, const LearnOptions
     ++result.em_iterations;
     if (on_iteration) {
       on_iteration(index, result.em_iterations, step.objective, step.next.theta, step.e,
-                           step.next.alpha ? &*step.next.alpha : nullptr);
+                   step.next.alpha ? &*step.next.alpha : nullptr);
     }
     result.optimizer_status = step.m.status;
   };

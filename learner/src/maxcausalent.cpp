@@ -7,12 +7,11 @@
 
 namespace hbirl {
 
-CausalLikelihood::CausalLikelihood(const Mdp& mdp, Eigen::VectorXd counts, double l2,
-                                   SoftViOptions soft_vi)
+CausalLikelihood::CausalLikelihood(const Mdp& mdp, Eigen::VectorXd counts, double l2, SoftViOptions soft_vi)
     : mdp_(mdp), counts_(std::move(counts)), l2_(l2), solver_(mdp, soft_vi) {
   if (counts_.size() != mdp.num_pairs()) {
-    throw InputError("counts", "has " + std::to_string(counts_.size()) + " entries, expected " +
-                                   std::to_string(mdp.num_pairs()));
+    throw InputError("counts",
+                     "has " + std::to_string(counts_.size()) + " entries, expected " + std::to_string(mdp.num_pairs()));
   }
   if (!(l2 >= 0.0) || !std::isfinite(l2)) throw InputError("l2", "must be a finite number >= 0");
   state_counts_ = Eigen::VectorXd::Zero(mdp.num_states);
@@ -21,8 +20,8 @@ CausalLikelihood::CausalLikelihood(const Mdp& mdp, Eigen::VectorXd counts, doubl
       const int r = mdp.pair(s, a);
       const double n = counts_[r];
       if (!std::isfinite(n) || n < 0.0) {
-        throw InputError("counts", "visit count of (s=" + std::to_string(s) + ", a=" +
-                                       std::to_string(a) + ") is not a finite non-negative number");
+        throw InputError("counts", "visit count of (s=" + std::to_string(s) + ", a=" + std::to_string(a) +
+                                       ") is not a finite non-negative number");
       }
       if (n == 0.0) continue;
       if (mdp.is_terminal(s) || !mdp.available(s, a)) {

@@ -25,15 +25,13 @@ std::uint64_t dynamics_digest(const Mdp& mdp) {
 namespace {
 constexpr double kSumTolerance = 1e-9;
 
-std::string pair_name(int s, int a) {
-  return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")";
-}
+std::string pair_name(int s, int a) { return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")"; }
 }  // namespace
 
 Eigen::VectorXd Mdp::reward(const Eigen::VectorXd& theta) const {
   if (theta.size() != features.cols()) {
-    throw InputError("weights", "has " + std::to_string(theta.size()) + " entries, expected " +
-                                    std::to_string(features.cols()));
+    throw InputError("weights",
+                     "has " + std::to_string(theta.size()) + " entries, expected " + std::to_string(features.cols()));
   }
   return features * theta;
 }
@@ -53,8 +51,9 @@ void Mdp::validate() const {
     throw InputError("mdp.discount", "must be in [0, 1), got " + std::to_string(discount));
   }
   if (discount > kMaxDiscount) {
-    throw InputError("mdp.discount", "must be at most 0.999999 (a horizon 1/(1 - discount) of a million steps); value "
-                                     "iteration cannot converge closer to 1");
+    throw InputError("mdp.discount",
+                     "must be at most 0.999999 (a horizon 1/(1 - discount) of a million steps); value "
+                     "iteration cannot converge closer to 1");
   }
   const int* outer = transitions.outerIndexPtr();
   const int* inner = transitions.innerIndexPtr();
@@ -66,12 +65,11 @@ void Mdp::validate() const {
       double sum = 0.0;
       for (int j = outer[r]; j < outer[r + 1]; ++j) {
         if (inner[j] < 0 || inner[j] >= num_states) {
-          throw InputError("mdp.transitions", pair_name(s, a) + ": next state " +
-                                                  std::to_string(inner[j]) + " out of range");
+          throw InputError("mdp.transitions",
+                           pair_name(s, a) + ": next state " + std::to_string(inner[j]) + " out of range");
         }
         if (!std::isfinite(value[j]) || value[j] < 0.0) {
-          throw InputError("mdp.transitions", pair_name(s, a) + ": probability " +
-                                                  std::to_string(value[j]) +
+          throw InputError("mdp.transitions", pair_name(s, a) + ": probability " + std::to_string(value[j]) +
                                                   " is not a finite non-negative number");
         }
         sum += value[j];
@@ -80,25 +78,25 @@ void Mdp::validate() const {
         ++available_actions;
         if (std::abs(sum - 1.0) > kSumTolerance) {
           throw InputError("mdp.transitions",
-                           pair_name(s, a) + ": probabilities sum to " + std::to_string(sum) +
-                               ", expected 1");
+                           pair_name(s, a) + ": probabilities sum to " + std::to_string(sum) + ", expected 1");
         }
       }
     }
     if (available_actions == 0 && !is_terminal(s)) {
-      throw InputError("mdp.transitions", "state " + std::to_string(s) +
-                                              " is not terminal but has no available action");
+      throw InputError("mdp.transitions",
+                       "state " + std::to_string(s) + " is not terminal but has no available action");
     }
   }
   if (!features.allFinite()) throw InputError("mdp.features", "contains NaN or inf");
   if (features.size() > 0 && features.cwiseAbs().maxCoeff() > kMaxFeatureMagnitude) {
-    throw InputError("mdp.features", "has a value beyond +-1e6: rescale the features (they are meant to be of order 1)");
+    throw InputError("mdp.features",
+                     "has a value beyond +-1e6: rescale the features (they are meant to be of order 1)");
   }
   double start_sum = 0.0;
   for (int s = 0; s < num_states; ++s) {
     if (!std::isfinite(start[s]) || start[s] < 0.0) {
-      throw InputError("mdp.start", "probability of state " + std::to_string(s) +
-                                        " is not a finite non-negative number");
+      throw InputError("mdp.start",
+                       "probability of state " + std::to_string(s) + " is not a finite non-negative number");
     }
     if (start[s] > 0.0 && is_terminal(s)) {
       throw InputError("mdp.start", "state " + std::to_string(s) + " is terminal");
@@ -106,13 +104,11 @@ void Mdp::validate() const {
     start_sum += start[s];
   }
   if (std::abs(start_sum - 1.0) > kSumTolerance) {
-    throw InputError("mdp.start", "probabilities sum to " + std::to_string(start_sum) +
-                                      ", expected 1");
+    throw InputError("mdp.start", "probabilities sum to " + std::to_string(start_sum) + ", expected 1");
   }
 }
 
-Mdp make_mdp(int num_states, int num_actions, int num_features,
-             const std::vector<TransitionEntry>& transitions,
+Mdp make_mdp(int num_states, int num_actions, int num_features, const std::vector<TransitionEntry>& transitions,
              const std::vector<FeatureEntry>& features, const Eigen::VectorXd& start,
              const std::vector<int>& terminal_states, double discount) {
   if (num_states <= 0) throw InputError("mdp.num_states", "must be positive");

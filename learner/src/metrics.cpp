@@ -15,8 +15,9 @@ namespace {
 // true reward, from the expert's values (the same policy: the same values, ILE 0).
 InverseLearningError ile_of(const Mdp& mdp, const Eigen::VectorXd& true_reward, const OptimalPolicy& expert,
                             const OptimalPolicy& learner) {
-  const Eigen::VectorXd v_learner =
-      learner.actions == expert.actions ? expert.value : policy_evaluation(mdp, true_reward, learner.actions, &expert.value);
+  const Eigen::VectorXd v_learner = learner.actions == expert.actions
+                                        ? expert.value
+                                        : policy_evaluation(mdp, true_reward, learner.actions, &expert.value);
   InverseLearningError result;
   result.ile = (expert.value - v_learner).lpNorm<1>();
   result.optimal_value_l1 = expert.value.lpNorm<1>();
@@ -44,9 +45,9 @@ InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorX
   return ile_of(mdp, true_reward, value_iteration(mdp, true_reward), value_iteration(mdp, mdp.reward(learned_theta)));
 }
 
-double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
-                        const Eigen::VectorXd& learned_theta) {
-  return agreement_of(mdp, value_iteration(mdp, mdp.reward(true_theta)), value_iteration(mdp, mdp.reward(learned_theta)));
+double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta) {
+  return agreement_of(mdp, value_iteration(mdp, mdp.reward(true_theta)),
+                      value_iteration(mdp, mdp.reward(learned_theta)));
 }
 
 PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta) {
@@ -69,8 +70,7 @@ Eigen::VectorXd expected_feature_counts(const Mdp& mdp, const Eigen::VectorXd& p
     const auto running = std::count_if(lengths.begin(), lengths.end(), [t](int l) { return l > t; });
     const double share = static_cast<double>(running) / static_cast<double>(lengths.size());
     for (int s = 0; s < mdp.num_states; ++s) {
-      pairs.segment(static_cast<Eigen::Index>(s) * A, A) =
-          d[s] * policy.segment(static_cast<Eigen::Index>(s) * A, A);
+      pairs.segment(static_cast<Eigen::Index>(s) * A, A) = d[s] * policy.segment(static_cast<Eigen::Index>(s) * A, A);
     }
     total.noalias() += share * (mdp.features.transpose() * pairs);
     d.noalias() = mdp.transitions.transpose() * pairs;
@@ -81,11 +81,10 @@ Eigen::VectorXd expected_feature_counts(const Mdp& mdp, const Eigen::VectorXd& p
   return total;
 }
 
-double feature_count_error(const Mdp& mdp, const Eigen::VectorXd& counts,
-                           const std::vector<int>& lengths, const Eigen::VectorXd& policy) {
+double feature_count_error(const Mdp& mdp, const Eigen::VectorXd& counts, const std::vector<int>& lengths,
+                           const Eigen::VectorXd& policy) {
   if (lengths.empty()) return 0.0;
-  const Eigen::VectorXd empirical =
-      empirical_feature_counts(mdp, counts) / static_cast<double>(lengths.size());
+  const Eigen::VectorXd empirical = empirical_feature_counts(mdp, counts) / static_cast<double>(lengths.size());
   return (empirical - expected_feature_counts(mdp, policy, lengths)).lpNorm<1>();
 }
 

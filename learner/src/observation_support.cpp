@@ -25,7 +25,8 @@ std::string symbol_sources(const ObservationPrior& prior, const ObservedTrajecto
   return s + "]";
 }
 
-std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTrajectory& t, const ObservationPrior& prior, int index) {
+std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTrajectory& t, const ObservationPrior& prior,
+                                           int index) {
   const int S = mdp.num_states, A = mdp.num_actions;
   std::vector<char> reach(static_cast<size_t>(S), 0), next(static_cast<size_t>(S), 0);
   for (int s = 0; s < S; ++s) reach[static_cast<size_t>(s)] = mdp.start[s] > 0.0;
@@ -39,7 +40,8 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
         any = any || ok;
       }
     }
-    if (!any) return ImpossibleObservation{index, step, -1, "every state the trajectory can be in at this step is terminal"};
+    if (!any)
+      return ImpossibleObservation{index, step, -1, "every state the trajectory can be in at this step is terminal"};
     for (int n = t.step_begin[static_cast<size_t>(step)]; n < t.step_begin[static_cast<size_t>(step) + 1]; ++n) {
       const int w = t.symbols[static_cast<size_t>(n)];
       const double* eta = t.eta.row(n).data();
@@ -55,12 +57,14 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
         together = together || alive[static_cast<size_t>(r)];
       }
       if (!alone) {
-        return ImpossibleObservation{index, step, n - t.step_begin[static_cast<size_t>(step)],
-                                     symbol_sources(prior, t, n) +
-                                         ": no source it gives weight to can produce it at any state-action reachable here (prior alpha 0)"};
+        return ImpossibleObservation{
+            index, step, n - t.step_begin[static_cast<size_t>(step)],
+            symbol_sources(prior, t, n) +
+                ": no source it gives weight to can produce it at any state-action reachable here (prior alpha 0)"};
       }
       if (!together) {
-        return ImpossibleObservation{index, step, -1, "no single state-action can produce all of this step's observations"};
+        return ImpossibleObservation{index, step, -1,
+                                     "no single state-action can produce all of this step's observations"};
       }
     }
     const bool last = step + 1 == t.length();
@@ -75,7 +79,8 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
       }
     }
     if (last && t.ends_in_terminal && !ends) {
-      return ImpossibleObservation{index, step, -1, "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
+      return ImpossibleObservation{
+          index, step, -1, "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
     }
     reach.swap(next);
   }

@@ -12,7 +12,6 @@
 
 namespace hbirl {
 
-
 std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories) {
   Fnv1a h;
   h.add(static_cast<std::uint64_t>(trajectories.size()));
@@ -119,7 +118,8 @@ std::optional<ObservationKinds> observation_kinds(const std::vector<ObservedTraj
   for (size_t k = 0; k < rows.size(); ++k) {
     kinds.symbols.push_back(static_cast<int>(rows[k][0]));
     kinds.contexts.push_back(static_cast<int>(rows[k][1]));
-    for (Eigen::Index z = 0; z < sources; ++z) kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 2];
+    for (Eigen::Index z = 0; z < sources; ++z)
+      kinds.eta(static_cast<Eigen::Index>(k), z) = rows[k][static_cast<size_t>(z) + 2];
   }
   return kinds;
 }

@@ -25,8 +25,8 @@ struct LbfgsContext {
   Eigen::VectorXd best_x;
 };
 
-lbfgsfloatval_t lbfgs_evaluate(void* instance, const lbfgsfloatval_t* x, lbfgsfloatval_t* g,
-                               const int n, const lbfgsfloatval_t /*step*/) {
+lbfgsfloatval_t lbfgs_evaluate(void* instance, const lbfgsfloatval_t* x, lbfgsfloatval_t* g, const int n,
+                               const lbfgsfloatval_t /*step*/) {
   auto* ctx = static_cast<LbfgsContext*>(instance);
   ctx->x = Eigen::Map<const Eigen::VectorXd>(x, n);
   const double value = (*ctx->f)(ctx->x, ctx->gradient);
@@ -41,26 +41,36 @@ lbfgsfloatval_t lbfgs_evaluate(void* instance, const lbfgsfloatval_t* x, lbfgsfl
   return std::isfinite(value) ? -value : std::numeric_limits<double>::infinity();
 }
 
-int lbfgs_progress(void* instance, const lbfgsfloatval_t*, const lbfgsfloatval_t*,
-                   const lbfgsfloatval_t, const lbfgsfloatval_t, const lbfgsfloatval_t,
-                   const lbfgsfloatval_t, int, int k, int) {
+int lbfgs_progress(void* instance, const lbfgsfloatval_t*, const lbfgsfloatval_t*, const lbfgsfloatval_t,
+                   const lbfgsfloatval_t, const lbfgsfloatval_t, const lbfgsfloatval_t, int, int k, int) {
   static_cast<LbfgsContext*>(instance)->iterations = k;
   return 0;
 }
 
 const char* lbfgs_status(int code) {
   switch (code) {
-    case LBFGS_SUCCESS: return "converged";
-    case LBFGS_STOP: return "converged (objective stopped changing)";
-    case LBFGS_ALREADY_MINIMIZED: return "converged (start point is optimal)";
-    case LBFGSERR_ROUNDING_ERROR: return "stopped: rounding errors prevent further progress";
-    case LBFGSERR_MAXIMUMLINESEARCH: return "stopped: line search reached its limit";
-    case LBFGSERR_MINIMUMSTEP: return "stopped: line search step became too small";
-    case LBFGSERR_MAXIMUMSTEP: return "stopped: line search step became too large";
-    case LBFGSERR_MAXIMUMITERATION: return "stopped: iteration limit";
-    case LBFGSERR_INCREASEGRADIENT: return "stopped: search direction is not an ascent direction";
-    case LBFGSERR_WIDTHTOOSMALL: return "stopped: line search interval too small";
-    default: return "stopped: L-BFGS error";
+    case LBFGS_SUCCESS:
+      return "converged";
+    case LBFGS_STOP:
+      return "converged (objective stopped changing)";
+    case LBFGS_ALREADY_MINIMIZED:
+      return "converged (start point is optimal)";
+    case LBFGSERR_ROUNDING_ERROR:
+      return "stopped: rounding errors prevent further progress";
+    case LBFGSERR_MAXIMUMLINESEARCH:
+      return "stopped: line search reached its limit";
+    case LBFGSERR_MINIMUMSTEP:
+      return "stopped: line search step became too small";
+    case LBFGSERR_MAXIMUMSTEP:
+      return "stopped: line search step became too large";
+    case LBFGSERR_MAXIMUMITERATION:
+      return "stopped: iteration limit";
+    case LBFGSERR_INCREASEGRADIENT:
+      return "stopped: search direction is not an ascent direction";
+    case LBFGSERR_WIDTHTOOSMALL:
+      return "stopped: line search interval too small";
+    default:
+      return "stopped: L-BFGS error";
   }
 }
 
@@ -78,18 +88,14 @@ void finish(const Objective& f, OptimizeResult& result, const OptimizerOptions& 
     result.gradient_norm = gradient.norm();
   }
   result.converged =
-      result.converged ||
-      result.gradient_norm <= options.gradient_tolerance * std::max(1.0, result.x.norm());
+      result.converged || result.gradient_norm <= options.gradient_tolerance * std::max(1.0, result.x.norm());
 }
 
 }  // namespace
 
-const char* to_string(OptimizerKind kind) {
-  return kind == OptimizerKind::kLbfgs ? "lbfgs" : "eg";
-}
+const char* to_string(OptimizerKind kind) { return kind == OptimizerKind::kLbfgs ? "lbfgs" : "eg"; }
 
-OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0,
-                              const OptimizerOptions& options) {
+OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0, const OptimizerOptions& options) {
   const int n = static_cast<int>(x0.size());
   OptimizeResult result;
   if (n == 0) {
@@ -122,8 +128,7 @@ OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0,
   if (ctx.best_value > -fx) result.x = ctx.best_x;
   result.evaluations = ctx.evaluations;
   result.iterations = ctx.iterations;
-  result.converged =
-      code == LBFGS_SUCCESS || code == LBFGS_STOP || code == LBFGS_ALREADY_MINIMIZED;
+  result.converged = code == LBFGS_SUCCESS || code == LBFGS_STOP || code == LBFGS_ALREADY_MINIMIZED;
   result.status = lbfgs_status(code);
   finish(f, result, options, &ctx);
   // Near the optimum the objective stops changing in double precision before the

@@ -89,8 +89,8 @@ void PolicyMatrix::set_policy(const std::vector<int>& actions) {
   set_policy(policy);
 }
 
-bool PolicyMatrix::run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b,
-                       Eigen::VectorXd& x, double tolerance) {
+bool PolicyMatrix::run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                       double tolerance) {
   solver.setTolerance(tolerance);
   solver.compute(a);
   Eigen::VectorXd guess = x;

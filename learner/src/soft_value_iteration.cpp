@@ -27,9 +27,7 @@ bool newton_has_stalled(double residual, double previous) {
 // method, Eisenstat & Walker 1996: far from the solution a rough step does as well, and
 // the forcing term's decay keeps convergence superlinear). The solve ends, as before, only
 // when a Bellman backup moves V by less than the tolerance.
-double newton_tolerance(double r) {
-  return std::clamp(r * r, PolicyMatrix::kWorkingTolerance, 1e-2);
-}
+double newton_tolerance(double r) { return std::clamp(r * r, PolicyMatrix::kWorkingTolerance, 1e-2); }
 }  // namespace
 
 SoftBellmanSolver::SoftBellmanSolver(const Mdp& mdp, SoftViOptions options)
@@ -165,8 +163,7 @@ Eigen::VectorXd SoftBellmanSolver::solve_adjoint(const Eigen::VectorXd& rhs) {
   return x;
 }
 
-SoftSolution soft_value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const SoftViOptions& options) {
+SoftSolution soft_value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, const SoftViOptions& options) {
   SoftBellmanSolver solver(mdp, options);
   return solver.solve(reward);
 }

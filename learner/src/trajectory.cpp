@@ -15,8 +15,8 @@ Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int 
     const int r = mdp.pair(s, a);
     const int begin = mdp.transitions.outerIndexPtr()[r];
     const int end = mdp.transitions.outerIndexPtr()[r + 1];
-    const int j = begin + rng.categorical(Eigen::Map<const Eigen::VectorXd>(
-                              mdp.transitions.valuePtr() + begin, end - begin));
+    const int j =
+        begin + rng.categorical(Eigen::Map<const Eigen::VectorXd>(mdp.transitions.valuePtr() + begin, end - begin));
     s = mdp.transitions.innerIndexPtr()[j];
     if (mdp.is_terminal(s)) {
       if (entered_terminal) *entered_terminal = true;

@@ -12,8 +12,7 @@ namespace {
 constexpr int kMaxPolicyIterations = 1000;
 
 // q = R + gamma T v with -inf on impossible pairs and terminal states.
-void q_values(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::VectorXd& v,
-              Eigen::VectorXd& q) {
+void q_values(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::VectorXd& v, Eigen::VectorXd& q) {
   q.noalias() = mdp.transitions * v;
   q = reward + mdp.discount * q;
   for (int s = 0; s < mdp.num_states; ++s) {
@@ -130,8 +129,8 @@ OptimalPolicy value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, dou
   return result;
 }
 
-Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const std::vector<int>& actions, const Eigen::VectorXd* guess) {
+Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward, const std::vector<int>& actions,
+                                  const Eigen::VectorXd* guess) {
   if (actions.size() != static_cast<size_t>(mdp.num_states)) {
     throw std::invalid_argument("policy_evaluation: one action per state expected");
   }
@@ -147,8 +146,8 @@ Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
   return policy_evaluation(mdp, reward, policy, guess);
 }
 
-Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const Eigen::VectorXd& policy, const Eigen::VectorXd* guess) {
+Eigen::VectorXd policy_evaluation(const Mdp& mdp, const Eigen::VectorXd& reward, const Eigen::VectorXd& policy,
+                                  const Eigen::VectorXd* guess) {
   const int A = mdp.num_actions;
   Eigen::VectorXd b = Eigen::VectorXd::Zero(mdp.num_states);
   for (int s = 0; s < mdp.num_states; ++s) {

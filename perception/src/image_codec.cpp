@@ -16,7 +16,8 @@ namespace hbirl::perception {
 namespace {
 
 void check_bgr(const cv::Mat& bgr) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::invalid_argument("image_codec: expected a non-empty 8-bit BGR image");
+  if (bgr.empty() || bgr.type() != CV_8UC3)
+    throw std::invalid_argument("image_codec: expected a non-empty 8-bit BGR image");
 }
 
 struct SpngFree {
@@ -65,12 +66,14 @@ cv::Mat decode_jpeg(const std::uint8_t* data, std::size_t size, int max_width, i
   Tj tj(tjInitDecompress());
   if (!tj || size > static_cast<std::size_t>(std::numeric_limits<unsigned long>::max())) return {};
   int width = 0, height = 0, subsampling = 0, colourspace = 0;
-  if (tjDecompressHeader3(tj.get(), data, static_cast<unsigned long>(size), &width, &height, &subsampling, &colourspace) != 0) return {};
+  if (tjDecompressHeader3(tj.get(), data, static_cast<unsigned long>(size), &width, &height, &subsampling,
+                          &colourspace) != 0)
+    return {};
   if (width < 1 || height < 1 || width > max_width || height > max_height) return {};
   cv::Mat image(height, width, CV_8UC3);
   // TJFLAG_LIMITSCANS: a progressive image of thousands of scans (a decompression bomb) is refused.
-  if (tjDecompress2(tj.get(), data, static_cast<unsigned long>(size), image.data, width, static_cast<int>(image.step), height, TJPF_BGR,
-                    TJFLAG_LIMITSCANS | TJFLAG_STOPONWARNING) != 0) {
+  if (tjDecompress2(tj.get(), data, static_cast<unsigned long>(size), image.data, width, static_cast<int>(image.step),
+                    height, TJPF_BGR, TJFLAG_LIMITSCANS | TJFLAG_STOPONWARNING) != 0) {
     return {};
   }
   return image;
@@ -92,13 +95,16 @@ std::vector<std::uint8_t> encode_png(const cv::Mat& bgr, int compression_level) 
   ihdr.bit_depth = 8;
   ihdr.color_type = SPNG_COLOR_TYPE_TRUECOLOR;
   spng_set_ihdr(ctx.get(), &ihdr);
-  if (const int e = spng_encode_image(ctx.get(), rgb.data, rgb.total() * rgb.elemSize(), SPNG_FMT_PNG, SPNG_ENCODE_FINALIZE); e != 0) {
+  if (const int e =
+          spng_encode_image(ctx.get(), rgb.data, rgb.total() * rgb.elemSize(), SPNG_FMT_PNG, SPNG_ENCODE_FINALIZE);
+      e != 0) {
     throw std::runtime_error(std::string("image_codec: PNG encoding failed: ") + spng_strerror(e));
   }
   std::size_t size = 0;
   int error = 0;
   void* png = spng_get_png_buffer(ctx.get(), &size, &error);
-  if (png == nullptr) throw std::runtime_error(std::string("image_codec: PNG encoding failed: ") + spng_strerror(error));
+  if (png == nullptr)
+    throw std::runtime_error(std::string("image_codec: PNG encoding failed: ") + spng_strerror(error));
   const auto* bytes = static_cast<const std::uint8_t*>(png);
   std::vector<std::uint8_t> out(bytes, bytes + size);
   std::free(png);  // the buffer is the caller's, allocated with malloc (spng.h)
@@ -111,7 +117,8 @@ std::vector<std::uint8_t> encode_jpeg(const cv::Mat& bgr, int quality) {
   if (!tj) throw std::runtime_error("image_codec: out of memory");
   unsigned char* jpeg = nullptr;
   unsigned long size = 0;
-  if (tjCompress2(tj.get(), bgr.data, bgr.cols, static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, &jpeg, &size, TJSAMP_420, quality, 0) != 0) {
+  if (tjCompress2(tj.get(), bgr.data, bgr.cols, static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, &jpeg, &size,
+                  TJSAMP_420, quality, 0) != 0) {
     const std::string why = tjGetErrorStr2(tj.get());
     tjFree(jpeg);
     throw std::runtime_error("image_codec: JPEG encoding failed: " + why);

@@ -18,7 +18,8 @@ std::string gnuplot_quoted(const std::string& s) {
   return out + "'";
 }
 
-std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width, int height) {
+std::string run_gnuplot(const std::string& path_stem, const std::string& data, const std::string& plot, int width,
+                        int height) {
   const std::string script_path = path_stem + ".gp";
   std::ofstream script(script_path);
   const std::string size = std::to_string(width) + "," + std::to_string(height);

@@ -30,8 +30,8 @@ std::string read_name(const JsonNode& node) {
 // Rows of probabilities given as tuples (key..., symbol, p); listed rows must sum to 1,
 // unlisted rows stay uniform. `key_of` maps a tuple to its row, validating the key.
 template <typename KeyOf>
-Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, int symbols, const detail::TupleList& shape,
-                                      KeyOf key_of) {
+Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, int symbols,
+                                      const detail::TupleList& shape, KeyOf key_of) {
   const size_t tuple = shape.size;
   Eigen::MatrixXd o = Eigen::MatrixXd::Constant(rows, symbols, 1.0 / symbols);
   std::vector<double> sum(static_cast<size_t>(rows), -1.0);  // -1: not listed
@@ -116,8 +116,9 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
   s.confounder_o = Eigen::MatrixXd::Constant(elements, symbols, 1.0 / symbols);
   if (auto list = node.find("confounder_observation")) {
     if (elements == 0 && list->size() > 0) (*list)[0].fail("observation_model.num_confounders is 0");
-    s.confounder_o = read_probability_rows(*list, elements, symbols, detail::kConfounderObservationTuple,
-                                           [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
+    s.confounder_o = read_probability_rows(
+        *list, elements, symbols, detail::kConfounderObservationTuple,
+        [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
   }
   if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto e = node.find("eta")) {
@@ -132,20 +133,24 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
   }
   if (auto n = node.find("trajectories")) s.trajectories = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto n = node.find("length")) s.length = static_cast<int>(n->as_int(1, kMaxCount));
-  if (auto n = node.find("controlled_trajectories")) s.controlled_trajectories = static_cast<int>(n->as_int(1, kMaxCount));
+  if (auto n = node.find("controlled_trajectories"))
+    s.controlled_trajectories = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto t = node.find("step_seconds")) {
     s.step_seconds = t->as_number(1e-6, 1e6);
   }
   // What a simulation holds in memory: every observation of the run.
-  const double observations = static_cast<double>(s.trajectories + s.controlled_trajectories) * s.length * s.observations_per_step;
+  const double observations =
+      static_cast<double>(s.trajectories + s.controlled_trajectories) * s.length * s.observations_per_step;
   if (observations > kMaxObservations) {
-    node.fail("(trajectories + controlled_trajectories) * length * observations_per_step is " + std::to_string(observations) +
-              ", more than " + std::to_string(kMaxObservations) + " observations to simulate");
+    node.fail("(trajectories + controlled_trajectories) * length * observations_per_step is " +
+              std::to_string(observations) + ", more than " + std::to_string(kMaxObservations) +
+              " observations to simulate");
   }
   return s;
 }
 
-DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& default_name, std::vector<std::string>* warnings) {
+DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& default_name,
+                                 std::vector<std::string>* warnings) {
   const JsonNode root(doc, "");
   if (!doc.is_object()) root.fail("the domain file must be a JSON object");
   root.check_keys(domain_shape().keys(), warnings);
@@ -161,14 +166,16 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
     d.name = default_name;
     if (d.name.empty()) root.fail("has no \"name\"");
   }
-  if (auto om = root.find("observation_model")) d.observation_model = detail::read_observation_model(*om, d.mdp, warnings);
+  if (auto om = root.find("observation_model"))
+    d.observation_model = detail::read_observation_model(*om, d.mdp, warnings);
   if (auto names_node = root.find("symbol_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_symbols)");
     d.symbol_names = detail::read_names(*names_node, d.num_symbols(), "symbol");
   }
   if (auto names_node = root.find("source_names")) {
     if (!d.observation_model) names_node->fail("needs observation_model (num_confounders)");
-    d.source_names = detail::read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
+    d.source_names =
+        detail::read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
   }
   if (auto tw = root.find("true_weights")) d.true_weights = detail::read_true_weights(*tw, d.mdp);
   if (auto sensor = root.find("sensor")) d.sensor = read_sensor(*sensor, d, warnings);

@@ -140,9 +140,9 @@ class DocumentBuilder {
   // A container being read.
   struct Open {
     Json* value;
-    const JsonShape* shape;    // nullptr: anything (or a shape of another type)
-    const std::string* key;    // its key in the enclosing object; nullptr in an array
-    size_t index;              // its index in the enclosing array
+    const JsonShape* shape;  // nullptr: anything (or a shape of another type)
+    const std::string* key;  // its key in the enclosing object; nullptr in an array
+    size_t index;            // its index in the enclosing array
     // A tuple list with keys: while they increase (as in a file a program wrote) none can
     // repeat and only the last is kept; after that, every key in `seen`.
     bool keyed = false;
@@ -163,7 +163,7 @@ class DocumentBuilder {
   Json root_;
   const JsonShape* root_shape_;
   std::vector<Open> stack_;
-  size_t skipping_ = 0;  // how deep inside a value that is not built
+  size_t skipping_ = 0;      // how deep inside a value that is not built
   bool skip_value_ = false;  // the value of the key just read is not built
   Json* member_ = nullptr;   // where the value of the key just read goes
   const JsonShape* member_shape_ = nullptr;
@@ -174,7 +174,8 @@ bool DocumentBuilder::key(std::string& key) {
   if (skipping_ > 0) return true;
   Open& top = stack_.back();
   auto [slot, added] = top.value->get_ref<Json::object_t&>().emplace(std::move(key), nullptr);
-  if (!added) throw InputError(path(0).empty() ? slot->first : path(0) + "." + slot->first, "appears twice in the same object");
+  if (!added)
+    throw InputError(path(0).empty() ? slot->first : path(0) + "." + slot->first, "appears twice in the same object");
   member_ = &slot->second;
   member_key_ = &slot->first;
   member_shape_ = nullptr;
@@ -250,7 +251,8 @@ bool DocumentBuilder::open(Json::value_t type) {
   // one byte of text.
   if (stack_.size() >= kMaxDepth) {
     const std::string here = key == nullptr ? path(index) : path(0).empty() ? *key : path(0) + "." + *key;
-    throw InputError(here, "nested more than " + std::to_string(kMaxDepth) + " arrays and objects deep: not a problem or domain file");
+    throw InputError(here, "nested more than " + std::to_string(kMaxDepth) +
+                               " arrays and objects deep: not a problem or domain file");
   }
   // A shape applies to a value of its type only; the reader reports any other.
   const Kind wanted = type == Json::value_t::object ? Kind::kObject : Kind::kList;
@@ -277,7 +279,8 @@ bool DocumentBuilder::close() {
 void DocumentBuilder::check_element(Open& list, const Json& element, size_t index) {
   if (list.shape == nullptr || list.shape->tuple_ == nullptr) return;
   const TupleList& tuple = *list.shape->tuple_;
-  if (!element.is_array() || element.size() != tuple.size) JsonNode(element, path(index)).expect_tuple(tuple.size, tuple.shape);
+  if (!element.is_array() || element.size() != tuple.size)
+    JsonNode(element, path(index)).expect_tuple(tuple.size, tuple.shape);
   TupleKey key;
   if (!list.keyed || !tuple_key(element, tuple.key_length, key)) return;
   if (list.seen == nullptr) {
@@ -294,7 +297,8 @@ void DocumentBuilder::check_element(Open& list, const Json& element, size_t inde
   }
   const uint32_t first = list.seen->insert(key, static_cast<uint32_t>(index));
   if (first != index) {
-    throw InputError(path(index), std::string("duplicate ") + tuple.what + " (also given at index " + std::to_string(first) + ")");
+    throw InputError(path(index),
+                     std::string("duplicate ") + tuple.what + " (also given at index " + std::to_string(first) + ")");
   }
 }
 

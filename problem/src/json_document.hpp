@@ -20,10 +20,10 @@ namespace hbirl::detail {
 
 // One kind of list of tuples.
 struct TupleList {
-  size_t size = 0;            // entries per tuple
-  const char* shape = "";     // "[state, action, next_state, probability]", for messages
-  size_t key_length = 0;      // the first key_length entries may not repeat (0: they may)
-  const char* what = "";      // "transition": "duplicate transition (also given at index 3)"
+  size_t size = 0;         // entries per tuple
+  const char* shape = "";  // "[state, action, next_state, probability]", for messages
+  size_t key_length = 0;   // the first key_length entries may not repeat (0: they may)
+  const char* what = "";   // "transition": "duplicate transition (also given at index 3)"
 };
 
 inline constexpr TupleList kTransitionTuple{4, "[state, action, next_state, probability]", 3, "transition"};
@@ -59,10 +59,10 @@ class JsonShape {
   friend class DocumentBuilder;
 
   Kind kind_;
-  std::vector<std::string> keys_;            // kObject
-  std::vector<const JsonShape*> values_;     // kObject: the shape of keys_[i]'s value
-  const JsonShape* element_ = nullptr;       // kList
-  const TupleList* tuple_ = nullptr;         // kList of tuples
+  std::vector<std::string> keys_;         // kObject
+  std::vector<const JsonShape*> values_;  // kObject: the shape of keys_[i]'s value
+  const JsonShape* element_ = nullptr;    // kList
+  const TupleList* tuple_ = nullptr;      // kList of tuples
 };
 
 // The document `text` holds, built as `shape` says; malformed JSON is InputError("",

@@ -93,9 +93,14 @@ std::string format_json(const nlohmann::ordered_json& value) {
 // learned source distributions and how many observations the context covers.
 nlohmann::ordered_json learned_eta_json(const LearnedEta& eta) {
   nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
-  const auto row = [](const RowMatrix& m, Eigen::Index r) { return std::vector<double>(m.row(r).begin(), m.row(r).end()); };
+  const auto row = [](const RowMatrix& m, Eigen::Index r) {
+    return std::vector<double>(m.row(r).begin(), m.row(r).end());
+  };
   for (Eigen::Index c = 0; c < eta.learned.rows(); ++c) {
-    contexts.push_back({{"context", c}, {"stated", row(eta.stated, c)}, {"learned", row(eta.learned, c)}, {"observations", eta.observations[c]}});
+    contexts.push_back({{"context", c},
+                        {"stated", row(eta.stated, c)},
+                        {"learned", row(eta.learned, c)},
+                        {"observations", eta.observations[c]}});
   }
   return contexts;
 }

@@ -65,8 +65,7 @@ std::optional<JsonNode> JsonNode::find(const std::string& key) const {
   return at(key);
 }
 
-void JsonNode::check_keys(const std::vector<std::string>& known,
-                          std::vector<std::string>* warnings) const {
+void JsonNode::check_keys(const std::vector<std::string>& known, std::vector<std::string>* warnings) const {
   if (!value_->is_object()) fail("expected an object, got " + describe());
   for (const auto& item : value_->items()) {
     const std::string& key = item.key();
@@ -116,7 +115,9 @@ void JsonNode::expect_tuple(size_t n, const char* shape) const {
 
 long long JsonNode::as_int(long long lo, long long hi) const {
   const auto& v = *value_;
-  const auto expected = [lo, hi] { return "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got "; };
+  const auto expected = [lo, hi] {
+    return "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got ";
+  };
   if (!v.is_number()) fail(expected() + describe());
   if (v.is_number_float()) {
     const double x = v.get<double>();
@@ -147,8 +148,7 @@ double JsonNode::as_number() const {
 double JsonNode::as_number(double lo, double hi) const {
   const double x = as_number();
   if (x < lo || x > hi) {
-    fail("expected a number in [" + format_number(lo) + ", " + format_number(hi) + "], got " +
-         format_number(x));
+    fail("expected a number in [" + format_number(lo) + ", " + format_number(hi) + "], got " + format_number(x));
   }
   return x;
 }

@@ -41,16 +41,12 @@ std::string fmt(double x) {
   return out.str();
 }
 
-std::string pair_name(int s, int a) {
-  return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")";
-}
-
+std::string pair_name(int s, int a) { return "(s=" + std::to_string(s) + ", a=" + std::to_string(a) + ")"; }
 
 // Fails on the first entry, in the file's order, that repeats an earlier one, naming both
 // (as the parser does when it reads the list, json_document.hpp).
 template <typename Key>
-void reject_duplicates(std::vector<std::pair<Key, size_t>> keys, const JsonNode& list,
-                       const char* what) {
+void reject_duplicates(std::vector<std::pair<Key, size_t>> keys, const JsonNode& list, const char* what) {
   std::sort(keys.begin(), keys.end());
   size_t repeat = std::numeric_limits<size_t>::max(), first = 0;
   for (size_t i = 1; i < keys.size(); ++i) {
@@ -97,7 +93,8 @@ const JsonShape& mdp_shape() {
 }
 
 const JsonShape& observation_model_shape() {
-  static const JsonShape subject = JsonShape::list(kSubjectAlphaTuple), confounder = JsonShape::list(kConfounderAlphaTuple),
+  static const JsonShape subject = JsonShape::list(kSubjectAlphaTuple),
+                         confounder = JsonShape::list(kConfounderAlphaTuple),
                          unlisted = JsonShape::object({{"eta", nullptr}});
   static const JsonShape shape = JsonShape::object({{"num_symbols", nullptr},
                                                     {"num_confounders", nullptr},
@@ -173,20 +170,23 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   const long long transitions_listed = listed("transitions"), terminal_listed = listed("terminal");
   const bool has_transitions = node.has("transitions");  // when missing, that is the error to report
   if (has_transitions && n.states > transitions_listed + terminal_listed) {
-    node.at("num_states").fail("is " + std::to_string(n.states) + ", but the file lists only " + std::to_string(transitions_listed) +
-                               " transitions and " + std::to_string(terminal_listed) +
-                               " terminal states (each state is terminal or has transitions)");
+    node.at("num_states")
+        .fail("is " + std::to_string(n.states) + ", but the file lists only " + std::to_string(transitions_listed) +
+              " transitions and " + std::to_string(terminal_listed) +
+              " terminal states (each state is terminal or has transitions)");
   }
   if (has_transitions && pairs > transitions_listed + listed("impossible_actions") + terminal_listed * n.actions) {
-    node.at("num_actions").fail("num_states * num_actions is " + std::to_string(pairs) +
-                                " pairs, more than the file's transitions, impossible actions and terminal states cover");
+    node.at("num_actions")
+        .fail("num_states * num_actions is " + std::to_string(pairs) +
+              " pairs, more than the file's transitions, impossible actions and terminal states cover");
   }
 
   double discount = 0.95;
   if (auto d = node.find("discount")) {
     discount = d->as_number();
     if (!(discount >= 0.0 && discount <= kMaxDiscount)) {
-      d->fail("expected a number in [0, " + fmt(kMaxDiscount) + "] (a horizon of at most a million steps), got " + exact(discount));
+      d->fail("expected a number in [0, " + fmt(kMaxDiscount) + "] (a horizon of at most a million steps), got " +
+              exact(discount));
     }
   }
 
@@ -277,7 +277,8 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     // file written from an MDP reads back bit for bit: 25 x 0.04 is not 1 in doubles, and
     // dividing by it moved every start probability by an ulp -- and a recorded run's
     // exported problem learned another theta in the 8th digit.
-    if (std::abs(sum - 1.0) > 8.0 * static_cast<double>(n.states) * std::numeric_limits<double>::epsilon()) start /= sum;
+    if (std::abs(sum - 1.0) > 8.0 * static_cast<double>(n.states) * std::numeric_limits<double>::epsilon())
+      start /= sum;
   } else {
     const auto live = std::count(is_terminal.begin(), is_terminal.end(), 0);
     if (live == 0) node.at("terminal").fail("every state is terminal");
@@ -313,8 +314,7 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   return mdp;
 }
 
-ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
-                                        std::vector<std::string>* warnings) {
+ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, std::vector<std::string>* warnings) {
   node.check_keys(observation_model_shape().keys(), warnings);
   ObservationPrior prior;
   prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
@@ -322,9 +322,10 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   // O is (|S||A| + |E|) x |W| doubles, and the E-step holds a few of its size: bounded
   // before it is allocated.
   if ((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols > kMaxFeatureCells) {
-    node.at("num_symbols").fail("(num_states * num_actions + num_confounders) * num_symbols is " +
-                                std::to_string((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols) +
-                                " cells, more than the " + std::to_string(kMaxFeatureCells) + " (2 GiB) an observation model may take");
+    node.at("num_symbols")
+        .fail("(num_states * num_actions + num_confounders) * num_symbols is " +
+              std::to_string((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols) +
+              " cells, more than the " + std::to_string(kMaxFeatureCells) + " (2 GiB) an observation model may take");
   }
   double subject_default = 1.0;
   if (auto d = node.find("subject_alpha_default")) subject_default = d->as_number(0.0, 1e300);
@@ -332,8 +333,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   if (auto d = node.find("confounder_alpha_default")) confounder_default = d->as_number(0.0, 1e300);
   prior.subject_alpha_base = subject_default;
   prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), prior.num_symbols, subject_default);
-  prior.confounder_alpha =
-      Eigen::MatrixXd::Constant(prior.num_confounders, prior.num_symbols, confounder_default);
+  prior.confounder_alpha = Eigen::MatrixXd::Constant(prior.num_confounders, prior.num_symbols, confounder_default);
   if (auto list = node.find("subject_alpha")) {
     for (size_t i = 0; i < list->size(); ++i) {
       const JsonNode e = (*list)[i];
@@ -359,20 +359,23 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
     for (int a = 0; a < mdp.num_actions; ++a) {
       if (mdp.is_terminal(s) || !mdp.available(s, a)) continue;
       if (!(prior.subject_alpha.row(mdp.pair(s, a)).sum() > 0.0)) {
-        node.at("subject_alpha").fail("alpha of " + pair_name(s, a) + " sums to 0; set a positive entry or subject_alpha_default");
+        node.at("subject_alpha")
+            .fail("alpha of " + pair_name(s, a) + " sums to 0; set a positive entry or subject_alpha_default");
       }
     }
   }
   for (int c = 0; c < prior.num_confounders; ++c) {
     if (!(prior.confounder_alpha.row(c).sum() > 0.0)) {
       (node.has("confounder_alpha") ? node.at("confounder_alpha") : node)
-          .fail("alpha of confounder " + std::to_string(c) + " sums to 0; set a positive entry or confounder_alpha_default");
+          .fail("alpha of confounder " + std::to_string(c) +
+                " sums to 0; set a positive entry or confounder_alpha_default");
     }
   }
   if (auto l = node.find("learn")) prior.learn = l->as_bool();
   if (auto u = node.find("update")) {
     AlphaUpdate update = AlphaUpdate::kPosterior;
-    if (!parse_alpha_update(u->as_string(), update)) u->fail("expected \"posterior\" or \"paper\", got \"" + u->as_string() + "\"");
+    if (!parse_alpha_update(u->as_string(), update))
+      u->fail("expected \"posterior\" or \"paper\", got \"" + u->as_string() + "\"");
     use_alpha_update(prior, update);
   }
   if (auto c = node.find("c")) {
@@ -382,17 +385,20 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
   if (auto l = node.find("learn_eta")) prior.learn_eta = l->as_bool();
   if (auto k = node.find("eta_prior_strength")) {
     prior.eta_strength = k->as_number();
-    if (!(prior.eta_strength > 0.0 && prior.eta_strength <= 1e12)) k->fail("expected a number in (0, 1e12], got " + fmt(prior.eta_strength));
+    if (!(prior.eta_strength > 0.0 && prior.eta_strength <= 1e12))
+      k->fail("expected a number in (0, 1e12], got " + fmt(prior.eta_strength));
   }
   if (auto u = node.find("unlisted_source")) {
     u->check_keys({"eta"}, warnings);  // as observation_model_shape()
     const JsonNode eta = u->at("eta");
     prior.unlisted_eta = eta.as_number();
-    if (!(prior.unlisted_eta > 0.0 && prior.unlisted_eta < 1.0)) eta.fail("expected a number in (0, 1), got " + fmt(prior.unlisted_eta));
+    if (!(prior.unlisted_eta > 0.0 && prior.unlisted_eta < 1.0))
+      eta.fail("expected a number in (0, 1), got " + fmt(prior.unlisted_eta));
   }
   if (auto strength = node.find("prior_strength")) {
     if (strength->is_string()) {
-      if (strength->as_string() != "auto") strength->fail("expected \"auto\" or a positive number, got \"" + strength->as_string() + "\"");
+      if (strength->as_string() != "auto")
+        strength->fail("expected \"auto\" or a positive number, got \"" + strength->as_string() + "\"");
     } else {
       const double s = strength->as_number(ObservationPrior::kMinStrength, ObservationPrior::kMaxStrength);
       prior.automatic_strength = false;
@@ -405,10 +411,12 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp,
 Eigen::VectorXd read_true_weights(const JsonNode& node, const Mdp& mdp) {
   const size_t k = node.size();
   if (static_cast<int>(k) != mdp.num_features()) {
-    node.fail("has " + std::to_string(k) + " entries, expected " + std::to_string(mdp.num_features()) + " (mdp.num_features)");
+    node.fail("has " + std::to_string(k) + " entries, expected " + std::to_string(mdp.num_features()) +
+              " (mdp.num_features)");
   }
   Eigen::VectorXd w(static_cast<Eigen::Index>(k));
-  for (size_t i = 0; i < k; ++i) w[static_cast<Eigen::Index>(i)] = node[i].as_number(-kMaxFeatureMagnitude, kMaxFeatureMagnitude);
+  for (size_t i = 0; i < k; ++i)
+    w[static_cast<Eigen::Index>(i)] = node[i].as_number(-kMaxFeatureMagnitude, kMaxFeatureMagnitude);
   return w;
 }
 
@@ -441,7 +449,8 @@ std::string read_text_file(const std::string& path) {
   if (fd < 0) {
     const int error = errno;
     struct stat st {};
-    if (error == ENXIO && ::stat(path.c_str(), &st) == 0) throw FileError(std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
+    if (error == ENXIO && ::stat(path.c_str(), &st) == 0)
+      throw FileError(std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
     throw FileError("cannot open: " + std::string(std::strerror(error)));
   }
   const Descriptor closer{fd};
@@ -482,9 +491,9 @@ void check_eta_can_be_learned(const JsonNode& root, const Problem& problem) {
   if (prior.num_confounders == 0 && prior.unlisted_eta == 0.0) {
     flag->fail("is true, but there is one source (num_confounders 0, no unlisted_source): no eta to learn");
   }
-  const bool observed = std::any_of(problem.demonstration.begin(), problem.demonstration.end(), [](const DemonstratedTrajectory& t) {
-    return !t.controlled && t.steps && t.steps->num_observations() > 0;
-  });
+  const bool observed = std::any_of(
+      problem.demonstration.begin(), problem.demonstration.end(),
+      [](const DemonstratedTrajectory& t) { return !t.controlled && t.steps && t.steps->num_observations() > 0; });
   if (!observed) flag->fail("is true, but no demonstrated step has observations: no eta to learn");
 }
 
@@ -594,12 +603,14 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
       if (trajectory.ends_in_terminal) {
         const StateAction last = trajectory.truth->back();
         double exit = 0.0;
-        for (SparseRowMatrix::InnerIterator it(problem.mdp.transitions, problem.mdp.pair(last.state, last.action)); it; ++it) {
+        for (SparseRowMatrix::InnerIterator it(problem.mdp.transitions, problem.mdp.pair(last.state, last.action)); it;
+             ++it) {
           if (problem.mdp.is_terminal(static_cast<int>(it.col()))) exit += it.value();
         }
         if (exit <= 0.0) {
           item.at("truth").fail("ends with (s=" + std::to_string(last.state) + ", a=" + std::to_string(last.action) +
-                                "), which cannot enter a terminal state; set \"ends_in_terminal\": false for a trajectory that was cut off");
+                                "), which cannot enter a terminal state; set \"ends_in_terminal\": false for a "
+                                "trajectory that was cut off");
         }
       }
     }
@@ -607,7 +618,8 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
     if (auto c = item.find("controlled")) {
       trajectory.controlled = c->as_bool();
       if (trajectory.controlled && (!trajectory.steps || !trajectory.truth)) {
-        c->fail("a controlled-run trajectory needs both \"steps\" and \"truth\" (its prior counts symbols per true step)");
+        c->fail(
+            "a controlled-run trajectory needs both \"steps\" and \"truth\" (its prior counts symbols per true step)");
       }
     }
     if (trajectory.steps && trajectory.truth &&
@@ -629,7 +641,8 @@ std::vector<Trajectory> Problem::truth_trajectories() const {
   for (size_t i = 0; i < demonstration.size(); ++i) {
     if (demonstration[i].controlled) continue;
     if (!demonstration[i].truth) {
-      throw InputError("demonstration[" + std::to_string(i) + "].truth", "missing (learning from the truth needs it for every trajectory)");
+      throw InputError("demonstration[" + std::to_string(i) + "].truth",
+                       "missing (learning from the truth needs it for every trajectory)");
     }
     out.push_back(*demonstration[i].truth);
   }
@@ -754,8 +767,8 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
   }
   doc["demonstration"] = demo;
   if (problem.true_weights) {
-    doc["true_weights"] = std::vector<double>(problem.true_weights->data(),
-                                              problem.true_weights->data() + problem.true_weights->size());
+    doc["true_weights"] =
+        std::vector<double>(problem.true_weights->data(), problem.true_weights->data() + problem.true_weights->size());
   }
   return doc;
 }

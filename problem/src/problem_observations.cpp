@@ -34,13 +34,15 @@ ProblemObservations problem_observations(const Problem& problem) {
     const DemonstratedTrajectory& item = problem.demonstration[i];
     if (item.controlled) continue;  // in the prior
     if (!item.steps) {
-      throw InputError("demonstration[" + std::to_string(i) + "].steps", "missing; learning from observations needs it for every trajectory");
+      throw InputError("demonstration[" + std::to_string(i) + "].steps",
+                       "missing; learning from observations needs it for every trajectory");
     }
     out.trajectories.push_back(*item.steps);
     out.demonstration_index.push_back(i);
   }
   if (out.trajectories.empty()) {
-    throw InputError("demonstration", problem.demonstration.empty() ? "has no trajectories" : "has only controlled-run trajectories");
+    throw InputError("demonstration",
+                     problem.demonstration.empty() ? "has no trajectories" : "has only controlled-run trajectories");
   }
   return out;
 }

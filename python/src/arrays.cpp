@@ -22,12 +22,17 @@ std::string at(int trajectory, long long step) {
 
 // The trajectory lengths, checked, and their total.
 long long checked_lengths(const IntArray& lengths) {
-  if (lengths.ndim() != 1 || lengths.shape(0) < 1) throw InputError("observations.lengths", "must be a 1-D array of at least one trajectory's step count");
+  if (lengths.ndim() != 1 || lengths.shape(0) < 1)
+    throw InputError("observations.lengths", "must be a 1-D array of at least one trajectory's step count");
   const auto l = lengths.unchecked<1>();
   long long total = 0;
   for (py::ssize_t i = 0; i < lengths.shape(0); ++i) {
-    if (l(i) < 1) throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " + std::to_string(l(i)) + " steps; at least 1");
-    if (l(i) > kMaxSteps - total) throw InputError("observations.lengths", "more than " + std::to_string(kMaxSteps) + " steps in all");  // before adding: no overflow
+    if (l(i) < 1)
+      throw InputError("observations.lengths",
+                       "trajectory " + std::to_string(i) + " has " + std::to_string(l(i)) + " steps; at least 1");
+    if (l(i) > kMaxSteps - total)
+      throw InputError("observations.lengths",
+                       "more than " + std::to_string(kMaxSteps) + " steps in all");  // before adding: no overflow
     total += l(i);
   }
   return total;
@@ -35,15 +40,19 @@ long long checked_lengths(const IntArray& lengths) {
 
 }  // namespace
 
-std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior, const Mdp& mdp) {
+std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
+                                                      const Mdp& mdp) {
   const int sources = 1 + prior.num_confounders;
-  if (flat.symbols.ndim() != 1) throw InputError("observations.symbols", "must be a 1-D array, one symbol per observation");
+  if (flat.symbols.ndim() != 1)
+    throw InputError("observations.symbols", "must be a 1-D array, one symbol per observation");
   const py::ssize_t n = flat.symbols.shape(0);
   if (flat.eta.ndim() != 2 || flat.eta.shape(0) != n || flat.eta.shape(1) != sources) {
-    throw InputError("observations.eta", "must be an (N, " + std::to_string(sources) + ") array: one row per observation, the subject and " +
+    throw InputError("observations.eta", "must be an (N, " + std::to_string(sources) +
+                                             ") array: one row per observation, the subject and " +
                                              std::to_string(prior.num_confounders) + " confounders (the prior's)");
   }
-  if (flat.step_index.ndim() != 1 || flat.step_index.shape(0) != n) throw InputError("observations.step_index", "must be a 1-D array, one step per observation");
+  if (flat.step_index.ndim() != 1 || flat.step_index.shape(0) != n)
+    throw InputError("observations.step_index", "must be a 1-D array, one step per observation");
   if (flat.contexts && (flat.contexts->ndim() != 1 || flat.contexts->shape(0) != n)) {
     throw InputError("observations.contexts", "must be a 1-D array, one context per observation");
   }
@@ -53,8 +62,9 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   // trajectory: bounded here, before anything is computed.
   for (py::ssize_t i = 0; i < flat.lengths.shape(0); ++i) {
     if (lengths(i) * static_cast<long long>(mdp.num_pairs()) > (1LL << 28)) {
-      throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " + std::to_string(lengths(i)) +
-                                                   " steps: with the MDP's " + std::to_string(mdp.num_pairs()) +
+      throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " +
+                                                   std::to_string(lengths(i)) + " steps: with the MDP's " +
+                                                   std::to_string(mdp.num_pairs()) +
                                                    " state-action pairs more than the 2^28 cells a pass may hold");
     }
   }
@@ -67,7 +77,9 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
   if (flat.ends_in_terminal && !has_terminal) {
     for (size_t i = 0; i < flat.ends_in_terminal->size(); ++i) {
-      if ((*flat.ends_in_terminal)[i]) throw InputError("observations.ends_in_terminal", "trajectory " + std::to_string(i) + ": true, but the MDP has no terminal states");
+      if ((*flat.ends_in_terminal)[i])
+        throw InputError("observations.ends_in_terminal",
+                         "trajectory " + std::to_string(i) + ": true, but the MDP has no terminal states");
     }
   }
   const auto symbols = flat.symbols.unchecked<1>();
@@ -81,7 +93,8 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   for (int i = 0; i < trajectories; ++i) {
     ObservedTrajectory& t = out[static_cast<size_t>(i)];
     t.step_begin.assign(1, 0);
-    t.ends_in_terminal = flat.ends_in_terminal ? static_cast<bool>((*flat.ends_in_terminal)[static_cast<size_t>(i)]) : has_terminal;
+    t.ends_in_terminal =
+        flat.ends_in_terminal ? static_cast<bool>((*flat.ends_in_terminal)[static_cast<size_t>(i)]) : has_terminal;
     const long long end_step = first_step + lengths(i);
     py::ssize_t begin = k;
     while (k < n && steps(k) < end_step) ++k;
@@ -91,19 +104,22 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
     long long step = first_step;
     for (py::ssize_t m = begin; m < k; ++m) {
       if (steps(m) < step) {
-        throw InputError("observations.step_index", "entry " + std::to_string(m) + " (" + std::to_string(steps(m)) +
-                                                        ") is smaller than the one before it: observations go in step order");
+        throw InputError("observations.step_index",
+                         "entry " + std::to_string(m) + " (" + std::to_string(steps(m)) +
+                             ") is smaller than the one before it: observations go in step order");
       }
       for (; step < steps(m); ++step) t.step_begin.push_back(static_cast<int>(m - begin));
       const std::string where = at(i, steps(m) - first_step);
       if (symbols(m) < 0 || symbols(m) >= prior.num_symbols) {
-        throw InputError(where, "symbol " + std::to_string(symbols(m)) + " is not in [0, " + std::to_string(prior.num_symbols - 1) + "]");
+        throw InputError(where, "symbol " + std::to_string(symbols(m)) + " is not in [0, " +
+                                    std::to_string(prior.num_symbols - 1) + "]");
       }
       t.symbols.push_back(static_cast<int>(symbols(m)));
       const Eigen::Index row = m - begin;
       for (int j = 0; j < sources; ++j) {
         const double v = eta(m, j);
-        if (!(v >= 0.0 && v <= 1.0)) throw InputError(where, "eta[" + std::to_string(j) + "] is " + std::to_string(v) + ", not in [0, 1]");
+        if (!(v >= 0.0 && v <= 1.0))
+          throw InputError(where, "eta[" + std::to_string(j) + "] is " + std::to_string(v) + ", not in [0, 1]");
         t.eta(row, j) = v;
       }
       const std::string wrong = normalise_eta(t.eta.row(row).data(), sources);
@@ -111,7 +127,9 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
       if (flat.contexts) {
         // -1: none (a trajectory gives contexts to all its observations or none, as in a problem file).
         const long long c = contexts(m);
-        if (c < -1 || c >= kMaxContexts) throw InputError(where, "context " + std::to_string(c) + " is not in [0, " + std::to_string(kMaxContexts - 1) + "] (or -1: none)");
+        if (c < -1 || c >= kMaxContexts)
+          throw InputError(where, "context " + std::to_string(c) + " is not in [0, " +
+                                      std::to_string(kMaxContexts - 1) + "] (or -1: none)");
         if ((c == -1) != (m == begin ? c == -1 : t.contexts.empty())) {
           throw InputError(where, "some observations of the trajectory have a context and others not (-1)");
         }
@@ -122,8 +140,9 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
     first_step = end_step;
   }
   if (k < n) {
-    throw InputError("observations.step_index", "entry " + std::to_string(k) + " (" + std::to_string(steps(k)) + ") is not a step of the " +
-                                                    std::to_string(total_steps) + " the lengths give (or is out of order)");
+    throw InputError("observations.step_index", "entry " + std::to_string(k) + " (" + std::to_string(steps(k)) +
+                                                    ") is not a step of the " + std::to_string(total_steps) +
+                                                    " the lengths give (or is out of order)");
   }
   return out;
 }
@@ -163,7 +182,8 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
     }
     first_step += t.length();
   }
-  return py::make_tuple(symbols, eta, step_index, lengths, any_context ? py::object(contexts) : py::object(py::none()), terminal);
+  return py::make_tuple(symbols, eta, step_index, lengths, any_context ? py::object(contexts) : py::object(py::none()),
+                        terminal);
 }
 
 py::array_t<double> per_state_action(const Mdp& mdp, const Eigen::VectorXd& pairs) {
@@ -189,8 +209,8 @@ py::array_t<double> per_state_action_symbol(const Mdp& mdp, const Eigen::MatrixX
 
 Eigen::MatrixXd pair_rows(const Mdp& mdp, const Array& sa_w, const std::string& name) {
   if (sa_w.ndim() != 3 || sa_w.shape(0) != mdp.num_states || sa_w.shape(1) != mdp.num_actions || sa_w.shape(2) < 1) {
-    throw InputError(name, "must be an (S, A, W) array with the MDP's S = " + std::to_string(mdp.num_states) + " and A = " +
-                               std::to_string(mdp.num_actions));
+    throw InputError(name, "must be an (S, A, W) array with the MDP's S = " + std::to_string(mdp.num_states) +
+                               " and A = " + std::to_string(mdp.num_actions));
   }
   const auto v = sa_w.unchecked<3>();
   Eigen::MatrixXd out(mdp.num_pairs(), sa_w.shape(2));
@@ -204,7 +224,8 @@ Eigen::MatrixXd pair_rows(const Mdp& mdp, const Array& sa_w, const std::string& 
 
 Eigen::VectorXd theta_of(const Mdp& mdp, const Eigen::VectorXd& theta, const std::string& name) {
   if (theta.size() != mdp.num_features()) {
-    throw InputError(name, "has " + std::to_string(theta.size()) + " weights, the MDP " + std::to_string(mdp.num_features()) + " features");
+    throw InputError(name, "has " + std::to_string(theta.size()) + " weights, the MDP " +
+                               std::to_string(mdp.num_features()) + " features");
   }
   if (!theta.allFinite()) throw InputError(name, "must be finite");
   return theta;
@@ -216,7 +237,8 @@ std::vector<Trajectory> trajectories_of(const Mdp& mdp, const std::vector<IntArr
   for (size_t i = 0; i < arrays.size(); ++i) {
     const IntArray& a = arrays[i];
     const std::string item = name + "[" + std::to_string(i) + "]";
-    if (a.ndim() != 2 || a.shape(1) != 2 || a.shape(0) < 1) throw InputError(item, "must be a (T, 2) array of (state, action), T >= 1");
+    if (a.ndim() != 2 || a.shape(1) != 2 || a.shape(0) < 1)
+      throw InputError(item, "must be a (T, 2) array of (state, action), T >= 1");
     const auto v = a.unchecked<2>();
     Trajectory t;
     for (py::ssize_t k = 0; k < a.shape(0); ++k) {

@@ -37,7 +37,8 @@ struct FlatObservations {
 // normalised as a problem file's are (within 1e-6 of summing to 1); ends_in_terminal
 // defaults as in a problem file (true when the MDP has terminal states); a context of -1
 // is none (for a whole trajectory).
-std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior, const Mdp& mdp);
+std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
+                                                      const Mdp& mdp);
 // And back: (symbols, eta, step_index, lengths, contexts or None, ends_in_terminal).
 py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories);
 

@@ -13,11 +13,12 @@
 
 namespace hbirl::python {
 
-FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const ObservationPrior& prior,
-                                    const app::LearnSettings& settings) {
+FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations,
+                                    const ObservationPrior& prior, const app::LearnSettings& settings) {
   FittedHierarchical fit;
   fit.settings = settings;
-  fit.contexts_given = std::any_of(observations.begin(), observations.end(), [](const ObservedTrajectory& t) { return !t.contexts.empty(); });
+  fit.contexts_given = std::any_of(observations.begin(), observations.end(),
+                                   [](const ObservedTrajectory& t) { return !t.contexts.empty(); });
   struct Iterate {
     double log_likelihood, objective, strength;
     Eigen::VectorXd theta;
@@ -28,7 +29,8 @@ FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTr
   hooks.on_iteration = [&history](const app::Iterate& i) {
     // The subject prior's strength (the posterior update's s) only means something while O is learned that way.
     const ObservationPrior* alpha = i.refined;
-    const double strength = alpha && alpha->learn && alpha->update == AlphaUpdate::kPosterior ? alpha->strength : std::nan("");
+    const double strength =
+        alpha && alpha->learn && alpha->update == AlphaUpdate::kPosterior ? alpha->strength : std::nan("");
     history[static_cast<size_t>(i.restart)].push_back({i.estep.log_likelihood, i.objective, strength, i.theta});
   };
   const app::Learned learned = app::learn(mdp, observations, prior, settings, hooks);
@@ -87,7 +89,8 @@ std::vector<ObservedTrajectory> FittedHierarchical::believed(std::vector<Observe
   return trajectories;
 }
 
-Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit, const std::vector<ObservedTrajectory>& observations) {
+Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit,
+                      const std::vector<ObservedTrajectory>& observations) {
   const std::vector<ObservedTrajectory> seen = fit.believed(observations);
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(fit.theta));
   std::unique_ptr<PosteriorEngine> engine = app::engine_factory(fit.settings)(mdp);
@@ -101,7 +104,8 @@ Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit, const std::
   return out;
 }
 
-std::vector<double> log_likelihoods(const Mdp& mdp, const FittedHierarchical& fit, const std::vector<ObservedTrajectory>& observations) {
+std::vector<double> log_likelihoods(const Mdp& mdp, const FittedHierarchical& fit,
+                                    const std::vector<ObservedTrajectory>& observations) {
   const std::vector<ObservedTrajectory> seen = fit.believed(observations);
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(fit.theta));
   ExactEngine engine(mdp);

@@ -40,8 +40,8 @@ struct FittedHierarchical {
 };
 
 // Throws InputError naming the setting, the prior or the observation when it cannot be learned from.
-FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const ObservationPrior& prior,
-                                    const app::LearnSettings& settings);
+FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations,
+                                    const ObservationPrior& prior, const app::LearnSettings& settings);
 
 struct Posteriors {
   std::vector<TrajectoryPosterior> trajectories;
@@ -51,8 +51,10 @@ struct Posteriors {
 void check_fitted_on(const Mdp& mdp, const FittedHierarchical& fit);
 // Each trajectory's posterior under the fitted theta and model, by the fit's engine (MCMC:
 // trajectory i from stream i of the fit's seed, as hbirl posterior).
-Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit, const std::vector<ObservedTrajectory>& observations);
+Posteriors posteriors(const Mdp& mdp, const FittedHierarchical& fit,
+                      const std::vector<ObservedTrajectory>& observations);
 // log Pr(observations | theta, O), exact (forward pass), per trajectory.
-std::vector<double> log_likelihoods(const Mdp& mdp, const FittedHierarchical& fit, const std::vector<ObservedTrajectory>& observations);
+std::vector<double> log_likelihoods(const Mdp& mdp, const FittedHierarchical& fit,
+                                    const std::vector<ObservedTrajectory>& observations);
 
 }  // namespace hbirl::python

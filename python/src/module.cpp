@@ -41,7 +41,8 @@ struct Rows {
   std::vector<double> value;
 };
 Rows rows_of(const Array& rows, const std::string& name, const char* layout) {
-  if (rows.ndim() != 2 || rows.shape(1) != 4) throw InputError(name, std::string("must be an (M, 4) array of ") + layout + " rows");
+  if (rows.ndim() != 2 || rows.shape(1) != 4)
+    throw InputError(name, std::string("must be an (M, 4) array of ") + layout + " rows");
   const auto v = rows.unchecked<2>();
   Rows out;
   out.index.reserve(static_cast<size_t>(rows.shape(0)));
@@ -50,7 +51,8 @@ Rows rows_of(const Array& rows, const std::string& name, const char* layout) {
     for (int j = 0; j < 3; ++j) {
       const double x = v(m, j);
       if (!(x >= 0.0 && x < 2147483647.0) || x != std::floor(x)) {
-        throw InputError(name, "row " + std::to_string(m) + ": entry " + std::to_string(j) + " (" + std::to_string(x) + ") is not an index >= 0");
+        throw InputError(name, "row " + std::to_string(m) + ": entry " + std::to_string(j) + " (" + std::to_string(x) +
+                                   ") is not an index >= 0");
       }
       idx[static_cast<size_t>(j)] = static_cast<long long>(x);
     }
@@ -65,9 +67,10 @@ Rows rows_of(const Array& rows, const std::string& name, const char* layout) {
 // rows; they are bounded by what the rows can describe before anything is allocated
 // (every state terminal or with transitions, as in a problem file). Checked as a problem
 // file is (Mdp::validate), so bad input is a ValueError naming the argument.
-Mdp make_python_mdp(const py::object& transitions_in, const Array& features, const std::optional<Eigen::VectorXd>& start,
-                    const std::vector<int>& terminal, double discount, const std::vector<std::pair<int, int>>& impossible,
-                    std::optional<int> num_states, std::optional<int> num_actions, std::optional<int> num_features) {
+Mdp make_python_mdp(const py::object& transitions_in, const Array& features,
+                    const std::optional<Eigen::VectorXd>& start, const std::vector<int>& terminal, double discount,
+                    const std::vector<std::pair<int, int>>& impossible, std::optional<int> num_states,
+                    std::optional<int> num_actions, std::optional<int> num_features) {
   // A scipy.sparse (S*A, S) matrix becomes [s, a, s', p] rows (its sizes fix S and A).
   Array transitions;
   if (py::hasattr(transitions_in, "tocoo")) {
@@ -75,10 +78,15 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     const py::tuple shape = coo.attr("shape");
     if (shape.size() != 2) throw InputError("transitions", "a sparse matrix must be (S * A, S)");
     const auto rows = shape[0].cast<long long>(), cols = shape[1].cast<long long>();
-    if (cols < 1 || rows < cols || rows % cols != 0 || rows > (1LL << 28)) throw InputError("transitions", "a sparse matrix must be (S * A, S) with S * A <= 2^28");
+    if (cols < 1 || rows < cols || rows % cols != 0 || rows > (1LL << 28))
+      throw InputError("transitions", "a sparse matrix must be (S * A, S) with S * A <= 2^28");
     const long long sparse_actions = rows / cols;
-    if (num_states && *num_states != cols) throw InputError("transitions", "has " + std::to_string(cols) + " states, num_states " + std::to_string(*num_states));
-    if (num_actions && *num_actions != sparse_actions) throw InputError("transitions", "has " + std::to_string(sparse_actions) + " actions, num_actions " + std::to_string(*num_actions));
+    if (num_states && *num_states != cols)
+      throw InputError("transitions",
+                       "has " + std::to_string(cols) + " states, num_states " + std::to_string(*num_states));
+    if (num_actions && *num_actions != sparse_actions)
+      throw InputError("transitions", "has " + std::to_string(sparse_actions) + " actions, num_actions " +
+                                          std::to_string(*num_actions));
     num_states = static_cast<int>(cols);
     num_actions = static_cast<int>(sparse_actions);
     const IntArray row = coo.attr("row").cast<IntArray>(), col = coo.attr("col").cast<IntArray>();
@@ -98,16 +106,20 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
   std::optional<Rows> t_rows, f_rows;
   if (!dense_t) t_rows = rows_of(transitions, "transitions", "[s, a, s', probability]");
   if (!dense_f) f_rows = rows_of(features, "features", "[s, a, k, value]");
-  for (const auto& [name, n] : {std::pair{"num_states", num_states}, {"num_actions", num_actions}, {"num_features", num_features}}) {
+  for (const auto& [name, n] :
+       {std::pair{"num_states", num_states}, {"num_actions", num_actions}, {"num_features", num_features}}) {
     if (n && *n < (std::string(name) == "num_features" ? 0 : 1)) throw InputError(name, "must be positive");
   }
   long long S = num_states.value_or(-1), A = num_actions.value_or(-1), K = num_features.value_or(-1);
   const auto agree = [](long long& size, long long value, const char* name, const char* what) {
-    if (size >= 0 && size != value) throw InputError(name, std::string("has ") + std::to_string(value) + " " + what + ", expected " + std::to_string(size));
+    if (size >= 0 && size != value)
+      throw InputError(name,
+                       std::string("has ") + std::to_string(value) + " " + what + ", expected " + std::to_string(size));
     size = value;
   };
   if (dense_t) {
-    if (transitions.shape(2) != transitions.shape(0)) throw InputError("transitions", "must be an (S, A, S) array or (M, 4) rows");
+    if (transitions.shape(2) != transitions.shape(0))
+      throw InputError("transitions", "must be an (S, A, S) array or (M, 4) rows");
     agree(S, transitions.shape(0), "transitions", "states");
     agree(A, transitions.shape(1), "transitions", "actions");
   }
@@ -121,40 +133,54 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     for (const auto& i : t_rows->index) max_s = std::max({max_s, i[0], i[2]}), max_a = std::max(max_a, i[1]);
   }
   if (f_rows) {
-    for (const auto& i : f_rows->index) max_s = std::max(max_s, i[0]), max_a = std::max(max_a, i[1]), max_k = std::max(max_k, i[2]);
+    for (const auto& i : f_rows->index)
+      max_s = std::max(max_s, i[0]), max_a = std::max(max_a, i[1]), max_k = std::max(max_k, i[2]);
   }
   if (S < 0) S = max_s + 1;
   if (A < 0) A = max_a + 1;
   if (K < 0) K = max_k + 1;
   if (S < 1 || A < 1) throw InputError("transitions", "give at least one state and one action");
-  if (max_s >= S) throw InputError(t_rows ? "transitions" : "features", "state " + std::to_string(max_s) + " is not in [0, " + std::to_string(S - 1) + "]");
-  if (max_a >= A) throw InputError(t_rows ? "transitions" : "features", "action " + std::to_string(max_a) + " is not in [0, " + std::to_string(A - 1) + "]");
-  if (max_k >= K) throw InputError("features", "feature " + std::to_string(max_k) + " is not in [0, " + std::to_string(K - 1) + "]");
+  if (max_s >= S)
+    throw InputError(t_rows ? "transitions" : "features",
+                     "state " + std::to_string(max_s) + " is not in [0, " + std::to_string(S - 1) + "]");
+  if (max_a >= A)
+    throw InputError(t_rows ? "transitions" : "features",
+                     "action " + std::to_string(max_a) + " is not in [0, " + std::to_string(A - 1) + "]");
+  if (max_k >= K)
+    throw InputError("features", "feature " + std::to_string(max_k) + " is not in [0, " + std::to_string(K - 1) + "]");
   if (t_rows && S > static_cast<long long>(t_rows->index.size() + terminal.size())) {
-    throw InputError("num_states", std::to_string(S) + " states, but only " + std::to_string(t_rows->index.size()) + " transitions and " +
-                                       std::to_string(terminal.size()) + " terminal states (each state is terminal or has transitions)");
+    throw InputError("num_states", std::to_string(S) + " states, but only " + std::to_string(t_rows->index.size()) +
+                                       " transitions and " + std::to_string(terminal.size()) +
+                                       " terminal states (each state is terminal or has transitions)");
   }
   // With rows, a pair without any is an impossible action (as a dense row of zeros); but an
   // action no row uses at all cannot be asked for (a number alone must not claim gigabytes).
   if (t_rows && A > max_a + 1) {
-    throw InputError("num_actions", std::to_string(A) + ", but no transition uses an action above " + std::to_string(max_a));
+    throw InputError("num_actions",
+                     std::to_string(A) + ", but no transition uses an action above " + std::to_string(max_a));
   }
-  if (S * A > (1LL << 28) || S * A * std::max(K, 1LL) > (1LL << 28)) throw InputError("num_features", "num_states * num_actions * num_features is more than 2^28");
-  if (start && start->size() != S) throw InputError("start", "must have one probability per state (" + std::to_string(S) + ")");
+  if (S * A > (1LL << 28) || S * A * std::max(K, 1LL) > (1LL << 28))
+    throw InputError("num_features", "num_states * num_actions * num_features is more than 2^28");
+  if (start && start->size() != S)
+    throw InputError("start", "must have one probability per state (" + std::to_string(S) + ")");
   std::vector<char> is_terminal(static_cast<size_t>(S), 0);
   for (int s : terminal) {
-    if (s < 0 || s >= S) throw InputError("terminal", "state " + std::to_string(s) + " is not in [0, " + std::to_string(S - 1) + "]");
+    if (s < 0 || s >= S)
+      throw InputError("terminal", "state " + std::to_string(s) + " is not in [0, " + std::to_string(S - 1) + "]");
     is_terminal[static_cast<size_t>(s)] = 1;
   }
   std::vector<char> is_impossible(static_cast<size_t>(S * A), 0);
   for (const auto& [s, a] : impossible) {
     if (s < 0 || s >= S || a < 0 || a >= A) {
-      throw InputError("impossible", "(" + std::to_string(s) + ", " + std::to_string(a) + ") is not a state and action of the MDP");
+      throw InputError("impossible",
+                       "(" + std::to_string(s) + ", " + std::to_string(a) + ") is not a state and action of the MDP");
     }
     is_impossible[static_cast<size_t>(s * A + a)] = 1;
   }
   py::gil_scoped_release released;  // the arrays are alive (the caller holds them); no Python below
-  const auto keep = [&](long long s, long long a) { return !is_terminal[static_cast<size_t>(s)] && !is_impossible[static_cast<size_t>(s * A + a)]; };
+  const auto keep = [&](long long s, long long a) {
+    return !is_terminal[static_cast<size_t>(s)] && !is_impossible[static_cast<size_t>(s * A + a)];
+  };
   std::vector<TransitionEntry> entries;
   if (dense_t) {
     const auto p = transitions.unchecked<3>();
@@ -169,7 +195,8 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
   } else {
     for (size_t m = 0; m < t_rows->index.size(); ++m) {
       const auto& i = t_rows->index[m];
-      if (keep(i[0], i[1])) entries.push_back({static_cast<int>(i[0]), static_cast<int>(i[1]), static_cast<int>(i[2]), t_rows->value[m]});
+      if (keep(i[0], i[1]))
+        entries.push_back({static_cast<int>(i[0]), static_cast<int>(i[1]), static_cast<int>(i[2]), t_rows->value[m]});
     }
   }
   std::vector<FeatureEntry> phi;
@@ -197,7 +224,8 @@ Mdp make_python_mdp(const py::object& transitions_in, const Array& features, con
     d /= d.sum();
   }
   try {
-    Mdp mdp = make_mdp(static_cast<int>(S), static_cast<int>(A), static_cast<int>(K), entries, phi, d, terminal, discount);
+    Mdp mdp =
+        make_mdp(static_cast<int>(S), static_cast<int>(A), static_cast<int>(K), entries, phi, d, terminal, discount);
     mdp.validate();
     return mdp;
   } catch (const InputError& e) {  // named as the arguments are ("transitions", not a file's "mdp.transitions")
@@ -231,14 +259,16 @@ Array array_of(const py::object& value, const std::string& name) {
 }
 
 ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders, const py::object& subject_alpha,
-                            const py::object& confounder_alpha, std::optional<double> subject_alpha_default, const std::string& update,
-                            double c, const py::object& prior_strength, std::optional<bool> learn, std::optional<bool> learn_eta,
-                            double eta_strength, double unlisted_eta) {
+                            const py::object& confounder_alpha, std::optional<double> subject_alpha_default,
+                            const std::string& update, double c, const py::object& prior_strength,
+                            std::optional<bool> learn, std::optional<bool> learn_eta, double eta_strength,
+                            double unlisted_eta) {
   if (num_symbols < 1) throw InputError("num_symbols", "must be at least 1");
   if (num_confounders < 0) throw InputError("num_confounders", "must be >= 0");
   if ((static_cast<long long>(mdp.num_pairs()) + num_confounders) * num_symbols > (1LL << 28)) {
-    throw InputError(num_confounders > mdp.num_pairs() ? "num_confounders" : "num_symbols",
-                     "(num_states * num_actions + num_confounders) * num_symbols is more than an observation model may take (2^28)");
+    throw InputError(
+        num_confounders > mdp.num_pairs() ? "num_confounders" : "num_symbols",
+        "(num_states * num_actions + num_confounders) * num_symbols is more than an observation model may take (2^28)");
   }
   ObservationPrior prior;
   prior.num_symbols = num_symbols;
@@ -253,10 +283,12 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
     prior.subject_alpha_base = *a;
   } else {
     prior.subject_alpha = pair_rows(mdp, array_of(subject_alpha, "subject_alpha"), "subject_alpha");
-    if (prior.subject_alpha.cols() != num_symbols) throw InputError("subject_alpha", "must have num_symbols = " + std::to_string(num_symbols) + " columns");
+    if (prior.subject_alpha.cols() != num_symbols)
+      throw InputError("subject_alpha", "must have num_symbols = " + std::to_string(num_symbols) + " columns");
   }
   if (subject_alpha_default) {
-    if (!(*subject_alpha_default >= 0.0) || !std::isfinite(*subject_alpha_default)) throw InputError("subject_alpha_default", "must be >= 0 and finite");
+    if (!(*subject_alpha_default >= 0.0) || !std::isfinite(*subject_alpha_default))
+      throw InputError("subject_alpha_default", "must be >= 0 and finite");
     prior.subject_alpha_base = *subject_alpha_default;
   }
   if (const std::optional<double> a = number_of(confounder_alpha, "confounder_alpha")) {
@@ -267,10 +299,13 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
     if (m.ndim() != 2 || m.shape(0) != num_confounders || m.shape(1) != num_symbols) {
       throw InputError("confounder_alpha", "must be an (E, W) array with E = num_confounders and W = num_symbols");
     }
-    prior.confounder_alpha = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(m.data(), m.shape(0), m.shape(1));
+    prior.confounder_alpha = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        m.data(), m.shape(0), m.shape(1));
   }
-  if (!prior.subject_alpha.allFinite() || (prior.subject_alpha.array() < 0.0).any()) throw InputError("subject_alpha", "must be finite and >= 0");
-  if (!prior.confounder_alpha.allFinite() || (prior.confounder_alpha.array() < 0.0).any()) throw InputError("confounder_alpha", "must be finite and >= 0");
+  if (!prior.subject_alpha.allFinite() || (prior.subject_alpha.array() < 0.0).any())
+    throw InputError("subject_alpha", "must be finite and >= 0");
+  if (!prior.confounder_alpha.allFinite() || (prior.confounder_alpha.array() < 0.0).any())
+    throw InputError("confounder_alpha", "must be finite and >= 0");
   for (int s = 0; s < mdp.num_states; ++s) {
     for (int a = 0; a < mdp.num_actions; ++a) {
       if (mdp.is_terminal(s) || !mdp.available(s, a)) continue;
@@ -280,7 +315,8 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
     }
   }
   for (int e = 0; e < num_confounders; ++e) {
-    if (!(prior.confounder_alpha.row(e).sum() > 0.0)) throw InputError("confounder_alpha", "alpha of confounder " + std::to_string(e) + " sums to 0");
+    if (!(prior.confounder_alpha.row(e).sum() > 0.0))
+      throw InputError("confounder_alpha", "alpha of confounder " + std::to_string(e) + " sums to 0");
   }
   AlphaUpdate u;
   if (!parse_alpha_update(update, u)) throw InputError("update", "'" + update + "' is not posterior or paper");
@@ -288,13 +324,15 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
   if (!(c > 0.0 && c <= 1.0)) throw InputError("c", "must be in (0, 1]");
   prior.c = c;
   if (py::isinstance<py::str>(prior_strength)) {
-    if (prior_strength.cast<std::string>() != "auto") throw InputError("prior_strength", "must be \"auto\" or a number");
+    if (prior_strength.cast<std::string>() != "auto")
+      throw InputError("prior_strength", "must be \"auto\" or a number");
   } else {
     const std::optional<double> given = number_of(prior_strength, "prior_strength");
     if (!given) throw InputError("prior_strength", "must be \"auto\" or a number");
     const double s = *given;
     if (!(s >= ObservationPrior::kMinStrength && s <= ObservationPrior::kMaxStrength)) {
-      throw InputError("prior_strength", "must be in [" + std::to_string(ObservationPrior::kMinStrength) + ", " + std::to_string(ObservationPrior::kMaxStrength) + "]");
+      throw InputError("prior_strength", "must be in [" + std::to_string(ObservationPrior::kMinStrength) + ", " +
+                                             std::to_string(ObservationPrior::kMaxStrength) + "]");
     }
     prior.automatic_strength = false;
     prior.strength = s;
@@ -303,7 +341,8 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
   if (learn_eta) prior.learn_eta = *learn_eta;
   if (!(eta_strength > 0.0 && eta_strength <= 1e12)) throw InputError("eta_strength", "must be in (0, 1e12]");
   prior.eta_strength = eta_strength;
-  if (!(unlisted_eta >= 0.0 && unlisted_eta < 1.0)) throw InputError("unlisted_eta", "must be in [0, 1) (0: no catch-all source)");
+  if (!(unlisted_eta >= 0.0 && unlisted_eta < 1.0))
+    throw InputError("unlisted_eta", "must be in [0, 1) (0: no catch-all source)");
   prior.unlisted_eta = unlisted_eta;
   return prior;
 }
@@ -326,7 +365,8 @@ void warn_each(const std::string& path, const std::vector<std::string>& warnings
 
 FlatObservations flat_of(const py::tuple& t) {
   if (t.size() != 6) throw InputError("observations", "internal: expected 6 parts");
-  FlatObservations f{t[0].cast<IntArray>(), t[1].cast<Array>(), t[2].cast<IntArray>(), t[3].cast<IntArray>(), std::nullopt, std::nullopt};
+  FlatObservations f{t[0].cast<IntArray>(), t[1].cast<Array>(), t[2].cast<IntArray>(),
+                     t[3].cast<IntArray>(), std::nullopt,       std::nullopt};
   if (!t[4].is_none()) f.contexts = t[4].cast<IntArray>();
   if (!t[5].is_none()) f.ends_in_terminal = t[5].cast<std::vector<bool>>();
   return f;
@@ -426,17 +466,20 @@ PYBIND11_MODULE(_hbirl, m) {
     }
   });
 
-  py::class_<Mdp>(m, "Mdp", "A finite MDP: states, actions, transitions, features, start distribution, terminal states, discount.")
+  py::class_<Mdp>(
+      m, "Mdp", "A finite MDP: states, actions, transitions, features, start distribution, terminal states, discount.")
       .def(py::init(&make_python_mdp), py::arg("transitions"), py::arg("features"), py::arg("start") = py::none(),
-           py::arg("terminal") = std::vector<int>{}, py::arg("discount") = 0.95, py::arg("impossible") = std::vector<std::pair<int, int>>{},
-           py::arg("num_states") = py::none(), py::arg("num_actions") = py::none(), py::arg("num_features") = py::none())
+           py::arg("terminal") = std::vector<int>{}, py::arg("discount") = 0.95,
+           py::arg("impossible") = std::vector<std::pair<int, int>>{}, py::arg("num_states") = py::none(),
+           py::arg("num_actions") = py::none(), py::arg("num_features") = py::none())
       .def_property_readonly("num_states", [](const Mdp& mdp) { return mdp.num_states; })
       .def_property_readonly("num_actions", [](const Mdp& mdp) { return mdp.num_actions; })
       .def_property_readonly("num_features", &Mdp::num_features)
       .def_property_readonly("discount", [](const Mdp& mdp) { return mdp.discount; })
       .def_property_readonly("start", [](const Mdp& mdp) { return mdp.start; })
       .def_property_readonly(
-          "terminal", [](const Mdp& mdp) {
+          "terminal",
+          [](const Mdp& mdp) {
             std::vector<int> out;
             for (int s = 0; s < mdp.num_states; ++s) {
               if (mdp.is_terminal(s)) out.push_back(s);
@@ -459,7 +502,10 @@ PYBIND11_MODULE(_hbirl, m) {
           },
           "The transitions as (M, 4) rows [s, a, s', probability].")
       .def(
-          "reward", [](const Mdp& mdp, const Eigen::VectorXd& theta) { return per_state_action(mdp, mdp.reward(theta_of(mdp, theta, "theta"))); },
+          "reward",
+          [](const Mdp& mdp, const Eigen::VectorXd& theta) {
+            return per_state_action(mdp, mdp.reward(theta_of(mdp, theta, "theta")));
+          },
           py::arg("theta"), "R(s, a) = theta . phi(s, a) as an (S, A) array.")
       .def(
           "soft_policy",
@@ -472,7 +518,8 @@ PYBIND11_MODULE(_hbirl, m) {
             }
             return per_state_action(mdp, policy);
           },
-          py::arg("theta"), "The MaxCausalEnt (soft) policy pi(a | s) for reward weights theta, an (S, A) array (0 on terminal states).")
+          py::arg("theta"),
+          "The MaxCausalEnt (soft) policy pi(a | s) for reward weights theta, an (S, A) array (0 on terminal states).")
       .def(
           "soft_values",
           [](const Mdp& mdp, const Eigen::VectorXd& theta) {
@@ -507,7 +554,8 @@ PYBIND11_MODULE(_hbirl, m) {
   m.def(
       "ile",
       [](const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta) {
-        const Eigen::VectorXd t = theta_of(mdp, true_theta, "true_theta"), l = theta_of(mdp, learned_theta, "learned_theta");
+        const Eigen::VectorXd t = theta_of(mdp, true_theta, "true_theta"),
+                              l = theta_of(mdp, learned_theta, "learned_theta");
         py::gil_scoped_release released;
         return inverse_learning_error(mdp, t, l).ile;
       },
@@ -515,20 +563,27 @@ PYBIND11_MODULE(_hbirl, m) {
       "Inverse learning error: the L1 distance between the values of the optimal policies of the true and the\n"
       "learned reward, both under the true reward (paper §Experiments).");
 
-  py::class_<ObservationPrior>(m, "ObservationPrior",
-                               "Dirichlet priors of the observation model (paper §II): the subject's per (s, a), each confounding\n"
-                               "element's, and how they and eta are learned.")
-      .def(py::init(&make_prior), py::arg("mdp"), py::arg("num_symbols"), py::arg("num_confounders"), py::arg("subject_alpha") = 1.0,
-           py::arg("confounder_alpha") = 1.0, py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1, py::arg("prior_strength") = "auto",
-           py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(), py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0)
+  py::class_<ObservationPrior>(
+      m, "ObservationPrior",
+      "Dirichlet priors of the observation model (paper §II): the subject's per (s, a), each confounding\n"
+      "element's, and how they and eta are learned.")
+      .def(py::init(&make_prior), py::arg("mdp"), py::arg("num_symbols"), py::arg("num_confounders"),
+           py::arg("subject_alpha") = 1.0, py::arg("confounder_alpha") = 1.0,
+           py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1,
+           py::arg("prior_strength") = "auto", py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(),
+           py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0)
       .def_property_readonly("num_symbols", [](const ObservationPrior& p) { return p.num_symbols; })
       .def_property_readonly("num_confounders", [](const ObservationPrior& p) { return p.num_confounders; })
       .def_property_readonly("confounder_alpha", [](const ObservationPrior& p) { return p.confounder_alpha; })
-      .def("subject_alpha", [](const ObservationPrior& p, const Mdp& mdp) {
+      .def(
+          "subject_alpha",
+          [](const ObservationPrior& p, const Mdp& mdp) {
             if (p.subject_alpha.rows() != mdp.num_pairs()) throw InputError("mdp", "is not the MDP of this prior");
             return per_state_action_symbol(mdp, p.subject_alpha);
-          }, py::arg("mdp"), "The subject's alpha as an (S, A, W) array.")
-      .def_property_readonly("update", [](const ObservationPrior& p) { return std::string(alpha_update_name(p.update)); })
+          },
+          py::arg("mdp"), "The subject's alpha as an (S, A, W) array.")
+      .def_property_readonly("update",
+                             [](const ObservationPrior& p) { return std::string(alpha_update_name(p.update)); })
       .def_property_readonly("learn", [](const ObservationPrior& p) { return p.learn; })
       .def_property_readonly("learn_eta", [](const ObservationPrior& p) { return p.learn_eta; })
       .def_property_readonly("eta_strength", [](const ObservationPrior& p) { return p.eta_strength; })
@@ -541,7 +596,8 @@ PYBIND11_MODULE(_hbirl, m) {
       "controlled_run_prior",
       [](const Mdp& mdp, const std::vector<IntArray>& truth, const py::tuple& observations, int num_symbols) {
         if (num_symbols < 1 || static_cast<long long>(mdp.num_pairs()) * num_symbols > (1LL << 28)) {
-          throw InputError("num_symbols", "must be at least 1, and num_states * num_actions * num_symbols at most 2^28");
+          throw InputError("num_symbols",
+                           "must be at least 1, and num_states * num_actions * num_symbols at most 2^28");
         }
         ObservationPrior none;
         none.num_symbols = num_symbols;
@@ -558,7 +614,8 @@ PYBIND11_MODULE(_hbirl, m) {
       },
       py::arg("mdp"), py::arg("truth"), py::arg("observations"), py::arg("num_symbols"));
 
-  py::class_<Problem>(m, "Problem", "A problem file (README.md \"Problem files\"): an MDP, names, demonstrations, true weights.")
+  py::class_<Problem>(m, "Problem",
+                      "A problem file (README.md \"Problem files\"): an MDP, names, demonstrations, true weights.")
       .def_property_readonly("mdp", [](const Problem& p) { return p.mdp; })
       .def_property_readonly("feature_names", [](const Problem& p) { return p.feature_names; })
       .def_property_readonly("state_names", [](const Problem& p) { return p.state_names; })
@@ -592,7 +649,8 @@ PYBIND11_MODULE(_hbirl, m) {
             out << format_json(problem_to_json(p));
             if (!out.flush()) throw InputError(path, "could not be written");
           },
-          py::arg("path"), "Write the problem file (README.md \"Problem files\"); hbirl load_problem and the CLI read it back.");
+          py::arg("path"),
+          "Write the problem file (README.md \"Problem files\"); hbirl load_problem and the CLI read it back.");
   m.def(
       "load_problem",
       [](const std::string& path) {
@@ -605,7 +663,8 @@ PYBIND11_MODULE(_hbirl, m) {
         warn_each(path, warnings);
         return p;
       },
-      py::arg("path"), "Read and check a problem file; a bad file raises ValueError naming the file, the field and the reason.");
+      py::arg("path"),
+      "Read and check a problem file; a bad file raises ValueError naming the file, the field and the reason.");
   m.def(
       "load_domain",
       [](const std::string& path) {
@@ -647,10 +706,12 @@ PYBIND11_MODULE(_hbirl, m) {
       .def_readwrite("confounders", &GridworldProblemOptions::confounders)
       .def_readwrite("per_step", &GridworldProblemOptions::per_step)
       .def_readwrite("controlled", &GridworldProblemOptions::controlled)
-      .def_property("labeller_mass", [](const GridworldProblemOptions& o) { return o.labeller.mass; },
-                    [](GridworldProblemOptions& o, double v) { o.labeller.mass = v; })
-      .def_property("labeller_accuracy", [](const GridworldProblemOptions& o) { return o.labeller.accuracy; },
-                    [](GridworldProblemOptions& o, double v) { o.labeller.accuracy = v; });
+      .def_property(
+          "labeller_mass", [](const GridworldProblemOptions& o) { return o.labeller.mass; },
+          [](GridworldProblemOptions& o, double v) { o.labeller.mass = v; })
+      .def_property(
+          "labeller_accuracy", [](const GridworldProblemOptions& o) { return o.labeller.accuracy; },
+          [](GridworldProblemOptions& o, double v) { o.labeller.accuracy = v; });
   m.def("onion", [] {
     Problem p;
     p.mdp = onion::make_onion_mdp();
@@ -694,22 +755,25 @@ PYBIND11_MODULE(_hbirl, m) {
       .def_readonly("history_log_likelihood", &FittedHierarchical::history_log_likelihood)
       .def_readonly("history_objective", &FittedHierarchical::history_objective)
       .def_readonly("history_prior_strength", &FittedHierarchical::history_prior_strength)
-      .def_property_readonly("history_theta", [](const FittedHierarchical& f) {
-        Eigen::MatrixXd out(static_cast<Eigen::Index>(f.history_theta.size()), f.theta.size());
-        for (size_t i = 0; i < f.history_theta.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = f.history_theta[i].transpose();
-        return out;
-      })
+      .def_property_readonly("history_theta",
+                             [](const FittedHierarchical& f) {
+                               Eigen::MatrixXd out(static_cast<Eigen::Index>(f.history_theta.size()), f.theta.size());
+                               for (size_t i = 0; i < f.history_theta.size(); ++i)
+                                 out.row(static_cast<Eigen::Index>(i)) = f.history_theta[i].transpose();
+                               return out;
+                             })
       .def_readonly("refined", &FittedHierarchical::refined)
       .def_property_readonly("subject", [](const FittedHierarchical& f) { return f.model.subject; })
       .def_property_readonly("confounders", [](const FittedHierarchical& f) { return f.model.confounders; })
-      .def_property_readonly("learned_eta", [](const FittedHierarchical& f) -> py::object {
-        if (!f.learned_eta) return py::none();
-        py::dict d;
-        d["stated"] = Eigen::MatrixXd(f.learned_eta->stated);
-        d["learned"] = Eigen::MatrixXd(f.learned_eta->learned);
-        d["observations"] = f.learned_eta->observations;
-        return d;
-      })
+      .def_property_readonly("learned_eta",
+                             [](const FittedHierarchical& f) -> py::object {
+                               if (!f.learned_eta) return py::none();
+                               py::dict d;
+                               d["stated"] = Eigen::MatrixXd(f.learned_eta->stated);
+                               d["learned"] = Eigen::MatrixXd(f.learned_eta->learned);
+                               d["observations"] = f.learned_eta->observations;
+                               return d;
+                             })
       .def_property_readonly("unlisted_source", [](const FittedHierarchical& f) { return f.refined.unlisted_added; })
       .def_property_readonly("mcmc_diagnostics", [](const FittedHierarchical& f) -> py::object {
         if (!f.mcmc) return py::none();

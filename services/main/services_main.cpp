@@ -39,7 +39,8 @@ struct Common {
 void add_common(CLI::App& app, Common& c) {
   app::add_url_option(&app, c.url, "to use");
   app.add_option("--id", c.id, "This process's id in STATUS messages (default: service-host-pid)");
-  app.add_option("--restarts", c.restarts, "How many times the supervisor restarted this service before (shown in STATUS)")
+  app.add_option("--restarts", c.restarts,
+                 "How many times the supervisor restarted this service before (shown in STATUS)")
       ->check(CLI::Range(0, 1000000));
   app::add_key_option(&app, c.key_file,
                       "sign every message for the run it names and drop, counting them, those not signed with it for\n"
@@ -70,14 +71,15 @@ int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
 }
 
 int sim_driver(int argc, char** argv) {
-  CLI::App app("hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
-               "the subject prior), then the demonstrations, as EPISODE markers and GROUND_TRUTH, and\n"
-               "  onion:       CAMERA frames (PNG) of the onion-sorting scene, for perception and the labeller;\n"
-               "  gridworld:   the paper's Gridworld (--size, default 5x5), whose simulated sensor publishes\n"
-               "               OBSERVATIONS with their eta itself (no perception or labeller needed);\n"
-               "  FILE.json:   a domain file's task, watched by the sensor its \"sensor\" section describes\n"
-               "               (README.md \"Your own task\"), publishing OBSERVATIONS the same way.\n"
-               "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
+  CLI::App app(
+      "hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
+      "the subject prior), then the demonstrations, as EPISODE markers and GROUND_TRUTH, and\n"
+      "  onion:       CAMERA frames (PNG) of the onion-sorting scene, for perception and the labeller;\n"
+      "  gridworld:   the paper's Gridworld (--size, default 5x5), whose simulated sensor publishes\n"
+      "               OBSERVATIONS with their eta itself (no perception or labeller needed);\n"
+      "  FILE.json:   a domain file's task, watched by the sensor its \"sensor\" section describes\n"
+      "               (README.md \"Your own task\"), publishing OBSERVATIONS the same way.\n"
+      "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
   Common c;
   add_common(app, c);
   SimDriverOptions o;
@@ -91,31 +93,49 @@ int sim_driver(int argc, char** argv) {
   app.add_flag("--print-listeners", print_listeners,
                "Print the services this domain's run needs listening (perception and labeller for a camera,\n"
                "the optimiser) and exit");
-  app.add_option("--seed", sim.seed, "Seed of the run (onion: sorts and scene; gridworld: goal, trajectories, observations;\n"
-                                     "a domain file: trajectories, observations)")
+  app.add_option("--seed", sim.seed,
+                 "Seed of the run (onion: sorts and scene; gridworld: goal, trajectories, observations;\n"
+                 "a domain file: trajectories, observations)")
       ->capture_default_str();
   app.add_option("--max-frames-per-second", o.max_frames_per_second,
                  "Pacing in wall-clock frames (a sensor: steps) per second (0: none)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
-  app.add_option("--start-delay", delay, "At most this many seconds to wait for the services downstream to be listening")
+  app.add_option("--start-delay", delay,
+                 "At most this many seconds to wait for the services downstream to be listening")
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
-  app.add_option("--config,-c", config, "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
+  app.add_option("--config,-c", config,
+                 "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
-  app.add_option("--controlled-sorts", sim.controlled_sorts, "onion: sorts in the controlled run")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--sorts", sim.sorts, "onion: demonstrated sorts")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")->check(CLI::Range(160, 4096))->capture_default_str();
-  app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
+  app.add_option("--controlled-sorts", sim.controlled_sorts, "onion: sorts in the controlled run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--sorts", sim.sorts, "onion: demonstrated sorts")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")
+      ->check(CLI::Range(160, 4096))
+      ->capture_default_str();
+  app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")
+      ->check(CLI::Range(1, 240))
+      ->capture_default_str();
   app.add_option("--confounders", sim.confounders, "gridworld: confounding elements |E|")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  app.add_option("--per-step", sim.per_step, "gridworld: observations per step")->check(CLI::Range(0, 100000))->capture_default_str();
-  app.add_option("--trajectories", sim.trajectories, "gridworld: demonstrations")->check(CLI::Range(1, 100000))->capture_default_str();
-  app.add_option("--controlled-trajectories", sim.controlled_trajectories, "gridworld: trajectories of the controlled run")
+  app.add_option("--per-step", sim.per_step, "gridworld: observations per step")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  app.add_option("--trajectories", sim.trajectories, "gridworld: demonstrations")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  app.add_option("--length", sim.length, "gridworld: steps per trajectory")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--controlled-trajectories", sim.controlled_trajectories,
+                 "gridworld: trajectories of the controlled run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--length", sim.length, "gridworld: steps per trajectory")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   app.add_option("--eta", eta, "gridworld: the observations' eta, plausible, uniform or true")
       ->check(CLI::IsMember({"plausible", "uniform", "true"}))
       ->capture_default_str();
@@ -139,8 +159,9 @@ int sim_driver(int argc, char** argv) {
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
   SimDriver driver(*bus, *domain, o, counters);
-  const bool finished = driver.serve(stop_requested, delay, [&heartbeat](const std::string& state) { heartbeat.tick(state); },
-                                     [](const std::string& s) { std::fprintf(stderr, "hbirl-sim-driver: %s\n", s.c_str()); });
+  const bool finished = driver.serve(
+      stop_requested, delay, [&heartbeat](const std::string& state) { heartbeat.tick(state); },
+      [](const std::string& s) { std::fprintf(stderr, "hbirl-sim-driver: %s\n", s.c_str()); });
   heartbeat.tick(finished ? "done" : "stopped", true);
   std::fprintf(stderr, "hbirl-sim-driver: done; %lld frames sent again on request, %lld bad messages\n",
                static_cast<long long>(driver.frames_resent()), static_cast<long long>(counters.bad_messages));
@@ -179,13 +200,14 @@ int labeller(int argc, char** argv) {
 }
 
 int sampler(int argc, char** argv) {
-  CLI::App app("hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and, on a channel of its\n"
-               "own (TRAJECTORY_<tag of its --id>), the trajectories of the blocks it is assigned -- its share\n"
-               "only, once -- and answers ESTEP_REQUEST for those blocks (ESTEP_RESULT). It needs no domain:\n"
-               "one worker serves any run. Run any number, on any number of machines (same LCM URL with ttl=1).\n"
-               "With --key: a run's key file (OUT/run.key) serves that run only; a key for many runs (hbirl keygen\n"
-               "FILE, the one given to services/launch.sh --key) serves every run of it, each answer signed for the\n"
-               "run of its request.");
+  CLI::App app(
+      "hbirl-sampler: an E-step worker. Receives the optimiser's MDP (MDP) and, on a channel of its\n"
+      "own (TRAJECTORY_<tag of its --id>), the trajectories of the blocks it is assigned -- its share\n"
+      "only, once -- and answers ESTEP_REQUEST for those blocks (ESTEP_RESULT). It needs no domain:\n"
+      "one worker serves any run. Run any number, on any number of machines (same LCM URL with ttl=1).\n"
+      "With --key: a run's key file (OUT/run.key) serves that run only; a key for many runs (hbirl keygen\n"
+      "FILE, the one given to services/launch.sh --key) serves every run of it, each answer signed for the\n"
+      "run of its request.");
   Common c;
   add_common(app, c);
   std::int64_t die_after = -1;
@@ -196,8 +218,9 @@ int sampler(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 20));
   bool lie = false;
-  app.add_flag("--testing-lie", lie, "Testing: add 1 to the first count of every answer (a worker that lies, for the optimiser's\n"
-                                     "spot check to catch)");
+  app.add_flag("--testing-lie", lie,
+               "Testing: add 1 to the first count of every answer (a worker that lies, for the optimiser's\n"
+               "spot check to catch)");
   app.add_option("--kill-self-after-blocks", die_after,
                  "Testing: SIGKILL this process once it has computed this many blocks (a worker dying mid-run)");
   CLI11_PARSE(app, argc, argv);
@@ -210,29 +233,31 @@ int sampler(int argc, char** argv) {
   while (!stop_requested()) {
     if (worker.handle(100) < 0) break;
     if (die_after >= 0 && worker.blocks_computed() >= die_after) {
-      std::fprintf(stderr, "hbirl-sampler: %s kills itself (SIGKILL) after %lld blocks, as asked\n", worker.id().c_str(),
-                   static_cast<long long>(worker.blocks_computed()));
+      std::fprintf(stderr, "hbirl-sampler: %s kills itself (SIGKILL) after %lld blocks, as asked\n",
+                   worker.id().c_str(), static_cast<long long>(worker.blocks_computed()));
       std::raise(SIGKILL);
     }
   }
   worker.publish_status("done");
-  std::fprintf(stderr, "hbirl-sampler: stopped (%s); %lld blocks computed, %lld messages in, %lld bad\n", worker.id().c_str(),
-               static_cast<long long>(worker.blocks_computed()), static_cast<long long>(counters.messages_in),
-               static_cast<long long>(counters.bad_messages));
+  std::fprintf(stderr, "hbirl-sampler: stopped (%s); %lld blocks computed, %lld messages in, %lld bad\n",
+               worker.id().c_str(), static_cast<long long>(worker.blocks_computed()),
+               static_cast<long long>(counters.messages_in), static_cast<long long>(counters.bad_messages));
   return 0;
 }
 
 int optimiser(int argc, char** argv) {
-  CLI::App app("hbirl-optimiser: collects the run (EPISODE, OBSERVATIONS, GROUND_TRUTH), learns the reward\n"
-               "with HiddenDataEM, the E-step on the sampler workers, and publishes EM_PROGRESS and REWARD.\n"
-               "Prints the result as JSON and exits.");
+  CLI::App app(
+      "hbirl-optimiser: collects the run (EPISODE, OBSERVATIONS, GROUND_TRUTH), learns the reward\n"
+      "with HiddenDataEM, the E-step on the sampler workers, and publishes EM_PROGRESS and REWARD.\n"
+      "Prints the result as JSON and exits.");
   Common c;
   add_common(app, c);
   OptimiserOptions o;
   std::string out;
   app::DomainArgs d;
-  app::add_domain_options(&app, d, "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
-                              "the EPISODE markers name; a domain file must be given here)");
+  app::add_domain_options(&app, d,
+                          "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
+                          "the EPISODE markers name; a domain file must be given here)");
   app.add_option("--workers", o.workers, "Sampler workers to wait for before learning (0: compute here)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
@@ -248,8 +273,9 @@ int optimiser(int argc, char** argv) {
                "Learn from what came when frames stop coming before the run is complete (after --quiet-ms), and say\n"
                "what is missing in the result (\"incomplete\"). Without it such a run fails (exit 3) after\n"
                "--incomplete-after-ms without a frame, asking for the missing ones again all the while");
-  app.add_option("--quiet-ms", o.quiet_ms, "With --allow-incomplete: learn from what came once no frame has come for this long\n"
-                                           "after the end of the run")
+  app.add_option("--quiet-ms", o.quiet_ms,
+                 "With --allow-incomplete: learn from what came once no frame has come for this long\n"
+                 "after the end of the run")
       ->check(CLI::Range(1, 3600000))
       ->capture_default_str();
   app.add_option("--incomplete-after-ms", o.incomplete_after_ms,
@@ -284,7 +310,8 @@ int optimiser(int argc, char** argv) {
   std::optional<OptimiserResult> result;
   try {
     result = run_optimiser(
-        *bus, o, counters, stop_requested, [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
+        *bus, o, counters, stop_requested,
+        [](const std::string& s) { std::fprintf(stderr, "hbirl-optimiser: %s\n", s.c_str()); },
         [&heartbeat] { heartbeat.tick("starting", true); });  // listening: the simulator may start
   } catch (const RunFailed& e) {
     // Not restarted by the supervisor (exit 3): collecting the run again would end the same way.
@@ -300,10 +327,12 @@ int optimiser(int argc, char** argv) {
     return 1;
   }
   nlohmann::json j;
-  j["theta"] = std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
+  j["theta"] =
+      std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
   j["domain"] = result->data.domain;
   j["feature_names"] = domain_of(result->data, o.domain)->names(1).features;
-  if (const auto& w = result->data.true_weights) j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
+  if (const auto& w = result->data.true_weights)
+    j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
   if (result->learned.ile) j["ile"] = *result->learned.ile;
   j["log_likelihood"] = result->learned.log_likelihood;
   j["em_iterations"] = result->learned.em_iterations;
@@ -315,11 +344,15 @@ int optimiser(int argc, char** argv) {
   if (!result->incomplete.empty()) j["incomplete"] = result->incomplete;
   j["frame_requests"] = result->frame_requests;
   j["workers"] = result->workers;
-  j["estep"] = {{"requests", result->estep.requests},         {"remote_blocks", result->estep.remote_blocks},
-                {"local_blocks", result->estep.local_blocks}, {"retried_blocks", result->estep.retried_blocks},
-                {"stale", result->estep.stale},               {"duplicates", result->estep.duplicates},
+  j["estep"] = {{"requests", result->estep.requests},
+                {"remote_blocks", result->estep.remote_blocks},
+                {"local_blocks", result->estep.local_blocks},
+                {"retried_blocks", result->estep.retried_blocks},
+                {"stale", result->estep.stale},
+                {"duplicates", result->estep.duplicates},
                 {"unassigned_answers", result->estep.unassigned},
-                {"spot_checks", result->estep.spot_checks},   {"workers_caught_lying", result->estep.liars},
+                {"spot_checks", result->estep.spot_checks},
+                {"workers_caught_lying", result->estep.liars},
                 {"conflicting_answers", result->estep.conflicts},
                 {"workers_with_other_numerics", result->estep.other_numerics},
                 {"trial_passes", result->estep.trial_passes},
@@ -357,7 +390,9 @@ int main(int argc, char** argv) {
   if (name.rfind("hbirl-", 0) == 0) name = name.substr(6);
   if (name == "services") {
     if (argc < 2 || !services().count(argv[1])) {
-      std::fprintf(stderr, "usage: hbirl-services SERVICE [OPTIONS]   SERVICE: sim-driver, perception, labeller, sampler, optimiser\n");
+      std::fprintf(
+          stderr,
+          "usage: hbirl-services SERVICE [OPTIONS]   SERVICE: sim-driver, perception, labeller, sampler, optimiser\n");
       return 2;
     }
     name = argv[1];

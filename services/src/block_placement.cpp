@@ -14,7 +14,9 @@ std::vector<std::string> place_blocks(const std::vector<int>& todo, std::vector<
     Worker& x = roster[w];
     if (!x.unheld.empty() && Worker::Clock::now() - x.last_unheld > std::chrono::minutes(1)) x.unheld.clear();
   }
-  const auto can_hold = [&](const std::string& w, int b) { return roster[w].can_hold(digests[static_cast<size_t>(b)]); };
+  const auto can_hold = [&](const std::string& w, int b) {
+    return roster[w].can_hold(digests[static_cast<size_t>(b)]);
+  };
   // A worker that failed to hold two blocks and holds none gets no more (for this data set,
   // or until the minute above passes): each block it is given would cost the pass a timeout.
   workers.erase(std::remove_if(workers.begin(), workers.end(),
@@ -31,7 +33,8 @@ std::vector<std::string> place_blocks(const std::vector<int>& todo, std::vector<
     unproven.resize(std::min(unproven.size(), proven.size()));
     for (const auto& w : unproven) {  // the block it has, else the last one; either one it can hold
       if (rest.empty()) break;
-      auto pick = std::find_if(rest.begin(), rest.end(), [&](int b) { return owners[static_cast<size_t>(b)] == w && can_hold(w, b); });
+      auto pick = std::find_if(rest.begin(), rest.end(),
+                               [&](int b) { return owners[static_cast<size_t>(b)] == w && can_hold(w, b); });
       if (pick == rest.end()) {
         const auto last = std::find_if(rest.rbegin(), rest.rend(), [&](int b) { return can_hold(w, b); });
         if (last == rest.rend()) continue;
@@ -44,7 +47,8 @@ std::vector<std::string> place_blocks(const std::vector<int>& todo, std::vector<
   }
   const size_t n = workers.size();
   std::map<std::string, size_t> share, given;  // even shares, the first ones one larger
-  for (size_t k = 0; k < n; ++k) share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);  // none: all loose
+  for (size_t k = 0; k < n; ++k)
+    share[workers[k]] = rest.size() / n + (k < rest.size() % n ? 1 : 0);  // none: all loose
   std::vector<int> loose;
   for (int b : rest) {
     const std::string& owner = owners[static_cast<size_t>(b)];

@@ -13,7 +13,8 @@
 namespace hbirl::services {
 
 std::int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 struct ChannelPattern::Compiled {

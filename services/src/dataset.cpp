@@ -18,19 +18,23 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   counters_ = &counters;
   // A whole run's messages may be waiting when a replay starts or a slow learner catches up.
   constexpr int kQueue = 1 << 20;
-  subs_.add(bus, services::subscribe(bus, channels::kEpisode, counters,
-                                                              [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, channels::kObservations, counters,
-                                                            [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
-  subs_.add(bus, services::subscribe(bus, channels::kGroundTruth, counters,
-                                                            [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
+  subs_.add(bus,
+            services::subscribe(
+                bus, channels::kEpisode, counters, [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
+  subs_.add(bus, services::subscribe(
+                     bus, channels::kObservations, counters,
+                     [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
+  subs_.add(bus,
+            services::subscribe(
+                bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
 }
 
 namespace {
 constexpr int kMaxFeatures = 100000;
 }  // namespace
 
-void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states, int num_actions) {
+void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states,
+                            int num_actions) {
   expected_domain_ = domain;
   expected_symbols_ = num_symbols;
   expected_sources_ = num_sources;
@@ -45,8 +49,8 @@ void DatasetBuilder::contradicted(const std::string& why) {
 void DatasetBuilder::saw_episode(int id) {
   last_episode_ = std::max(last_episode_, id);
   if (run_episodes_ > 0 && id >= run_episodes_) {
-    contradicted("a message about episode " + std::to_string(id) + " after END_RUN said the run had " + std::to_string(run_episodes_) +
-                 " episodes");
+    contradicted("a message about episode " + std::to_string(id) + " after END_RUN said the run had " +
+                 std::to_string(run_episodes_) + " episodes");
   } else if (watching_ && taken_complete_ && !taken_episodes_.count(id)) {  // (an END_RUN that stated no number)
     contradicted("a message about episode " + std::to_string(id) + ", which the run did not have when it was complete");
   }
@@ -98,9 +102,11 @@ void DatasetBuilder::mark_controlled(Episode& e, const hbirl::episode_marker_t& 
 void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
   if (counters_) counters_->gaps += marker_seq_.see(m.seq);
   if (!expected_domain_.empty() && m.domain != expected_domain_) {
-    throw InputError("episode_marker.domain", "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
+    throw InputError("episode_marker.domain",
+                     "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
   }
-  if (!domain_.empty() && m.domain != domain_) throw InputError("episode_marker.domain", "changed from " + domain_ + " to " + m.domain);
+  if (!domain_.empty() && m.domain != domain_)
+    throw InputError("episode_marker.domain", "changed from " + domain_ + " to " + m.domain);
   domain_ = m.domain;
   if (watching_) {  // taken: the markers are checked against the run, not kept
     if (m.kind != hbirl::episode_marker_t::END_RUN) {
@@ -119,8 +125,8 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
         throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
       }
       if (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) {
-        contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) + " frames a step, then " +
-                     std::to_string(m.frames_per_step));
+        contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) +
+                     " frames a step, then " + std::to_string(m.frames_per_step));
       }
       if (e.frames_per_step != m.frames_per_step) {  // (a repeat changes nothing)
         count(e, m.episode, -1);
@@ -142,10 +148,11 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       // The simulator repeats every end marker each second until the reward comes: a
       // repeat leaves the counts as they are, without a walk over the episode's frames. An
       // end marker that says otherwise than an earlier one contradicts the run.
-      if (e.ended && (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
-                      e.ends_in_terminal != m.ends_in_terminal)) {
-        contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) + " then " +
-                     std::to_string(m.num_steps) + " steps)");
+      if (e.ended &&
+          (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
+           e.ends_in_terminal != m.ends_in_terminal)) {
+        contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" +
+                     std::to_string(e.num_steps) + " then " + std::to_string(m.num_steps) + " steps)");
       }
       e.ends_in_terminal = m.ends_in_terminal;
       if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) break;
@@ -162,20 +169,23 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
       // one states the run's number of episodes (num_steps; 0: not stated), episodes 0 .. n-1
       // are the run; a second END_RUN stating another number, or an episode at or past n
       // (begun before or after), contradicts it (docs/RELIABILITY.md).
-      const bool any_ended = watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
+      const bool any_ended =
+          watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
       if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
       if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
       // Without a number, an END_RUN ends the run once the episodes begun have ended: on a bus
       // anyone may publish to, a forger could end it in any pause of the sensor's (and repeat
       // it to pass the confirmation). Believed only when every message is signed.
       if (m.num_steps == 0 && counters_ && !counters_->authenticated) {
-        throw InputError("episode_marker.num_steps", "an END_RUN that states no number of episodes is believed only with a run key "
-                                                     "(anyone on an unauthenticated bus could end the run early with one)");
+        throw InputError("episode_marker.num_steps",
+                         "an END_RUN that states no number of episodes is believed only with a run key "
+                         "(anyone on an unauthenticated bus could end the run early with one)");
       }
       ++end_runs_heard_;
       if (m.num_steps > 0) {
         if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
-          const std::string why = "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " + std::to_string(run_episodes_);
+          const std::string why =
+              "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " + std::to_string(run_episodes_);
           contradicted(why);
           throw InputError("episode_marker.num_steps", why);
         }
@@ -205,7 +215,8 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   // validate(observations_t) has checked the message itself (messages.hpp); here, that it
   // fits the domain and the run.
   if (expected_symbols_ > 0 && m.num_symbols != expected_symbols_) {
-    throw InputError("observations.num_symbols", std::to_string(m.num_symbols) + ", the domain has " + std::to_string(expected_symbols_));
+    throw InputError("observations.num_symbols",
+                     std::to_string(m.num_symbols) + ", the domain has " + std::to_string(expected_symbols_));
   }
   if (expected_sources_ > 0 && m.num_sources != expected_sources_) {
     throw InputError("observations.num_sources", std::to_string(m.num_sources) + " (eta's length), the domain has " +
@@ -235,16 +246,16 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   if (const auto seen = e.frames.find({m.step, m.frame}); seen != e.frames.end()) {
     const Frame& first = seen->second;
     if (first.symbols != f.symbols || first.eta != f.eta || first.contexts != f.contexts) {
-      contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step) +
-                   ", frame " + std::to_string(m.frame));
+      contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " +
+                   std::to_string(m.step) + ", frame " + std::to_string(m.frame));
     }
     return;
   }
   const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
                              8 * static_cast<std::int64_t>(f.eta.size());
   if (bytes_ + bytes > max_bytes_) {
-    throw InputError("observations", "the run's data would take more than --max-dataset-mb " + std::to_string(max_bytes_ >> 20) +
-                                         " MB: frame not kept");
+    throw InputError("observations", "the run's data would take more than --max-dataset-mb " +
+                                         std::to_string(max_bytes_ >> 20) + " MB: frame not kept");
   }
   bytes_ += bytes;
   e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f));
@@ -258,15 +269,18 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
 
 void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (counters_) counters_->gaps += truth_seq_.see(m.seq);
-  if (m.step < 0 || m.state < 0 || m.action < 0) throw InputError("ground_truth.step", "step, state and action must be >= 0");
+  if (m.step < 0 || m.state < 0 || m.action < 0)
+    throw InputError("ground_truth.step", "step, state and action must be >= 0");
   if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
   if (expected_states_ > 0 && (m.state >= expected_states_ || m.action >= expected_actions_)) {
-    throw InputError("ground_truth.state", "state " + std::to_string(m.state) + " or action " + std::to_string(m.action) +
-                                               " is not the domain's");
+    throw InputError("ground_truth.state", "state " + std::to_string(m.state) + " or action " +
+                                               std::to_string(m.action) + " is not the domain's");
   }
-  if (!domain_.empty() && m.domain != domain_) throw InputError("ground_truth.domain", "is " + m.domain + ", the run's " + domain_);
+  if (!domain_.empty() && m.domain != domain_)
+    throw InputError("ground_truth.domain", "is " + m.domain + ", the run's " + domain_);
   if (!expected_domain_.empty() && m.domain != expected_domain_) {
-    throw InputError("ground_truth.domain", "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
+    throw InputError("ground_truth.domain",
+                     "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
   }
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
@@ -280,7 +294,8 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   // a forgery) changes nothing.
   const auto [kept, fresh] = e.truth.try_emplace(m.step, StateAction{m.state, m.action});
   if (!fresh && (kept->second.state != m.state || kept->second.action != m.action)) {
-    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step));
+    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " +
+                 std::to_string(m.step));
   }
   if (fresh && e.ended && m.step < e.num_steps) {
     ++e.have_truth;
@@ -346,7 +361,8 @@ void keep_contexts_if_all_given(std::vector<ObservedTrajectory>& set, const std:
   }
   if (!any || all) return;
   for (auto& t : set) t.contexts.clear();
-  note += (note.empty() ? "" : "; ") + what + ": some observations came with a context and others without: contexts ignored";
+  note += (note.empty() ? "" : "; ") + what +
+          ": some observations came with a context and others without: contexts ignored";
 }
 
 }  // namespace
@@ -375,7 +391,8 @@ void DatasetBuilder::add_episode(Dataset& d, int id, const Episode& e) const {
     }
     t.step_begin.push_back(static_cast<int>(t.symbols.size()));
   }
-  t.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), std::max(1, num_sources_));
+  t.eta =
+      Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), std::max(1, num_sources_));
   Trajectory truth;
   for (int step = 0; step < e.num_steps; ++step) {
     const auto it = e.truth.find(step);
@@ -433,14 +450,16 @@ Dataset DatasetBuilder::take() {
   // A complete run is closed: an episode it did not have contradicts it from now on, and
   // so does an END_RUN stating another number than the episodes 0 .. n-1 it had.
   taken_complete_ = complete();
-  if (taken_complete_ && run_episodes_ == 0 && !episodes_.empty() && episodes_.rbegin()->first + 1 == static_cast<int>(episodes_.size())) {
+  if (taken_complete_ && run_episodes_ == 0 && !episodes_.empty() &&
+      episodes_.rbegin()->first + 1 == static_cast<int>(episodes_.size())) {
     run_episodes_ = static_cast<int>(episodes_.size());
   }
   Dataset d = empty_dataset();
   // (In order: episodes_ is ordered by episode, each one's frames by step and frame.)
   for (auto& [id, e] : episodes_) {
     add_episode(d, id, e);
-    for (const auto& [key, f] : e.frames) taken_frames_.emplace_back(std::tuple(id, key.first, key.second), frame_digest(f));
+    for (const auto& [key, f] : e.frames)
+      taken_frames_.emplace_back(std::tuple(id, key.first, key.second), frame_digest(f));
     for (const auto& [step, t] : e.truth) taken_truth_.emplace_back(std::pair(id, step), t);
     e.frames.clear();  // assembled: each observation is held once, here or in d
     e.truth.clear();
@@ -465,23 +484,24 @@ void DatasetBuilder::watch_marker(const hbirl::episode_marker_t& m) {
   Episode& e = it->second;
   mark_controlled(e, m);
   if (e.frames_per_step != 0 && m.frames_per_step != e.frames_per_step) {
-    contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) + " frames a step, then " +
-                 std::to_string(m.frames_per_step));
+    contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) +
+                 " frames a step, then " + std::to_string(m.frames_per_step));
   }
   if (m.kind == hbirl::episode_marker_t::END_EPISODE && e.ended &&
       (e.num_steps != m.num_steps || e.ends_in_terminal != m.ends_in_terminal)) {
-    contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) + " then " +
-                 std::to_string(m.num_steps) + " steps)");
+    contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) +
+                 " then " + std::to_string(m.num_steps) + " steps)");
   }
 }
 
 void DatasetBuilder::watch_frame(const hbirl::observations_t& m, const Frame& f) {
   saw_episode(m.episode);
   const auto key = std::tuple(static_cast<int>(m.episode), static_cast<int>(m.step), static_cast<int>(m.frame));
-  const auto it = std::lower_bound(taken_frames_.begin(), taken_frames_.end(), key, [](const auto& x, const auto& k) { return x.first < k; });
+  const auto it = std::lower_bound(taken_frames_.begin(), taken_frames_.end(), key,
+                                   [](const auto& x, const auto& k) { return x.first < k; });
   if (it != taken_frames_.end() && it->first == key && it->second != frame_digest(f)) {
-    contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step) +
-                 ", frame " + std::to_string(m.frame));
+    contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " +
+                 std::to_string(m.step) + ", frame " + std::to_string(m.frame));
   }
 }
 
@@ -489,9 +509,11 @@ void DatasetBuilder::watch_truth(const hbirl::ground_truth_t& m) {
   if (m.episode < 0) throw InputError("episode", "is negative");
   saw_episode(m.episode);
   const auto key = std::pair(static_cast<int>(m.episode), static_cast<int>(m.step));
-  const auto it = std::lower_bound(taken_truth_.begin(), taken_truth_.end(), key, [](const auto& x, const auto& k) { return x.first < k; });
+  const auto it = std::lower_bound(taken_truth_.begin(), taken_truth_.end(), key,
+                                   [](const auto& x, const auto& k) { return x.first < k; });
   if (it != taken_truth_.end() && it->first == key && !(it->second == StateAction{m.state, m.action})) {
-    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " + std::to_string(m.step));
+    contradicted("two different ground truths of episode " + std::to_string(m.episode) + ", step " +
+                 std::to_string(m.step));
   }
 }
 

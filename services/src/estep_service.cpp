@@ -41,11 +41,13 @@ BusBlockExecutor::BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& 
       roster_(mdp_digest_, numerics_fingerprint(), options.same_numerics_only, options.worker_silence_s),
       window_(bus, counters, options.send_window_bytes, std::chrono::milliseconds(options.timeout_ms)),
       request_id_(random_request_id()) {
-  subs_.add(bus_, subscribe(bus_, channels::kStatus, counters_,
-                            [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kStatus, counters_,
+                      [this](const hbirl::service_status_t& m, const Message&) { on_status(m); }, 1000));
   // Every block of a pass may arrive between two handle() calls.
-  subs_.add(bus_, subscribe(bus_, channels::kEStepResult, counters_,
-                            [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kEStepResult, counters_,
+                      [this](const hbirl::estep_result_t& m, const Message&) { on_result(m); }, 100000));
 }
 
 void BusBlockExecutor::publish_mdp() {
@@ -63,7 +65,8 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) {
   blocks_.contexts = estep.num_contexts();
   blocks_.kinds = estep.uses_kind_table();
   blocks_.digests.clear();
-  for (int b = 0; b < estep.num_blocks(); ++b) blocks_.digests.push_back(dataset_digest(block_of(estep.trajectories(), b)));
+  for (int b = 0; b < estep.num_blocks(); ++b)
+    blocks_.digests.push_back(dataset_digest(block_of(estep.trajectories(), b)));
   blocks_.current = std::set<std::uint64_t>(blocks_.digests.begin(), blocks_.digests.end());
   blocks_.data_digest = dataset_digest(estep.trajectories());
   if (owners_.size() != blocks_.digests.size()) owners_.assign(blocks_.digests.size(), std::string());
@@ -75,9 +78,11 @@ void BusBlockExecutor::on_status(const hbirl::service_status_t& m) {
   progress_ += heard.acknowledged;
   if (heard.new_numerics) {
     ++stats_.other_numerics;
-    counters_.note("sampler " + m.id + " computes with other numerics (fingerprint " + std::to_string(static_cast<std::uint64_t>(m.numerics)) + ", here " +
+    counters_.note("sampler " + m.id + " computes with other numerics (fingerprint " +
+                   std::to_string(static_cast<std::uint64_t>(m.numerics)) + ", here " +
                    std::to_string(roster_.numerics()) + ")" +
-                   (options_.same_numerics_only ? ": it gets no work" : ": theta may differ from a one-process run in the last bits"));
+                   (options_.same_numerics_only ? ": it gets no work"
+                                                : ": theta may differ from a one-process run in the last bits"));
   }
   // A worker without our MDP: send it (not more than twice a second). Its blocks are sent
   // with the pass that gives them to it.
@@ -91,14 +96,17 @@ void BusBlockExecutor::on_result(const hbirl::estep_result_t& m) {
     ++stats_.stale;
     return;
   }
-  if (m.block < 0 || m.block >= pass_.shape.blocks) throw InputError("estep_result.block", std::to_string(m.block) + " is not a block");
-  if (static_cast<std::uint64_t>(m.block_digest) != blocks_.digests[static_cast<size_t>(m.block)]) {  // computed on other trajectories
+  if (m.block < 0 || m.block >= pass_.shape.blocks)
+    throw InputError("estep_result.block", std::to_string(m.block) + " is not a block");
+  if (static_cast<std::uint64_t>(m.block_digest) !=
+      blocks_.digests[static_cast<size_t>(m.block)]) {  // computed on other trajectories
     ++stats_.foreign;
     return;
   }
   check_shape(m, pass_.shape);
   const auto& slot = pass_.received[static_cast<size_t>(m.block)];
-  if (slot && pass_.answered_by[static_cast<size_t>(m.block)] != m.worker) {  // answered already, by the worker it was given to
+  if (slot &&
+      pass_.answered_by[static_cast<size_t>(m.block)] != m.worker) {  // answered already, by the worker it was given to
     ++stats_.duplicates;
     return;
   }
@@ -123,8 +131,9 @@ void BusBlockExecutor::take_answer(const hbirl::estep_result_t& m, EStepStatisti
     if (!same_statistics(*slot, s, 0.0)) {
       ++stats_.conflicts;
       pass_.doubted.insert(m.worker);
-      counters_.bad(channels::kEStepResult.name, "two different answers to block " + std::to_string(m.block) + " under the name '" +
-                                                    m.worker + "' (one forged?): its blocks of this pass are computed here");
+      counters_.bad(channels::kEStepResult.name, "two different answers to block " + std::to_string(m.block) +
+                                                     " under the name '" + m.worker +
+                                                     "' (one forged?): its blocks of this pass are computed here");
       forget_answers_of(m.worker);
       return;
     }
@@ -160,8 +169,9 @@ int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) {
 void BusBlockExecutor::distrust(const std::string& worker, const std::string& why) {
   ++stats_.liars;
   roster_[worker].distrusted = true;
-  counters_.bad(channels::kEStepResult.name,
-                "worker '" + worker + "' " + why + ": it gets no more work, and its blocks of this pass are computed here");
+  counters_.bad(
+      channels::kEStepResult.name,
+      "worker '" + worker + "' " + why + ": it gets no more work, and its blocks of this pass are computed here");
   forget_answers_of(worker);
 }
 
@@ -197,8 +207,9 @@ std::vector<EStepStatistics> BusBlockExecutor::compute_here(const ObservationESt
                                                             const ObservationModel& model, std::uint64_t seed,
                                                             const RowMatrix* eta) {
   if (!said_too_many_contexts_) {
-    counters_.note("learned eta has " + std::to_string(eta->rows()) + " contexts (each distinct eta is one), more than the " +
-                   std::to_string(options_.max_contexts) + " a request carries: the E-step is computed here, not by the workers "
+    counters_.note("learned eta has " + std::to_string(eta->rows()) +
+                   " contexts (each distinct eta is one), more than the " + std::to_string(options_.max_contexts) +
+                   " a request carries: the E-step is computed here, not by the workers "
                    "(give the observations contexts, or --eta stated)");
     said_too_many_contexts_ = true;
   }
@@ -304,7 +315,8 @@ void BusBlockExecutor::check_spots(const std::vector<int>& spots, std::vector<ES
 }
 
 std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep, const SoftSolution& policy,
-                                                   const ObservationModel& model, std::uint64_t seed, const RowMatrix* eta) {
+                                                   const ObservationModel& model, std::uint64_t seed,
+                                                   const RowMatrix* eta) {
   const std::lock_guard<std::recursive_mutex> lock(mutex_);
   if (options_.stop && options_.stop()) throw Stopped();
   const auto start = Clock::now();
@@ -313,7 +325,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   for (int k = 0; k < 100000 && bus_.handle(0) > 0; ++k) {
   }
   // The workers compute with the exact engine on this executor's MDP: the pass must too.
-  if (dynamics_digest(estep.mdp()) != mdp_digest_) throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
+  if (dynamics_digest(estep.mdp()) != mdp_digest_)
+    throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
   if (!estep.exact_engine()) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
   ++request_id_;
   ++stats_.requests;
@@ -324,9 +337,15 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   prepare_blocks(estep);
   const int blocks = estep.num_blocks();
   pass_ = Pass{};
-  pass_.shape = {blocks, estep.mdp().num_pairs(), model.num_symbols(), model.num_confounders(),
-                 eta ? static_cast<int>(eta->rows()) : 0, estep.options().watch, 0};
-  if (pass_.shape.watch >= 0) pass_.shape.watch_steps = estep.trajectories()[static_cast<size_t>(pass_.shape.watch)].length();
+  pass_.shape = {blocks,
+                 estep.mdp().num_pairs(),
+                 model.num_symbols(),
+                 model.num_confounders(),
+                 eta ? static_cast<int>(eta->rows()) : 0,
+                 estep.options().watch,
+                 0};
+  if (pass_.shape.watch >= 0)
+    pass_.shape.watch_steps = estep.trajectories()[static_cast<size_t>(pass_.shape.watch)].length();
   pass_.received.assign(static_cast<size_t>(blocks), std::nullopt);
   pass_.assigned.assign(static_cast<size_t>(blocks), {});
   pass_.answered_by.assign(static_cast<size_t>(blocks), std::string());
@@ -334,8 +353,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   std::vector<EStepStatistics> spot_results;
   std::vector<std::string> spot_workers;
 
-  hbirl::estep_request_t request =
-      request_message({request_id_, blocks_.data_digest, mdp_digest_, &blocks_.digests, seed}, estep, policy, model, eta);
+  hbirl::estep_request_t request = request_message(
+      {request_id_, blocks_.data_digest, mdp_digest_, &blocks_.digests, seed}, estep, policy, model, eta);
   for (int attempt = 0; attempt < options_.max_attempts; ++attempt) {
     const std::vector<int> todo = pass_.missing();
     if (todo.empty()) break;
@@ -364,7 +383,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   check_spots(spots, spot_results, spot_workers);
   const std::vector<int> rest = pass_.missing();
   if (!rest.empty()) {
-    const std::vector<EStepStatistics> local = estep.block_statistics(policy, model, seed, rest, options_.local_threads, eta);
+    const std::vector<EStepStatistics> local =
+        estep.block_statistics(policy, model, seed, rest, options_.local_threads, eta);
     for (size_t k = 0; k < rest.size(); ++k) pass_.received[static_cast<size_t>(rest[k])] = local[k];
     stats_.local_blocks += static_cast<std::int64_t>(rest.size());
   }

@@ -21,7 +21,8 @@ std::uint64_t numerics_fingerprint() {
       transitions.push_back({s, 1, (s + 1) % 4, 0.7});
       transitions.push_back({s, 1, s, 0.3});
     }
-    const Mdp mdp = make_mdp(4, 2, 1, transitions, {{1, 1, 0, 1.0}, {3, 0, 0, 0.5}}, Eigen::Vector4d(0.4, 0.3, 0.2, 0.1), {}, 0.9);
+    const Mdp mdp =
+        make_mdp(4, 2, 1, transitions, {{1, 1, 0, 1.0}, {3, 0, 0, 0.5}}, Eigen::Vector4d(0.4, 0.3, 0.2, 0.1), {}, 0.9);
     std::vector<ObservedTrajectory> observed(2);
     const int symbols[2][6] = {{0, 1, 1, 0, 1, 0}, {1, 1, 0, 0, 0, 1}};
     for (int i = 0; i < 2; ++i) {
@@ -91,7 +92,8 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
     }
   }
   for (int i = 0; i < m.n; ++i) {
-    if (m.symbol[static_cast<size_t>(i)] < 0) throw InputError("trajectory.symbol[" + std::to_string(i) + "]", "is negative");
+    if (m.symbol[static_cast<size_t>(i)] < 0)
+      throw InputError("trajectory.symbol[" + std::to_string(i) + "]", "is negative");
     t.symbols.push_back(m.symbol[static_cast<size_t>(i)]);
   }
   t.eta = eigen_rows<RowMatrix>(m.eta, m.num_sources);
@@ -106,7 +108,9 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
   t.weights = m.weights;
   if (m.num_context != 0 && m.num_context != m.n) throw InputError("trajectory.num_context", "must be 0 or n");
   for (int c : m.context) {
-    if (c < 0 || c >= kMaxContexts) throw InputError("trajectory.context", std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+    if (c < 0 || c >= kMaxContexts)
+      throw InputError("trajectory.context",
+                       std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
   }
   t.contexts = m.context;
   t.ends_in_terminal = m.ends_in_terminal;
@@ -115,7 +119,8 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
 
 std::span<const ObservedTrajectory> block_of(const std::vector<ObservedTrajectory>& trajectories, int b) {
   const auto begin = static_cast<size_t>(b) * ObservationEStep::kBlockSize;
-  return std::span<const ObservedTrajectory>(trajectories).subspan(begin, std::min<size_t>(ObservationEStep::kBlockSize, trajectories.size() - begin));
+  return std::span<const ObservedTrajectory>(trajectories)
+      .subspan(begin, std::min<size_t>(ObservationEStep::kBlockSize, trajectories.size() - begin));
 }
 
 hbirl::estep_request_t request_message(const PassData& pass, const ObservationEStep& estep, const SoftSolution& policy,
@@ -163,19 +168,23 @@ EStepStatistics statistics_of(const hbirl::estep_result_t& m, const ResultShape&
   s.alpha_dot.subject = eigen_rows(m.alpha_subject, symbols);
   s.alpha_dot.confounders = eigen_rows(m.alpha_confounder, symbols);
   if (!s.counts.allFinite() || !s.alpha_dot.subject.allFinite() || !s.alpha_dot.confounders.allFinite() ||
-      (s.counts.array() < 0).any() || (s.alpha_dot.subject.array() < 0).any() || (s.alpha_dot.confounders.array() < 0).any()) {
+      (s.counts.array() < 0).any() || (s.alpha_dot.subject.array() < 0).any() ||
+      (s.alpha_dot.confounders.array() < 0).any()) {
     throw InputError("estep_result.counts", "must be finite and >= 0");
   }
-  if (m.impossible < 0 || m.impossible > ObservationEStep::kBlockSize) throw InputError("estep_result.impossible", "out of range");
+  if (m.impossible < 0 || m.impossible > ObservationEStep::kBlockSize)
+    throw InputError("estep_result.impossible", "out of range");
   if (m.num_watched_steps != 0) {  // only from the block that holds the watched trajectory, all its steps
-    if (shape.watch < 0 || m.block != shape.watch / ObservationEStep::kBlockSize || m.num_watched_steps != shape.watch_steps) {
+    if (shape.watch < 0 || m.block != shape.watch / ObservationEStep::kBlockSize ||
+        m.num_watched_steps != shape.watch_steps) {
       throw InputError("estep_result.num_watched_steps", "is not the watched trajectory's length");
     }
     s.watched = eigen_rows<RowMatrix>(m.watched, pairs);
     const bool distributions = s.watched.allFinite() && (s.watched.array() >= 0.0).all() &&
                                ((s.watched.rowwise().sum().array() - 1.0).abs() <= 1e-6).all();
     if (!distributions) throw InputError("estep_result.watched", "each step's marginals must be a distribution");
-    if (!std::isfinite(m.watched_log_likelihood)) throw InputError("estep_result.watched_log_likelihood", "must be finite");
+    if (!std::isfinite(m.watched_log_likelihood))
+      throw InputError("estep_result.watched_log_likelihood", "must be finite");
     s.watched_log_likelihood = m.watched_log_likelihood;
   }
   if (m.num_contexts != contexts || (contexts > 0 && m.num_sources != 1 + confounders)) {
@@ -210,7 +219,8 @@ bool same_statistics(const EStepStatistics& a, const EStepStatistics& b, double 
           std::abs(a.log_likelihood - b.log_likelihood) <= tolerance * (1.0 + std::abs(b.log_likelihood))) &&
          a.impossible == b.impossible && close(a.watched, b.watched) &&
          (a.watched_log_likelihood == b.watched_log_likelihood ||
-          std::abs(a.watched_log_likelihood - b.watched_log_likelihood) <= tolerance * (1.0 + std::abs(b.watched_log_likelihood)));
+          std::abs(a.watched_log_likelihood - b.watched_log_likelihood) <=
+              tolerance * (1.0 + std::abs(b.watched_log_likelihood)));
 }
 
 }  // namespace hbirl::services

@@ -33,7 +33,8 @@ RunId get_run(const std::uint8_t* in) {
 
 // HMAC-SHA-512-256 over the run, the channel's name, a zero byte, and the message: a signed
 // message moved to another channel or presented as another run's fails.
-std::array<std::uint8_t, kTagBytes> tag_of(const RunKey& key, RunId run, const std::string& channel, const void* data, int size) {
+std::array<std::uint8_t, kTagBytes> tag_of(const RunKey& key, RunId run, const std::string& channel, const void* data,
+                                           int size) {
   static_assert(crypto_auth_hmacsha512256_BYTES == kTagBytes, "tag size");
   static_assert(crypto_auth_hmacsha512256_KEYBYTES == RunKey::kBytes, "key size");
   crypto_auth_hmacsha512256_state state;
@@ -44,7 +45,8 @@ std::array<std::uint8_t, kTagBytes> tag_of(const RunKey& key, RunId run, const s
   crypto_auth_hmacsha512256_update(&state, run_bytes, kRunBytes);
   crypto_auth_hmacsha512256_update(&state, reinterpret_cast<const unsigned char*>(channel.data()), channel.size());
   crypto_auth_hmacsha512256_update(&state, &zero, 1);
-  crypto_auth_hmacsha512256_update(&state, static_cast<const unsigned char*>(data), static_cast<unsigned long long>(size));
+  crypto_auth_hmacsha512256_update(&state, static_cast<const unsigned char*>(data),
+                                   static_cast<unsigned long long>(size));
   std::array<std::uint8_t, kTagBytes> tag{};
   crypto_auth_hmacsha512256_final(&state, tag.data());
   return tag;
@@ -55,7 +57,8 @@ bool parse_hex(const char* text, size_t digits, std::uint8_t* out, size_t bytes)
   return sodium_hex2bin(out, bytes, text, digits, nullptr, &used, nullptr) == 0 && used == bytes;
 }
 
-const char* const kKeyFormat = "must hold 64 hexadecimal digits, and for one run a second line 'run' and 16 more (hbirl keygen makes one)";
+const char* const kKeyFormat =
+    "must hold 64 hexadecimal digits, and for one run a second line 'run' and 16 more (hbirl keygen makes one)";
 
 }  // namespace
 
@@ -108,7 +111,8 @@ RunKey RunKey::read(const std::string& path) {
     sodium_memzero(text, sizeof text);
     return InputError("--key", "'" + path + "' " + kKeyFormat);
   };
-  if (n < static_cast<ssize_t>(kKeyDigits) || !parse_hex(text, kKeyDigits, key.bytes_.data(), key.bytes_.size())) throw malformed();
+  if (n < static_cast<ssize_t>(kKeyDigits) || !parse_hex(text, kKeyDigits, key.bytes_.data(), key.bytes_.size()))
+    throw malformed();
   std::string rest(text + kKeyDigits, static_cast<size_t>(n) - kKeyDigits);
   sodium_memzero(text, sizeof text);
   if (!rest.empty() && rest.back() == '\n') rest.pop_back();  // the file's last newline
@@ -236,21 +240,27 @@ void check_recording_key(const std::string& log_path, const std::string& key_fil
   log.unsubscribe(all);
   if (!key) {
     if (signed_messages + old_format > 0) {
-      throw InputError("--key", "the messages in '" + log_path + "' are signed with a run key: give it (launch.sh wrote OUT/run.key)");
+      throw InputError("--key", "the messages in '" + log_path +
+                                    "' are signed with a run key: give it (launch.sh wrote OUT/run.key)");
     }
     return;
   }
   if (signed_messages == 0) {
-    throw InputError("--key", old_format > 0 ? "'" + log_path + "' was signed in the format before run identities (hbk1): this hbirl cannot check it"
-                                             : "the messages in '" + log_path + "' are not signed: read it without --key");
+    throw InputError(
+        "--key",
+        old_format > 0
+            ? "'" + log_path + "' was signed in the format before run identities (hbk1): this hbirl cannot check it"
+            : "the messages in '" + log_path + "' are not signed: read it without --key");
   }
   if (with_key == 0) {
     throw InputError("--key", "none of the " + std::to_string(signed_messages) + " signed messages in '" + log_path +
-                                  "' is signed with the key in '" + key_file + "': the wrong key (a run's key is OUT/run.key, beside its recording)");
+                                  "' is signed with the key in '" + key_file +
+                                  "': the wrong key (a run's key is OUT/run.key, beside its recording)");
   }
   if (!found) {
-    throw InputError("--key", "'" + key_file + "' is the key file of run " + run_id_text(*key->run()) + ", and '" + log_path +
-                                  "' holds run " + run_id_text(recorded_run) + ": give that run's key file (OUT/run.key beside its recording)");
+    throw InputError("--key", "'" + key_file + "' is the key file of run " + run_id_text(*key->run()) + ", and '" +
+                                  log_path + "' holds run " + run_id_text(recorded_run) +
+                                  ": give that run's key file (OUT/run.key beside its recording)");
   }
 }
 
@@ -258,14 +268,17 @@ std::unique_ptr<Bus> with_key(std::unique_ptr<Bus> bus, const std::string& key_f
   if (key_file.empty()) {
     counters.authenticated = false;
     if (use != KeyUse::kReader)
-      counters.note("the bus is unauthenticated (no --key): any process on the multicast group can publish to this run "
-                  "(docs/RELIABILITY.md)");
+      counters.note(
+          "the bus is unauthenticated (no --key): any process on the multicast group can publish to this run "
+          "(docs/RELIABILITY.md)");
     return bus;
   }
   const RunKey key = RunKey::read(key_file);
   if (!key.run() && use == KeyUse::kService) {
-    throw InputError("--key", "'" + key_file + "' names no run (a key for many runs): services/launch.sh writes each run its own "
-                              "OUT/run.key; hbirl keygen --run-of '" + key_file + "' FILE makes one by hand");
+    throw InputError("--key", "'" + key_file +
+                                  "' names no run (a key for many runs): services/launch.sh writes each run its own "
+                                  "OUT/run.key; hbirl keygen --run-of '" +
+                                  key_file + "' FILE makes one by hand");
   }
   return std::make_unique<KeyedBus>(std::move(bus), key, counters, use);
 }

@@ -9,8 +9,9 @@ namespace hbirl::services {
 
 LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
     : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
-  subs_.add(bus_, subscribe(bus_, channels::kDetections, counters_,
-                                                 [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kDetections, counters_,
+                      [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
 }
 
 void LabellerService::on_detections(const hbirl::detections_t& m) {
@@ -18,7 +19,8 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
   onion::SceneConfig config;
   config.width = m.width;
   config.validate();
-  if (m.height != config.height()) throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
+  if (m.height != config.height())
+    throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
   std::vector<perception::Detection> found(static_cast<size_t>(m.n));
   for (int i = 0; i < m.n; ++i) {
     auto& d = found[static_cast<size_t>(i)];
@@ -30,14 +32,16 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
         !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
       throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
     }
-    d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper : perception::BlobClass::kOnion;
+    d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper
+                                                           : perception::BlobClass::kOnion;
     d.x = m.x[k];
     d.y = m.y[k];
     d.area = m.area[k];
     d.box = cv::Rect(m.box_x[k], m.box_y[k], m.box_w[k], m.box_h[k]);
     d.dark_share = m.dark_share[k];
   }
-  const std::vector<perception::Observation> obs = perception::label(found, onion::labeller_options(config, uniform_eta_));
+  const std::vector<perception::Observation> obs =
+      perception::label(found, onion::labeller_options(config, uniform_eta_));
   hbirl::observations_t o{};
   same_frame(m, o);
   o.seq = ++seq_;

@@ -10,8 +10,9 @@ LcmBus::LcmBus(const std::string& url) : url_(url), lcm_(url) {
   if (!lcm_.good()) {
     std::string why = "LCM could not start on '" + (url.empty() ? std::string("the default udpm URL") : url) + "'";
     if (url.empty() || url.rfind("udpm://", 0) == 0) {
-      why += " (no multicast route? as root: ip route add 224.0.0.0/4 dev lo; or run inside "
-             "services/launch.sh, which makes a private network namespace)";
+      why +=
+          " (no multicast route? as root: ip route add 224.0.0.0/4 dev lo; or run inside "
+          "services/launch.sh, which makes a private network namespace)";
     }
     throw InputError("bus", why);
   }
@@ -26,8 +27,8 @@ namespace {
 // trip UBSan's vptr check.)
 extern "C" void on_lcm_message(const lcm_recv_buf_t* buffer, const char* channel, void* user) {
   const std::string name(channel);
-  static_cast<const RawHandler*>(user)->operator()(
-      Message{name, static_cast<const std::uint8_t*>(buffer->data), static_cast<int>(buffer->data_size), buffer->recv_utime});
+  static_cast<const RawHandler*>(user)->operator()(Message{name, static_cast<const std::uint8_t*>(buffer->data),
+                                                           static_cast<int>(buffer->data_size), buffer->recv_utime});
 }
 }  // namespace
 
@@ -56,7 +57,7 @@ int LcmBus::handle(int timeout_ms) {
   errno = 0;
   const int r = lcm_.handleTimeout(timeout_ms);
   if (r < 0) return errno == EINTR ? 0 : -1;  // a signal (e.g. SIGTERM) is not the end of the bus
-  return r;  // LCM handles at most one message per call: 1, or 0 on timeout
+  return r;                                   // LCM handles at most one message per call: 1, or 0 on timeout
 }
 
 }  // namespace hbirl::services

@@ -96,9 +96,11 @@ LogBus::Next LogBus::check_next(std::string& why, Header& header) {
   if (std::memcmp(h, kSync, 4) != 0) {
     why = "no event starts at byte " + std::to_string(pos_) + " (no sync word)";
   } else if (channel < 1 || channel > kMaxChannelBytes) {
-    why = where + " states a channel name of " + std::to_string(channel) + " bytes (1 to " + std::to_string(kMaxChannelBytes) + " are read)";
+    why = where + " states a channel name of " + std::to_string(channel) + " bytes (1 to " +
+          std::to_string(kMaxChannelBytes) + " are read)";
   } else if (data < 0 || data > kMaxEventBytes) {
-    why = where + " states " + std::to_string(data) + " bytes of data (at most " + std::to_string(kMaxEventBytes >> 20) + " MB are read)";
+    why = where + " states " + std::to_string(data) + " bytes of data (at most " +
+          std::to_string(kMaxEventBytes >> 20) + " MB are read)";
   }
   if (!why.empty()) {
     back();
@@ -142,7 +144,8 @@ bool LogBus::read_event(const Header& header, bool& wanted) {
   std::FILE* file = in_.get();
   channel_.resize(static_cast<size_t>(header.channel_bytes));
   if (std::fread(channel_.data(), 1, channel_.size(), file) != channel_.size()) return false;
-  wanted = std::any_of(subscriptions_.begin(), subscriptions_.end(), [this](const Subscription& s) { return s.channel->matches(channel_); });
+  wanted = std::any_of(subscriptions_.begin(), subscriptions_.end(),
+                       [this](const Subscription& s) { return s.channel->matches(channel_); });
   // Data nobody listens to is read through when it is small (a seek costs more), else skipped.
   if (wanted || header.data_bytes <= std::int64_t{1} << 20) {
     data_.resize(static_cast<size_t>(header.data_bytes));
@@ -161,7 +164,8 @@ int LogBus::handle(int timeout_ms) {
     Next next = lost_ ? Next::kEnd : check_next(why, header);
     if (next == Next::kDamaged) {
       if (!follow_) throw InputError("--log", "'" + path_ + "' is damaged: " + why);
-      if (++damaged_ <= 20) std::fprintf(stderr, "hbirl: %s: %s: skipped to the next event\n", path_.c_str(), why.c_str());
+      if (++damaged_ <= 20)
+        std::fprintf(stderr, "hbirl: %s: %s: skipped to the next event\n", path_.c_str(), why.c_str());
       ++pos_;
       lost_ = true;
       continue;

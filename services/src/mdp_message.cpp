@@ -52,16 +52,19 @@ void MdpAssembler::forget() {
 }
 
 std::optional<Mdp> MdpAssembler::add(const hbirl::mdp_t& m) {
-  if (m.num_states < 1 || m.num_states > kMaxStates) throw InputError("mdp.num_states", "must be in [1, " + std::to_string(kMaxStates) + "]");
+  if (m.num_states < 1 || m.num_states > kMaxStates)
+    throw InputError("mdp.num_states", "must be in [1, " + std::to_string(kMaxStates) + "]");
   if (m.num_actions < 1 || m.num_actions > kMaxActions) {
     throw InputError("mdp.num_actions", "must be in [1, " + std::to_string(kMaxActions) + "]");
   }
-  if (static_cast<long long>(m.num_states) * m.num_actions > kMaxPairs) throw InputError("mdp.num_actions", "too many state-action pairs");
+  if (static_cast<long long>(m.num_states) * m.num_actions > kMaxPairs)
+    throw InputError("mdp.num_actions", "too many state-action pairs");
   if (m.num_chunks < 1 || m.num_chunks > kMaxChunks || m.chunk < 0 || m.chunk >= m.num_chunks) {
     throw InputError("mdp.chunk", std::to_string(m.chunk) + " of " + std::to_string(m.num_chunks) + " is not a chunk");
   }
   if (!(m.discount >= 0.0 && m.discount < 1.0)) throw InputError("mdp.discount", "must be in [0, 1)");
-  if (m.num_start != (m.chunk == 0 ? m.num_states : 0)) throw InputError("mdp.num_start", "must be num_states in chunk 0, else 0");
+  if (m.num_start != (m.chunk == 0 ? m.num_states : 0))
+    throw InputError("mdp.num_start", "must be num_states in chunk 0, else 0");
   const long long pairs = static_cast<long long>(m.num_states) * m.num_actions;
   for (int i = 0; i < m.num_transitions; ++i) {
     const auto k = static_cast<size_t>(i);
@@ -71,8 +74,8 @@ std::optional<Mdp> MdpAssembler::add(const hbirl::mdp_t& m) {
     }
   }
   const auto digest = static_cast<std::uint64_t>(m.mdp_digest);
-  if (digest != digest_ || m.num_chunks != num_chunks_ || m.num_states != num_states_ || m.num_actions != num_actions_ ||
-      m.discount != discount_) {
+  if (digest != digest_ || m.num_chunks != num_chunks_ || m.num_states != num_states_ ||
+      m.num_actions != num_actions_ || m.discount != discount_) {
     // Another MDP: start over (a half-received one is dropped).
     digest_ = digest;
     num_chunks_ = m.num_chunks;

@@ -94,7 +94,8 @@ int MemoryBus::handle(int timeout_ms) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
     const auto any = [this] {
-      return !connected_ || std::any_of(subscriptions_.begin(), subscriptions_.end(), [](const auto& s) { return !s->queue.empty(); });
+      return !connected_ ||
+             std::any_of(subscriptions_.begin(), subscriptions_.end(), [](const auto& s) { return !s->queue.empty(); });
     };
     if (!any()) ready_.wait_for(lock, std::chrono::milliseconds(std::max(0, timeout_ms)), any);
     if (!connected_) return -1;
@@ -104,7 +105,8 @@ int MemoryBus::handle(int timeout_ms) {
     }
   }
   std::sort(batch.begin(), batch.end(), [](const auto& a, const auto& b) { return a.second.order < b.second.order; });
-  for (auto& [s, q] : batch) s->handler(Message{q.channel, q.data.data(), static_cast<int>(q.data.size()), q.recv_utime});
+  for (auto& [s, q] : batch)
+    s->handler(Message{q.channel, q.data.data(), static_cast<int>(q.data.size()), q.recv_utime});
   return static_cast<int>(batch.size());
 }
 

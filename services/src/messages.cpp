@@ -19,12 +19,14 @@ void validate(const hbirl::observations_t& m) {
   for (int i = 0; i < m.num_context; ++i) {
     const int c = m.context[static_cast<size_t>(i)];
     if (c < 0 || c >= kMaxContexts) {
-      throw InputError("observations.context[" + std::to_string(i) + "]", "is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+      throw InputError("observations.context[" + std::to_string(i) + "]",
+                       "is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
     }
   }
   for (int i = 0; i < m.n; ++i) {
     const int s = m.symbol[static_cast<size_t>(i)];
-    if (s < 0 || s >= m.num_symbols) throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
+    if (s < 0 || s >= m.num_symbols)
+      throw InputError("observations.symbol[" + std::to_string(i) + "]", "is outside the alphabet");
     std::vector<double> eta = m.eta[static_cast<size_t>(i)];
     const std::string wrong = normalise_eta(eta.data(), m.num_sources);
     if (!wrong.empty()) throw InputError("observations.eta[" + std::to_string(i) + "]", wrong);

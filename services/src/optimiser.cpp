@@ -84,8 +84,8 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   if (options.domain) {
     const std::optional<ObservationPrior> stated = options.domain->stated_prior();
     const Mdp& mdp = options.domain->mdp();
-    builder->expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0, mdp.num_states,
-                   mdp.num_actions);
+    builder->expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0,
+                    mdp.num_states, mdp.num_actions);
   }
   builder->limit(options.max_dataset_bytes);
   builder->subscribe(bus, counters);
@@ -101,8 +101,9 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   std::string incomplete;
   const auto check_contradiction = [&builder] {
     if (!builder->contradiction().empty()) {
-      throw RunFailed("the run contradicts itself: " + builder->contradiction() +
-                      " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
+      throw RunFailed(
+          "the run contradicts itself: " + builder->contradiction() +
+          " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
     }
   };
   // Collected until complete; then confirmed: until END_RUN is heard again (or confirm_ms
@@ -148,15 +149,20 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
         last_request = Clock::now();
       }
       const auto quiet = Clock::now() - last_frame;
-      if (builder->run_ended() && quiet > std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
-        incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " + std::to_string(builder->missing_truth()) +
-                     " ground-truth step(s) missing, " + std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
+      if (builder->run_ended() &&
+          quiet >
+              std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
+        incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " +
+                     std::to_string(builder->missing_truth()) + " ground-truth step(s) missing, " +
+                     std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
         const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
         if (!options.allow_incomplete) {
-          throw RunFailed("the run is incomplete: " + incomplete + ", and nothing came for " + waited +
-                          " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
+          throw RunFailed(
+              "the run is incomplete: " + incomplete + ", and nothing came for " + waited +
+              " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
         }
-        say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete + "), as allowed");
+        say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete +
+            "), as allowed");
         break;
       }
     }
@@ -164,7 +170,8 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
     if (!incomplete.empty() || ended) break;  // learning from what came, as allowed (or all there is)
     const std::int64_t heard = builder->end_runs_heard();
     const auto until = Clock::now() + std::chrono::milliseconds(options.confirm_ms);
-    while (!ended && builder->complete() && builder->end_runs_heard() == heard && Clock::now() < until && !(stop && stop())) {
+    while (!ended && builder->complete() && builder->end_runs_heard() == heard && Clock::now() < until &&
+           !(stop && stop())) {
       if (options.beat) options.beat("collecting");
       ended = bus.handle(50) < 0;
       check_contradiction();
@@ -202,27 +209,28 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const auto start = Clock::now();
   const std::int64_t utime = result.data.last_utime;
   try {
-    result.learned = learn_from_dataset(*domain, result.data, options.learning, executor,
-                                        [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha,
-                                            const EStepResult& estep, const LearnedEta* eta) {
-                                          if (stop && stop()) throw Stopped();  // also when computing alone
-                                          if (options.beat) options.beat("learning");
-                                          publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep, eta);
-                                          hbirl::em_progress_t p{};
-                                          p.utime = utime;
-                                          p.restart = 0;
-                                          p.iteration = iteration;
-                                          p.log_likelihood = ll;
-                                          p.prior_strength = alpha.learn && alpha.update == AlphaUpdate::kPosterior ? alpha.strength : 0.0;
-                                          p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
-                                          p.num_features = static_cast<std::int32_t>(theta.size());
-                                          p.theta = lcm_vector(theta);
-                                          const auto s = executor->stats();
-                                          p.retries = static_cast<std::int32_t>(s.retried_blocks);
-                                          p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
-                                          p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-                                          publish(bus, channels::kEmProgress, p, counters);
-                                        });
+    result.learned = learn_from_dataset(
+        *domain, result.data, options.learning, executor,
+        [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha,
+            const EStepResult& estep, const LearnedEta* eta) {
+          if (stop && stop()) throw Stopped();  // also when computing alone
+          if (options.beat) options.beat("learning");
+          publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep, eta);
+          hbirl::em_progress_t p{};
+          p.utime = utime;
+          p.restart = 0;
+          p.iteration = iteration;
+          p.log_likelihood = ll;
+          p.prior_strength = alpha.learn && alpha.update == AlphaUpdate::kPosterior ? alpha.strength : 0.0;
+          p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
+          p.num_features = static_cast<std::int32_t>(theta.size());
+          p.theta = lcm_vector(theta);
+          const auto s = executor->stats();
+          p.retries = static_cast<std::int32_t>(s.retried_blocks);
+          p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
+          p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+          publish(bus, channels::kEmProgress, p, counters);
+        });
   } catch (const Stopped&) {
     say("stopped while learning");
     return std::nullopt;
@@ -253,14 +261,16 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
 std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<const Domain> given) {
   if (given) {
     if (!data.domain.empty() && data.domain != given->name()) {
-      throw InputError("episode_marker.domain", "'" + data.domain + "' is not the domain learned on ('" + given->name() + "')");
+      throw InputError("episode_marker.domain",
+                       "'" + data.domain + "' is not the domain learned on ('" + given->name() + "')");
     }
     return given;
   }
   if (data.domain.empty()) throw InputError("episode_marker.domain", "no episode markers: the domain is unknown");
   std::shared_ptr<const Domain> builtin = builtin_domain(data.domain);
   if (!builtin) {
-    throw InputError("episode_marker.domain", "'" + data.domain + "' is not a built-in domain: give its domain file (--domain FILE)");
+    throw InputError("episode_marker.domain",
+                     "'" + data.domain + "' is not a built-in domain: give its domain file (--domain FILE)");
   }
   return builtin;
 }
@@ -289,9 +299,10 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
   OptimiserResult result;
   result.missing_frames = builder.missing_frames();
   if (!builder.complete()) {
-    result.incomplete = std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
-                        ", " + std::to_string(builder.unfinished_episodes()) + " episode(s) without their end, " +
-                        std::to_string(builder.missing_frames()) + " frame(s) missing";
+    result.incomplete =
+        std::string(builder.run_ended() ? "the run ended" : "the recording has no END_RUN (the run was cut short)") +
+        ", " + std::to_string(builder.unfinished_episodes()) + " episode(s) without their end, " +
+        std::to_string(builder.missing_frames()) + " frame(s) missing";
   }
   result.data = builder.take();
   // The rest of the recording (what the live optimiser heard while it learned) is read for
@@ -304,10 +315,11 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters) {
                                   " messages signed with a run key: give it (launch.sh wrote OUT/run.key)");
   }
   if (counters.other_run > 0 && !RunKey::read(run.key_file).run()) {
-    throw InputError("--log", "'" + run.path + "' holds messages of more than one run signed with this key (" +
-                                  std::to_string(counters.other_run) + " not of the first run " +
-                                  run_id_text(static_cast<const KeyedBus&>(*bus).run()) +
-                                  "; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
+    throw InputError(
+        "--log", "'" + run.path + "' holds messages of more than one run signed with this key (" +
+                     std::to_string(counters.other_run) + " not of the first run " +
+                     run_id_text(static_cast<const KeyedBus&>(*bus).run()) +
+                     "; a replay recorded with it?): give the key file of the run to read (OUT/run.key names its run)");
   }
   if (!builder.contradiction().empty()) {
     throw InputError("--log", "'" + run.path + "': the run contradicts itself: " + builder.contradiction() +

@@ -17,8 +17,8 @@ using Clock = std::chrono::steady_clock;
 // bookkeeping of a map node): what --max-dataset-mb counts.
 std::int64_t held_bytes(const hbirl::trajectory_t& m) {
   return 256 + 4 * static_cast<std::int64_t>(m.step_begin.size()) + 4 * static_cast<std::int64_t>(m.symbol.size()) +
-         8 * static_cast<std::int64_t>(m.n) * std::max(1, m.num_sources) + 8 * static_cast<std::int64_t>(m.weights.size()) +
-         4 * static_cast<std::int64_t>(m.context.size());
+         8 * static_cast<std::int64_t>(m.n) * std::max(1, m.num_sources) +
+         8 * static_cast<std::int64_t>(m.weights.size()) + 4 * static_cast<std::int64_t>(m.context.size());
 }
 
 // Blocks being received at once: a sender making up digests cannot make the list grow.
@@ -31,32 +31,36 @@ constexpr auto kQuietBeforeServing = std::chrono::milliseconds(200);
 
 SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
     : bus_(bus), id_(std::move(id)), counters_(counters), max_dataset_bytes_(max_dataset_bytes) {
-  subs_.add(bus_, subscribe(bus_, channels::kMdp, counters_,
-                                          [this](const hbirl::mdp_t& m, const Message& raw) {
-                                            bus_.sign_for_run(raw.run);  // a worker of any run answers each in its own
-                                            on_mdp(m);
-                                          },
-                                          10000));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kMdp, counters_,
+                      [this](const hbirl::mdp_t& m, const Message& raw) {
+                        bus_.sign_for_run(raw.run);  // a worker of any run answers each in its own
+                        on_mdp(m);
+                      },
+                      10000));
   // A whole share may arrive between two handle() calls; only the newest requests matter.
-  subs_.add(bus_, subscribe(bus_, channels::trajectory_channel(id_), counters_,
-                                                 [this](const hbirl::trajectory_t& m, const Message& raw) {
-                                                   bus_.sign_for_run(raw.run);
-                                                   on_trajectory(m, raw.size);
-                                                 },
-                                                 100000));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::trajectory_channel(id_), counters_,
+                      [this](const hbirl::trajectory_t& m, const Message& raw) {
+                        bus_.sign_for_run(raw.run);
+                        on_trajectory(m, raw.size);
+                      },
+                      100000));
   // A worker of every run of a shared key that starts after an optimiser sent its MDP: it
   // answers the optimiser it hears (its heartbeats then reach it, and it sends the MDP).
-  subs_.add(bus_, subscribe(bus_, channels::kStatus, counters_,
-                                                     [this](const hbirl::service_status_t& m, const Message& raw) {
-                                                       if (m.service == "optimiser" && !mdp_ && request_run_ == 0) bus_.sign_for_run(raw.run);
-                                                     },
-                                                     100));
-  subs_.add(bus_, subscribe(bus_, channels::kEStepRequest, counters_,
-                                                    [this](const hbirl::estep_request_t& m, const Message& raw) {
-                                                      bus_.sign_for_run(raw.run);
-                                                      on_request(m, raw.run);
-                                                    },
-                                                    8));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kStatus, counters_,
+                      [this](const hbirl::service_status_t& m, const Message& raw) {
+                        if (m.service == "optimiser" && !mdp_ && request_run_ == 0) bus_.sign_for_run(raw.run);
+                      },
+                      100));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kEStepRequest, counters_,
+                      [this](const hbirl::estep_request_t& m, const Message& raw) {
+                        bus_.sign_for_run(raw.run);
+                        on_request(m, raw.run);
+                      },
+                      8));
 }
 
 int SamplerWorker::handle(int timeout_ms) {
@@ -124,20 +128,24 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
                                                   std::to_string(ObservationEStep::kBlockSize));
   }
   if (m.num_trajectories < 1 || m.index < 0 || m.index >= m.num_trajectories) {
-    throw InputError("trajectory.index", std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
+    throw InputError("trajectory.index",
+                     std::to_string(m.index) + " is not in [0, " + std::to_string(m.num_trajectories) + ")");
   }
   last_trajectory_ = Clock::now();  // (after the checks: junk must not hold up serve())
   const auto digest = static_cast<std::uint64_t>(m.block_digest);
   if (held_.count(digest)) return;  // have it already
   const int block = m.index / m.block_size;
   const int size = std::min(m.block_size, m.num_trajectories - block * m.block_size);
-  if (!incoming_.count(digest) && incoming_.size() >= kMaxIncomingBlocks) {  // made-up digests: forget one (the smallest digest)
+  if (!incoming_.count(digest) &&
+      incoming_.size() >= kMaxIncomingBlocks) {  // made-up digests: forget one (the smallest digest)
     release(incoming_.begin()->first);
     incoming_.erase(incoming_.begin());
   }
   Incoming& in = incoming_[digest];
   if (in.size == 0) in.size = size;
-  if (in.size != size) throw InputError("trajectory.num_trajectories", "puts its block at another size than the block's other trajectories");
+  if (in.size != size)
+    throw InputError("trajectory.num_trajectories",
+                     "puts its block at another size than the block's other trajectories");
   const int position = m.index - block * m.block_size;
   if (in.trajectories.count(position)) return;  // a repeat
   const std::int64_t need = held_bytes(m);
@@ -146,8 +154,8 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
     release(digest);
     incoming_.erase(digest);
     status_soon();
-    throw InputError("trajectory", "the blocks would take more than --max-dataset-mb " + std::to_string(max_dataset_bytes_ >> 20) +
-                                       " MB: this block is dropped");
+    throw InputError("trajectory", "the blocks would take more than --max-dataset-mb " +
+                                       std::to_string(max_dataset_bytes_ >> 20) + " MB: this block is dropped");
   }
   in.trajectories.emplace(position, from_message(m));
   bytes_ += need;
@@ -211,14 +219,17 @@ void SamplerWorker::release(std::uint64_t digest) {
 
 void SamplerWorker::check_request(const hbirl::estep_request_t& m) const {
   const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
-  if (m.engine != "exact") throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
+  if (m.engine != "exact")
+    throw InputError("estep_request.engine", "'" + m.engine + "' is not an engine this worker has");
   if (m.num_pairs != P) throw InputError("estep_request.num_pairs", "is not the MDP's |S||A| = " + std::to_string(P));
-  if (m.block_size != ObservationEStep::kBlockSize) throw InputError("estep_request.block_size", "differs from this worker's");
+  if (m.block_size != ObservationEStep::kBlockSize)
+    throw InputError("estep_request.block_size", "differs from this worker's");
   if (m.num_trajectories < 1 || m.num_blocks != (m.num_trajectories + m.block_size - 1) / m.block_size) {
     throw InputError("estep_request.num_blocks", "is not the number of blocks of num_trajectories");
   }
   if (W < 1 || E < 0) throw InputError("estep_request.num_symbols", "must be >= 1 (and num_confounders >= 0)");
-  if (m.watch < -1 || m.watch >= m.num_trajectories) throw InputError("estep_request.watch", "is not a trajectory of the data set");
+  if (m.watch < -1 || m.watch >= m.num_trajectories)
+    throw InputError("estep_request.watch", "is not a trajectory of the data set");
   if (m.num_contexts < 0) throw InputError("estep_request.num_contexts", "is negative");
   if (m.num_contexts > 0 && (E < 1 || m.num_sources != 1 + E)) {
     throw InputError("estep_request.num_sources", "learned eta needs 1 + num_confounders sources and a confounder");
@@ -277,7 +288,8 @@ void SamplerWorker::serve(bool all_here_only) {
     if (!blocks.empty() && static_cast<int>(held_.at(blocks.back().second).size()) != ObservationEStep::kBlockSize) {
       throw InputError("estep_request.block_digest", "puts a short block before others");
     }
-    if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b && m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
+    if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b &&
+        m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
       watch = static_cast<int>(trajectories) + m.watch % ObservationEStep::kBlockSize;
     }
     blocks.emplace_back(b, digest);
@@ -292,7 +304,8 @@ void SamplerWorker::serve(bool all_here_only) {
         for (int w : t.symbols) {
           if (w >= W) throw InputError("estep_request.num_symbols", "is smaller than the blocks' alphabet");
         }
-        if (t.num_observations() > 0 && t.eta.cols() != 1 + E) throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
+        if (t.num_observations() > 0 && t.eta.cols() != 1 + E)
+          throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
         data.push_back(t);
       }
     }
@@ -331,16 +344,19 @@ void SamplerWorker::serve(bool all_here_only) {
                                                          std::to_string(estep_->num_contexts()) + " contexts");
     }
     eta = eigen_rows<RowMatrix>(m.context_eta, m.num_sources);
-    if (!eta->allFinite() || (eta->array() < 0).any()) throw InputError("estep_request.context_eta", "must be finite and >= 0");
+    if (!eta->allFinite() || (eta->array() < 0).any())
+      throw InputError("estep_request.context_eta", "must be finite and >= 0");
   }
   // One block at a time, each answer sent as soon as it is ready.
   for (const int block : ready) {
     pending_.erase(block);
     const auto local = std::find_if(blocks.begin(), blocks.end(), [block](const auto& x) { return x.first == block; });
     const auto start = Clock::now();
-    const EStepStatistics s = estep_->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed),
-                                                       {static_cast<int>(local - blocks.begin())}, 1, eta ? &*eta : nullptr)
-                                  .front();
+    const EStepStatistics s =
+        estep_
+            ->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed),
+                               {static_cast<int>(local - blocks.begin())}, 1, eta ? &*eta : nullptr)
+            .front();
     hbirl::estep_result_t r{};
     r.utime = m.utime;
     r.request_id = m.request_id;

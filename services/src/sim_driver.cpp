@@ -53,8 +53,9 @@ SimDriver::SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulati
                      Counters& counters)
     : bus_(bus), options_(o), counters_(counters), domain_(std::move(domain_name)), run_(std::move(run)) {
   if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
-  subs_.add(bus_, subscribe(bus_, channels::kFrameRequest, counters_,
-                                                    [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
+  subs_.add(bus_, subscribe(
+                      bus_, channels::kFrameRequest, counters_,
+                      [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
 }
 
 SimDriver::~SimDriver() = default;
@@ -179,7 +180,8 @@ hbirl::episode_marker_t SimDriver::end_marker(int id) {
 }
 
 void SimDriver::republish_end_markers() {
-  for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
+  for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id)
+    publish(bus_, channels::kEpisode, end_marker(id), counters_);
   publish(bus_, channels::kEpisode, end_of_run(), counters_);
 }
 
@@ -190,7 +192,8 @@ hbirl::episode_marker_t SimDriver::end_of_run() {
 }
 
 bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
-                      const std::function<void(const std::string&)>& beat, const std::function<void(const std::string&)>& log) {
+                      const std::function<void(const std::string&)>& beat,
+                      const std::function<void(const std::string&)>& log) {
   const auto say = [&log](const std::string& s) {
     if (log) log(s);
   };
@@ -202,16 +205,17 @@ bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
   for (const auto& l : listeners()) waiting.insert(l);
   bool learned = false;
   Subscriptions subs;
-  subs.add(bus_, subscribe(bus_, channels::kStatus, counters_,
-                                                    [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); },
-                                                    1000));
-  subs.add(bus_, subscribe(bus_, channels::kReward, counters_,
-                                            [&learned, this](const hbirl::reward_t& r, const Message&) {
-                                              // Another run's optimiser (another domain) does not end this one.
-                                              if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");
-                                              learned = learned || r.final;
-                                            }));
-  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(start_delay_s));
+  subs.add(bus_, subscribe(
+                     bus_, channels::kStatus, counters_,
+                     [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); }, 1000));
+  subs.add(bus_,
+           subscribe(bus_, channels::kReward, counters_, [&learned, this](const hbirl::reward_t& r, const Message&) {
+             // Another run's optimiser (another domain) does not end this one.
+             if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");
+             learned = learned || r.final;
+           }));
+  const auto until =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(start_delay_s));
   while (!waiting.empty() && Clock::now() < until && !(stop && stop())) {
     bus_.handle(50);
     tick("starting");
@@ -225,7 +229,8 @@ bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
     bus_.handle(0);
     tick("running");
   });
-  say(std::string(finished ? "run published" : "stopped") + "; " + std::to_string(counters_.messages_out) + " messages published");
+  say(std::string(finished ? "run published" : "stopped") + "; " + std::to_string(counters_.messages_out) +
+      " messages published");
   // Then frames lost on the way are sent again, and the end markers repeated in case they
   // were lost, until the optimiser has published its reward.
   auto next_markers = Clock::now() + std::chrono::seconds(1);

@@ -19,7 +19,8 @@ WorkerRoster::Heard WorkerRoster::hear(const hbirl::service_status_t& m, const s
     // Heartbeats under ever new names: forget the longest silent of those that never
     // answered (a worker that did, busy computing now, is not pushed out by made-up names).
     const auto older = [](const auto& a, const auto& b) {
-      return std::pair(a.second.ever_answered, a.second.last_seen) < std::pair(b.second.ever_answered, b.second.last_seen);
+      return std::pair(a.second.ever_answered, a.second.last_seen) <
+             std::pair(b.second.ever_answered, b.second.last_seen);
     };
     workers_.erase(std::min_element(workers_.begin(), workers_.end(), older));
   }

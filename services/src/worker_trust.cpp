@@ -6,7 +6,8 @@
 
 namespace hbirl::services {
 
-std::vector<int> SpotChecks::choose(const std::vector<int>& todo, const std::vector<std::string>& assigned, WorkerRoster& roster) {
+std::vector<int> SpotChecks::choose(const std::vector<int>& todo, const std::vector<std::string>& assigned,
+                                    WorkerRoster& roster) {
   std::map<std::string, std::vector<int>> unchecked;  // worker -> its blocks
   for (int b : todo) {
     const std::string& w = assigned[static_cast<size_t>(b)];

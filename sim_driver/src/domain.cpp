@@ -6,17 +6,20 @@
 
 namespace hbirl {
 
-double Simulation::render(int, int, int, cv::Mat&) const { throw InputError("domain", "this simulation has no camera"); }
+double Simulation::render(int, int, int, cv::Mat&) const {
+  throw InputError("domain", "this simulation has no camera");
+}
 
 const ObservedTrajectory& Simulation::observed(int) const {
   throw InputError("domain", "this simulation's frames are camera images, not observations");
 }
 
-Eigen::MatrixXd Domain::subject_prior(const std::vector<Trajectory>& truth, const std::vector<ObservedTrajectory>& observed,
-                                      int symbols) const {
+Eigen::MatrixXd Domain::subject_prior(const std::vector<Trajectory>& truth,
+                                      const std::vector<ObservedTrajectory>& observed, int symbols) const {
   if (observed.empty()) throw InputError("controlled run", "no controlled episodes: no subject prior");
   if (num_symbols() > 0 && symbols != num_symbols()) {
-    throw InputError("observations.num_symbols", std::to_string(symbols) + " differs from the domain's " + std::to_string(num_symbols()));
+    throw InputError("observations.num_symbols",
+                     std::to_string(symbols) + " differs from the domain's " + std::to_string(num_symbols()));
   }
   return controlled_run_prior(mdp(), truth, observed, symbols, controlled_prior_options());
 }
@@ -57,7 +60,8 @@ int gridworld_size_of(const std::string& spec) {
 
 std::unique_ptr<Domain> gridworld_of_size(int size) {
   if (size < 2 || size > kMaxGridworldSize) {
-    throw InputError("domain", "a Gridworld has 2 to " + std::to_string(kMaxGridworldSize) + " cells a side, not " + std::to_string(size));
+    throw InputError("domain", "a Gridworld has 2 to " + std::to_string(kMaxGridworldSize) + " cells a side, not " +
+                                   std::to_string(size));
   }
   return make_gridworld_domain(size);
 }
@@ -72,7 +76,8 @@ std::unique_ptr<Domain> builtin_domain(const std::string& name) {
   return nullptr;
 }
 
-std::unique_ptr<Domain> open_domain(const std::string& spec, const DomainOptions& options, std::vector<std::string>* warnings) {
+std::unique_ptr<Domain> open_domain(const std::string& spec, const DomainOptions& options,
+                                    std::vector<std::string>* warnings) {
   if (spec == "gridworld") return gridworld_of_size(options.gridworld_size);
   if (auto domain = builtin_domain(spec)) return domain;
   if (spec.empty()) throw InputError("domain", "is empty: give onion, gridworld or a domain file");

@@ -6,7 +6,7 @@
 
 namespace hbirl {
 
-std::unique_ptr<Domain> make_onion_domain();             // onion_domain.cpp
+std::unique_ptr<Domain> make_onion_domain();              // onion_domain.cpp
 std::unique_ptr<Domain> make_gridworld_domain(int size);  // gridworld_domain.cpp
 
 // A simulated sensor's run (domain.cpp): the observations of every episode, one frame per step.

@@ -57,7 +57,8 @@ class SensorSimulation final : public SensorRun {
     alone.per_step = s.observations_per_step;
     alone.occlusion = s.occlusion;
     alone.eta = EtaKind::kSubject;
-    GridworldObservations run = observe_gridworld(mdp, controlled, s.subject_o, Eigen::MatrixXd(0, num_symbols), alone, sensor_rng);
+    GridworldObservations run =
+        observe_gridworld(mdp, controlled, s.subject_o, Eigen::MatrixXd(0, num_symbols), alone, sensor_rng);
     subject_alone(run.trajectories, num_sources);  // the same sources as the demonstrations
     GridworldObservationOptions watch;
     watch.confounders = num_sources - 1;
@@ -88,7 +89,8 @@ class FileDomain final : public Domain {
     n.symbols = spec_.symbol_names.empty() ? numbered("symbol ", spec_.num_symbols()) : spec_.symbol_names;
     n.sources = spec_.source_names;
     if (n.sources.empty()) n.sources.push_back("subject (expert)");
-    for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e) n.sources.push_back("element " + std::to_string(e));
+    for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e)
+      n.sources.push_back("element " + std::to_string(e));
     n.sources.resize(static_cast<size_t>(std::max(num_sources, 1)));
     return n;
   }
@@ -107,7 +109,8 @@ class FileDomain final : public Domain {
   }
 
   std::unique_ptr<Simulation> simulate(const SimulationOptions& options) const override {
-    if (!spec_.sensor) throw InputError("domain", "'" + spec_.name + "' has no \"sensor\" section: nothing to simulate");
+    if (!spec_.sensor)
+      throw InputError("domain", "'" + spec_.name + "' has no \"sensor\" section: nothing to simulate");
     return std::make_unique<SensorSimulation>(spec_, options.seed);
   }
 
@@ -125,7 +128,8 @@ std::unique_ptr<Domain> file_domain(const std::string& path, std::vector<std::st
     throw InputError(e.field().empty() ? path : path + ": " + e.field(), e.message());
   }
   if (builtin_domain(spec.name)) {
-    throw InputError(path + ": name", "'" + spec.name + "' is a built-in domain's name; give the file another \"name\"");
+    throw InputError(path + ": name",
+                     "'" + spec.name + "' is a built-in domain's name; give the file another \"name\"");
   }
   return std::make_unique<FileDomain>(std::move(spec));
 }

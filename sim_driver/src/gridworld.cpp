@@ -63,12 +63,10 @@ std::vector<std::string> gridworld_state_names(int size) {
 
 std::vector<std::string> gridworld_action_names() { return {"up", "down", "left", "right"}; }
 
-std::vector<std::string> gridworld_feature_names() {
-  return {"top_left", "top_right", "bottom_left", "bottom_right"};
-}
+std::vector<std::string> gridworld_feature_names() { return {"top_left", "top_right", "bottom_left", "bottom_right"}; }
 
-std::vector<Trajectory> soft_expert_demonstration(const Mdp& mdp, const Eigen::VectorXd& weights,
-                                                  int num_trajectories, int length, Rng& rng) {
+std::vector<Trajectory> soft_expert_demonstration(const Mdp& mdp, const Eigen::VectorXd& weights, int num_trajectories,
+                                                  int length, Rng& rng) {
   const SoftSolution expert = soft_value_iteration(mdp, mdp.reward(weights));
   if (!expert.converged) throw std::runtime_error("soft value iteration did not converge");
   std::vector<Trajectory> trajectories;
@@ -78,8 +76,7 @@ std::vector<Trajectory> soft_expert_demonstration(const Mdp& mdp, const Eigen::V
   return trajectories;
 }
 
-GridworldTask make_gridworld_task(const GridworldOptions& options, int num_trajectories,
-                                  int length, Rng& rng) {
+GridworldTask make_gridworld_task(const GridworldOptions& options, int num_trajectories, int length, Rng& rng) {
   GridworldTask task;
   task.mdp = make_gridworld(options);
   task.goal = rng.uniform_int(4);

@@ -35,19 +35,22 @@ class GridworldSimulation final : public SensorRun {
     alone.confounders = 0;
     alone.per_step = g.per_step;
     alone.eta = EtaKind::kSubject;
-    GridworldObservations run = observe_gridworld(task.mdp, controlled, subject_o, Eigen::MatrixXd(0, 4), alone, obs_rng);
+    GridworldObservations run =
+        observe_gridworld(task.mdp, controlled, subject_o, Eigen::MatrixXd(0, 4), alone, obs_rng);
     subject_alone(run.trajectories, num_sources);  // the same sources as the demonstrations
     GridworldObservationOptions observe;
     observe.confounders = g.confounders;
     observe.per_step = g.per_step;
     observe.eta = g.eta;
-    GridworldObservations demonstrations = observe_gridworld(task.mdp, task.trajectories, subject_o, confounder_o, observe, obs_rng);
+    GridworldObservations demonstrations =
+        observe_gridworld(task.mdp, task.trajectories, subject_o, confounder_o, observe, obs_rng);
     for (auto& t : demonstrations.trajectories) run.trajectories.push_back(std::move(t));
     frames_per_step = 1;
     step_seconds = g.step_seconds;
     true_weights = task.true_weights;
     // No terminal states: every trajectory is cut off.
-    add_episodes(controlled, task.trajectories, std::move(run.trajectories), std::vector<char>(controlled.size() + task.trajectories.size(), 0));
+    add_episodes(controlled, task.trajectories, std::move(run.trajectories),
+                 std::vector<char>(controlled.size() + task.trajectories.size(), 0));
   }
 };
 

@@ -46,8 +46,9 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
       const bool occluded = options.occlusion > 0.0 && rng.uniform() < options.occlusion;
       for (int i = 0; i < (occluded ? 0 : options.per_step); ++i) {
         const int z = rng.uniform_int(sources);
-        observed.symbols.push_back(z == 0 ? rng.categorical(subject_o.row(mdp.pair(step.state, step.action)).transpose())
-                                          : rng.categorical(confounder_o.row(z - 1).transpose()));
+        observed.symbols.push_back(z == 0
+                                       ? rng.categorical(subject_o.row(mdp.pair(step.state, step.action)).transpose())
+                                       : rng.categorical(confounder_o.row(z - 1).transpose()));
         truth.push_back(z);
       }
       observed.step_begin.push_back(static_cast<int>(observed.symbols.size()));

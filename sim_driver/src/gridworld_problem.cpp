@@ -12,7 +12,8 @@ namespace {
 
 void check_range(const char* name, double value, double low, double high) {
   if (!(value >= low && value <= high)) {
-    throw InputError(name, std::to_string(value) + " is not in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
+    throw InputError(name,
+                     std::to_string(value) + " is not in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
   }
 }
 
@@ -30,7 +31,8 @@ void check(const GridworldProblemOptions& o) {
   check_range("labeller_accuracy", o.labeller.accuracy, 0.0, 1.0);
   check_range("controlled", o.controlled, 1, 100000);
   // The demonstrations are held in memory: 10^8 steps is already ~2 GB of steps and their observations.
-  if (static_cast<double>(o.trajectories) * o.length > 1e8) throw InputError("trajectories", "trajectories * length is more than 10^8 steps");
+  if (static_cast<double>(o.trajectories) * o.length > 1e8)
+    throw InputError("trajectories", "trajectories * length is more than 10^8 steps");
 }
 
 // The demonstrations watched by the paper's Gridworld sensor with |E| elements, eta from
@@ -45,7 +47,8 @@ void watch_gridworld(const GridworldProblemOptions& o, const GridworldTask& task
   options.per_step = o.per_step;
   GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject_o, elements, options, rng);
   assign_labeller_eta(observed, sources, o.labeller, rng);
-  const std::vector<Trajectory> controlled = soft_expert_demonstration(task.mdp, task.true_weights, o.controlled, o.length, rng);
+  const std::vector<Trajectory> controlled =
+      soft_expert_demonstration(task.mdp, task.true_weights, o.controlled, o.length, rng);
   options.confounders = 0;
   options.eta = EtaKind::kTrue;
   GridworldObservations alone = observe_gridworld(task.mdp, controlled, subject_o, Eigen::MatrixXd(0, 4), options, rng);

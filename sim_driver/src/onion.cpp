@@ -18,17 +18,22 @@ State next_state(const State& s, int action, int inspected) {
     case kInspect:
       if (s.onion == kGripped && s.gripper == kAtInspection && s.quality == kUnknown) n.quality = inspected;
       break;
-    case kMoveToConveyor: n.gripper = kAtConveyor; break;
-    case kMoveToInspection: n.gripper = kAtInspection; break;
-    case kMoveToBin: n.gripper = kAtBin; break;
-    default: throw InputError("action", "unknown onion action " + std::to_string(action));
+    case kMoveToConveyor:
+      n.gripper = kAtConveyor;
+      break;
+    case kMoveToInspection:
+      n.gripper = kAtInspection;
+      break;
+    case kMoveToBin:
+      n.gripper = kAtBin;
+      break;
+    default:
+      throw InputError("action", "unknown onion action " + std::to_string(action));
   }
   return n;
 }
 
-bool is_terminal(const State& s) {
-  return s.onion == kInBin || (s.onion == kOnConveyor && s.quality != kUnknown);
-}
+bool is_terminal(const State& s) { return s.onion == kInBin || (s.onion == kOnConveyor && s.quality != kUnknown); }
 
 Mdp make_onion_mdp(const OnionOptions& options) {
   if (!(options.blemished > 0.0 && options.blemished < 1.0)) throw InputError("blemished", "must be in (0, 1)");

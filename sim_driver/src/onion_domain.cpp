@@ -73,7 +73,8 @@ class OnionDomain final : public Domain {
     n.actions = onion::action_names();
     n.features = onion::feature_names();
     for (int r = 0; r < perception::kRegionRows; ++r) {
-      for (int c = 0; c < perception::kRegionColumns; ++c) n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
+      for (int c = 0; c < perception::kRegionColumns; ++c)
+        n.symbols.push_back("R" + std::to_string(r + 1) + "C" + std::to_string(c + 1));
     }
     n.symbols.push_back("bright onion");
     n.symbols.push_back("dark onion");
@@ -81,7 +82,8 @@ class OnionDomain final : public Domain {
     n.sources.resize(static_cast<size_t>(std::max(num_sources, 1)));
     for (int e = 4; e < num_sources; ++e) n.sources[static_cast<size_t>(e)] = "element " + std::to_string(e);
     // The labeller's rules (perception/labeller.hpp): the gripper rule per size ratio, then the onion rules.
-    for (int k = 0; k < perception::kGripperRatioRules; ++k) n.contexts.push_back("gripper, size ratio " + std::to_string(5 * (k + 1)) + "%");
+    for (int k = 0; k < perception::kGripperRatioRules; ++k)
+      n.contexts.push_back("gripper, size ratio " + std::to_string(5 * (k + 1)) + "%");
     n.contexts.push_back("onion near the gripper");
     n.contexts.push_back("large onion");
     n.contexts.push_back("small onion");

@@ -36,7 +36,7 @@ const cv::Scalar kMirror(214, 206, 198);
 // Where things are (fractions of width / height).
 constexpr double kGripperX[3] = {0.24, 0.50, 0.82};  // at the conveyor, inspection, bin
 constexpr double kGripperY[3] = {0.70, 0.45, 0.60};
-constexpr double kHoldBelow = 0.055;                  // a gripped onion's centre below the gripper's
+constexpr double kHoldBelow = 0.055;  // a gripped onion's centre below the gripper's
 constexpr double kBeltTop = 0.80, kBeltBottom = 0.90, kBeltEnd = 0.58;
 constexpr double kBinLeft = 0.70, kBinRight = 0.92, kBinTop = 0.70, kBinBottom = 0.95;
 constexpr double kMirrorLeft = 0.32, kMirrorRight = 0.68, kMirrorTop = 0.03, kMirrorBottom = 0.27;
@@ -79,8 +79,9 @@ SceneConfig SceneConfig::parse(const std::string& elements, const std::string& f
     } else if (item == "mirror") {
       c.mirror = true;
     } else {
-      throw InputError(field, "unknown element '" + item +
-                                  "' (expected controlled, all, or a list of blue-shirt, other-onions, foreground, mirror)");
+      throw InputError(field,
+                       "unknown element '" + item +
+                           "' (expected controlled, all, or a list of blue-shirt, other-onions, foreground, mirror)");
     }
   }
   return c;
@@ -105,11 +106,13 @@ void SceneConfig::validate() const {
   if (width < 160 || width > 4096) throw InputError("width", "must be between 160 and 4096 pixels");
   if (fps < 1 || fps > 240) throw InputError("fps", "must be between 1 and 240");
   if (!(step_seconds > 0.0 && step_seconds <= 60.0)) throw InputError("step_seconds", "must be in (0, 60]");
-  if (!(foreground_share >= 0.0 && foreground_share <= 0.95)) throw InputError("foreground_share", "must be in [0, 0.95]");
+  if (!(foreground_share >= 0.0 && foreground_share <= 0.95))
+    throw InputError("foreground_share", "must be in [0, 0.95]");
 }
 
 GripperSize gripper_size(const SceneConfig& config) {
-  return {static_cast<int>(std::lround(kGripperW * config.width)), static_cast<int>(std::lround(kGripperH * config.height()))};
+  return {static_cast<int>(std::lround(kGripperW * config.width)),
+          static_cast<int>(std::lround(kGripperH * config.height()))};
 }
 
 double onion_area(const SceneConfig& config) {
@@ -136,7 +139,8 @@ OnionScene::OnionScene(const SceneConfig& config, std::uint64_t seed) : config_(
   occlusion_period_ = rng.uniform(16.0, 24.0);
   occlusion_phase_ = rng.uniform(0.0, occlusion_period_);
   // In front for stay + one walk (half of each) of every period.
-  if (config_.foreground_share > 0.0) occlusion_stay_ = std::max(0.0, config_.foreground_share * occlusion_period_ - kOcclusionWalk);
+  if (config_.foreground_share > 0.0)
+    occlusion_stay_ = std::max(0.0, config_.foreground_share * occlusion_period_ - kOcclusionWalk);
   background_ = cv::Mat(config_.height(), config_.width, CV_8UC3);
   draw_background(background_);
 }
@@ -150,19 +154,19 @@ void OnionScene::draw_background(cv::Mat& img) const {
   img.setTo(kWall);
   cv::rectangle(img, cv::Point(0, static_cast<int>(0.62 * H)), cv::Point(W, H), kFloor, cv::FILLED);
   // The conveyor belt with its rollers.
-  cv::rectangle(img, cv::Point(0, static_cast<int>(kBeltTop * H)), cv::Point(static_cast<int>(kBeltEnd * W), static_cast<int>(kBeltBottom * H)),
-                kBelt, cv::FILLED);
+  cv::rectangle(img, cv::Point(0, static_cast<int>(kBeltTop * H)),
+                cv::Point(static_cast<int>(kBeltEnd * W), static_cast<int>(kBeltBottom * H)), kBelt, cv::FILLED);
   for (double x = 0.03; x < kBeltEnd; x += 0.06) {
-    cv::circle(img, cv::Point(static_cast<int>(x * W), static_cast<int>(kBeltBottom * H)), std::max(2, W / 110), cv::Scalar(90, 90, 90),
-               cv::FILLED);
+    cv::circle(img, cv::Point(static_cast<int>(x * W), static_cast<int>(kBeltBottom * H)), std::max(2, W / 110),
+               cv::Scalar(90, 90, 90), cv::FILLED);
   }
   // The inspection stand.
-  cv::line(img, cv::Point(static_cast<int>(0.5 * W), static_cast<int>(0.55 * H)), cv::Point(static_cast<int>(0.5 * W), static_cast<int>(0.62 * H)),
-           kArm, std::max(1, W / 160));
+  cv::line(img, cv::Point(static_cast<int>(0.5 * W), static_cast<int>(0.55 * H)),
+           cv::Point(static_cast<int>(0.5 * W), static_cast<int>(0.62 * H)), kArm, std::max(1, W / 160));
   if (config_.mirror) {
     cv::rectangle(img, cv::Point(static_cast<int>(kMirrorLeft * W) - 3, static_cast<int>(kMirrorTop * H) - 3),
-                  cv::Point(static_cast<int>(kMirrorRight * W) + 3, static_cast<int>(kMirrorBottom * H) + 3), cv::Scalar(110, 100, 95),
-                  cv::FILLED);
+                  cv::Point(static_cast<int>(kMirrorRight * W) + 3, static_cast<int>(kMirrorBottom * H) + 3),
+                  cv::Scalar(110, 100, 95), cv::FILLED);
   }
 }
 
@@ -179,8 +183,8 @@ OnionScene::Pose OnionScene::pose(const Episode& e, int t, double u) const {
                     (a == kRelease && s.onion == kGripped && s.gripper != kAtInspection);
   if (dips) p.gy += 0.06 * std::sin(kPi * u);
   const double belt_y = kBeltTop - kOnionRadius * config_.width / config_.height();
-  const bool held = s.onion == kGripped ? !(a == kRelease && n.onion != kGripped && u > 0.5)
-                                        : (n.onion == kGripped && u > 0.5);
+  const bool held =
+      s.onion == kGripped ? !(a == kRelease && n.onion != kGripped && u > 0.5) : (n.onion == kGripped && u > 0.5);
   p.onion_visible = true;
   p.onion_in_bin = false;
   if (held) {
@@ -202,7 +206,8 @@ OnionScene::Pose OnionScene::pose(const Episode& e, int t, double u) const {
   return p;
 }
 
-void OnionScene::draw_onion(cv::Mat& img, double x, double y, double radius, double angle, double spot, bool blemished) const {
+void OnionScene::draw_onion(cv::Mat& img, double x, double y, double radius, double angle, double spot,
+                            bool blemished) const {
   const int W = img.cols, H = img.rows;
   const cv::Point c(static_cast<int>(x * W), static_cast<int>(y * H));
   const int r = std::max(2, static_cast<int>(std::lround(radius * W)));
@@ -211,14 +216,16 @@ void OnionScene::draw_onion(cv::Mat& img, double x, double y, double radius, dou
   const double facing = std::cos(angle - spot);
   if (blemished && facing > 0.2) {
     const int dx = static_cast<int>(std::lround(0.45 * r * std::sin(angle - spot)));
-    cv::circle(img, c + cv::Point(dx, 0), std::max(1, static_cast<int>(std::lround(0.55 * r * facing))), kSpot, cv::FILLED, cv::LINE_AA);
+    cv::circle(img, c + cv::Point(dx, 0), std::max(1, static_cast<int>(std::lround(0.55 * r * facing))), kSpot,
+               cv::FILLED, cv::LINE_AA);
   }
 }
 
 void OnionScene::draw_mirror(cv::Mat& img, const Pose& p, const Episode& e) const {
   const int W = img.cols, H = img.rows;
   const cv::Rect inside(static_cast<int>(kMirrorLeft * W), static_cast<int>(kMirrorTop * H),
-                        static_cast<int>((kMirrorRight - kMirrorLeft) * W), static_cast<int>((kMirrorBottom - kMirrorTop) * H));
+                        static_cast<int>((kMirrorRight - kMirrorLeft) * W),
+                        static_cast<int>((kMirrorBottom - kMirrorTop) * H));
   cv::Mat clip = img(inside);
   clip.setTo(kMirror);
   // The reflection: the scene seen from behind, further away (smaller, drawn towards
@@ -236,7 +243,8 @@ void OnionScene::draw_mirror(cv::Mat& img, const Pose& p, const Episode& e) cons
     cv::circle(clip, o - offset, r, kOnion, cv::FILLED, cv::LINE_AA);
     const double facing = std::cos(p.onion_angle + kPi - e.spot_angle);
     if (e.blemished && facing > 0.2) {
-      cv::circle(clip, o - offset, std::max(1, static_cast<int>(std::lround(0.6 * r * facing))), kSpot, cv::FILLED, cv::LINE_AA);
+      cv::circle(clip, o - offset, std::max(1, static_cast<int>(std::lround(0.6 * r * facing))), kSpot, cv::FILLED,
+                 cv::LINE_AA);
     }
   }
 }
@@ -257,10 +265,11 @@ void OnionScene::draw_blue_person(cv::Mat& img, double time) const {
   // rule cannot tell apart.
   const double side = phase < 0.5 ? 1.0 : -1.0;  // in the hand towards which they walk
   cv::line(img, P(x + side * 0.05, 0.36), P(x + side * 0.1, 0.55), kSkin, std::max(2, W / 90));
-  cv::rectangle(img, P(x + side * 0.1 - kGripperW / 2, 0.55), P(x + side * 0.1 + kGripperW / 2, 0.55 + kGripperH), kShirtBlue,
-                cv::FILLED);
+  cv::rectangle(img, P(x + side * 0.1 - kGripperW / 2, 0.55), P(x + side * 0.1 + kGripperW / 2, 0.55 + kGripperH),
+                kShirtBlue, cv::FILLED);
   cv::circle(img, P(x, 0.22), static_cast<int>(0.033 * W), kSkin, cv::FILLED, cv::LINE_AA);
-  cv::ellipse(img, P(x, 0.20), cv::Size(static_cast<int>(0.034 * W), static_cast<int>(0.02 * W)), 0, 180, 360, kHair, cv::FILLED);
+  cv::ellipse(img, P(x, 0.20), cv::Size(static_cast<int>(0.034 * W), static_cast<int>(0.02 * W)), 0, 180, 360, kHair,
+              cv::FILLED);
 }
 
 void OnionScene::draw_other_onions(cv::Mat& img, double time) const {
@@ -283,21 +292,25 @@ void OnionScene::draw_other_onions(cv::Mat& img, double time) const {
 void OnionScene::draw_expert(cv::Mat& img, const Pose& p, const Episode& e) const {
   const int W = img.cols, H = img.rows;
   auto P = [&](double fx, double fy) { return cv::Point(static_cast<int>(fx * W), static_cast<int>(fy * H)); };
-  if (p.onion_visible && p.onion_in_bin) draw_onion(img, p.ox, p.oy, kOnionRadius, p.onion_angle, e.spot_angle, e.blemished);
+  if (p.onion_visible && p.onion_in_bin)
+    draw_onion(img, p.ox, p.oy, kOnionRadius, p.onion_angle, e.spot_angle, e.blemished);
   // The bin's front hides an onion that fell in.
   cv::rectangle(img, P(kBinLeft, kBinTop), P(kBinRight, kBinBottom), kBin, cv::FILLED);
   cv::rectangle(img, P(kBinLeft, kBinTop), P(kBinRight, kBinTop + 0.02), cv::Scalar(70, 84, 70), cv::FILLED);
   // The arm: from its base behind the stand to the gripper.
   cv::line(img, P(0.58, 0.98), P(0.62, 0.30), kArm, std::max(3, W / 40));
   cv::line(img, P(0.62, 0.30), P(p.gx, p.gy - kGripperH / 2), kArm, std::max(2, W / 55));
-  if (p.onion_visible && !p.onion_in_bin) draw_onion(img, p.ox, p.oy, kOnionRadius, p.onion_angle, e.spot_angle, e.blemished);
+  if (p.onion_visible && !p.onion_in_bin)
+    draw_onion(img, p.ox, p.oy, kOnionRadius, p.onion_angle, e.spot_angle, e.blemished);
   const GripperSize g = gripper_size(config_);
   const cv::Point c = P(p.gx, p.gy);
-  cv::rectangle(img, c - cv::Point(g.width / 2, g.height / 2), c + cv::Point(g.width - g.width / 2, g.height / 2 - g.height / 5), kBlue,
-                cv::FILLED);
+  cv::rectangle(img, c - cv::Point(g.width / 2, g.height / 2),
+                c + cv::Point(g.width - g.width / 2, g.height / 2 - g.height / 5), kBlue, cv::FILLED);
   // Two fingers.
-  cv::rectangle(img, c + cv::Point(-g.width / 2, g.height / 2 - g.height / 5), c + cv::Point(-g.width / 4, g.height / 2), kBlue, cv::FILLED);
-  cv::rectangle(img, c + cv::Point(g.width / 4, g.height / 2 - g.height / 5), c + cv::Point(g.width / 2, g.height / 2), kBlue, cv::FILLED);
+  cv::rectangle(img, c + cv::Point(-g.width / 2, g.height / 2 - g.height / 5),
+                c + cv::Point(-g.width / 4, g.height / 2), kBlue, cv::FILLED);
+  cv::rectangle(img, c + cv::Point(g.width / 4, g.height / 2 - g.height / 5), c + cv::Point(g.width / 2, g.height / 2),
+                kBlue, cv::FILLED);
 }
 
 void OnionScene::draw_foreground_person(cv::Mat& img, double time) const {
@@ -318,7 +331,8 @@ void OnionScene::draw_foreground_person(cv::Mat& img, double time) const {
   auto P = [&](double fx, double fy) { return cv::Point(static_cast<int>(fx * W), static_cast<int>(fy * H)); };
   cv::rectangle(img, P(x - 0.17, 0.44), P(x + 0.17, 1.0), kMustard, cv::FILLED);
   cv::circle(img, P(x, 0.36), static_cast<int>(0.075 * W), kSkin, cv::FILLED, cv::LINE_AA);
-  cv::ellipse(img, P(x, 0.33), cv::Size(static_cast<int>(0.077 * W), static_cast<int>(0.05 * W)), 0, 180, 360, kHair, cv::FILLED);
+  cv::ellipse(img, P(x, 0.33), cv::Size(static_cast<int>(0.077 * W), static_cast<int>(0.05 * W)), 0, 180, 360, kHair,
+              cv::FILLED);
 }
 
 void OnionScene::render(const Episode& episode, int t, int frame, cv::Mat& out) const {
@@ -353,7 +367,8 @@ std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const
   double time = options.start_time;
   const bool first_blemished = rng.uniform() < 0.5;
   for (int i = 0; i < options.sorts; ++i) {
-    const bool blemished = options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
+    const bool blemished =
+        options.alternate_quality ? first_blemished != (i % 2 == 1) : rng.uniform() < options.blemished;
     const Trajectory steps = expert_sort(mdp, weights, rng.uniform_int(3), blemished);
     sorts.push_back(make_episode(steps, blemished, time, rng.next_u64()));
     time += static_cast<double>(steps.size()) * config.step_seconds;

@@ -86,9 +86,11 @@ Layout random_graph(Rng& rng) {
   g.actions = uniform_between(rng, 2, 6);
   std::vector<int> ring(static_cast<size_t>(g.states));
   for (int i = 0; i < g.states; ++i) ring[static_cast<size_t>(i)] = i;
-  for (int i = g.states - 1; i > 0; --i) std::swap(ring[static_cast<size_t>(i)], ring[static_cast<size_t>(rng.uniform_int(i + 1))]);
+  for (int i = g.states - 1; i > 0; --i)
+    std::swap(ring[static_cast<size_t>(i)], ring[static_cast<size_t>(rng.uniform_int(i + 1))]);
   std::vector<int> next(static_cast<size_t>(g.states));
-  for (int i = 0; i < g.states; ++i) next[static_cast<size_t>(ring[static_cast<size_t>(i)])] = ring[static_cast<size_t>((i + 1) % g.states)];
+  for (int i = 0; i < g.states; ++i)
+    next[static_cast<size_t>(ring[static_cast<size_t>(i)])] = ring[static_cast<size_t>((i + 1) % g.states)];
   for (int s = 0; s < g.states; ++s) {
     g.state_names.push_back("s" + std::to_string(s));
     for (int a = 0; a < g.actions; ++a) {
@@ -109,7 +111,8 @@ Layout random_graph(Rng& rng) {
 // Every (s, a) entry of a feature from its value per pair.
 void add_feature(std::vector<FeatureEntry>& features, const Eigen::VectorXd& per_pair, int actions, int k) {
   for (Eigen::Index r = 0; r < per_pair.size(); ++r) {
-    if (per_pair[r] != 0.0) features.push_back({static_cast<int>(r) / actions, static_cast<int>(r) % actions, k, per_pair[r]});
+    if (per_pair[r] != 0.0)
+      features.push_back({static_cast<int>(r) / actions, static_cast<int>(r) % actions, k, per_pair[r]});
   }
 }
 
@@ -143,7 +146,8 @@ double decisiveness_of(const Mdp& mdp, const Eigen::VectorXd& theta) {
     if (mdp.is_terminal(s)) continue;
     ++states;
     for (int a = 0; a < mdp.num_actions; ++a) {
-      if (mdp.available(s, a) && optimal.q[mdp.pair(s, a)] >= optimal.value[s] - tie) total += soft.policy[mdp.pair(s, a)];
+      if (mdp.available(s, a) && optimal.q[mdp.pair(s, a)] >= optimal.value[s] - tie)
+        total += soft.policy[mdp.pair(s, a)];
     }
   }
   return total / states;
@@ -279,10 +283,14 @@ void observe(RandomTask& task, const std::vector<char>& ended, Rng& rng) {
 
 const char* eta_kind_name(EtaKind kind) {
   switch (kind) {
-    case EtaKind::kUniform: return "uniform";
-    case EtaKind::kPlausible: return "plausible";
-    case EtaKind::kSubject: return "subject";
-    case EtaKind::kTrue: return "true";
+    case EtaKind::kUniform:
+      return "uniform";
+    case EtaKind::kPlausible:
+      return "plausible";
+    case EtaKind::kSubject:
+      return "subject";
+    case EtaKind::kTrue:
+      return "true";
   }
   return "?";
 }
@@ -319,7 +327,8 @@ RandomTask make_random_task(std::uint64_t seed, int draw, const RandomTaskOverri
   observe(task, ended, data);
   Rng eta_rng = data.split(1);
   assign_eta(task.observed, 1 + task.num_confounders, task.eta, eta_rng);
-  for (int i = 0; i < controlled; ++i) task.controlled.push_back(sample_trajectory(task.mdp, expert.policy, task.length, data));
+  for (int i = 0; i < controlled; ++i)
+    task.controlled.push_back(sample_trajectory(task.mdp, expert.policy, task.length, data));
   task.prior.num_symbols = task.num_symbols;
   task.prior.num_confounders = task.num_confounders;
   task.prior.subject_alpha = controlled_run_alpha(task.mdp, task.controlled, task.subject_o, task.per_step, 1.0, data);

@@ -11,7 +11,8 @@ namespace {
 class RecordedRun final : public SensorRun {
  public:
   explicit RecordedRun(const Problem& problem) {
-    if (!problem.observation_model) throw InputError("observation_model", "missing: there is nothing to publish without symbols");
+    if (!problem.observation_model)
+      throw InputError("observation_model", "missing: there is nothing to publish without symbols");
     num_symbols = problem.observation_model->num_symbols;
     num_sources = 1 + problem.observation_model->num_confounders;
     if (problem.true_weights) true_weights = *problem.true_weights;
@@ -20,9 +21,11 @@ class RecordedRun final : public SensorRun {
     std::vector<char> ended, demonstration_ended;
     for (size_t i = 0; i < problem.demonstration.size(); ++i) {
       const DemonstratedTrajectory& d = problem.demonstration[i];
-      if (!d.steps) throw InputError("demonstration[" + std::to_string(i) + "].steps", "missing: a sensor publishes observations");
+      if (!d.steps)
+        throw InputError("demonstration[" + std::to_string(i) + "].steps", "missing: a sensor publishes observations");
       // Steps without known truth still need a length: placeholders, never published.
-      const Trajectory steps = d.truth ? *d.truth : Trajectory(static_cast<size_t>(d.steps->length()), StateAction{0, 0});
+      const Trajectory steps =
+          d.truth ? *d.truth : Trajectory(static_cast<size_t>(d.steps->length()), StateAction{0, 0});
       (d.controlled ? controlled : demonstrations).push_back(steps);
       (d.controlled ? controlled_seen : seen).push_back(*d.steps);
       (d.controlled ? ended : demonstration_ended).push_back(d.ends_in_terminal ? 1 : 0);

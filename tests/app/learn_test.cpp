@@ -44,8 +44,8 @@ LearnResult by_hand(const RandomTask& task, std::optional<AlphaUpdate> update, i
 TEST(Learn, IsTheLearnersPartsBitForBit) {
   for (std::uint64_t seed : {3u, 8u}) {
     const RandomTask task = small_task(seed);
-    for (const auto& [update, restarts] : {std::pair<std::optional<AlphaUpdate>, int>{std::nullopt, 1},
-                                           {AlphaUpdate::kPaper, 2}}) {
+    for (const auto& [update, restarts] :
+         {std::pair<std::optional<AlphaUpdate>, int>{std::nullopt, 1}, {AlphaUpdate::kPaper, 2}}) {
       LearnSettings settings;
       settings.alpha_update = update;
       settings.em.restarts = restarts;
@@ -82,8 +82,8 @@ TEST(Learn, ReportsEveryIterate) {
 TEST(Learn, AnImpossibleObservationIsNamedByTheFrontEnd) {
   const RandomTask task = small_task(5);
   ObservationPrior prior = task.prior;
-  prior.subject_alpha.setZero();           // the subject makes nothing,
-  prior.confounder_alpha.setZero();        // nor does any confounding element
+  prior.subject_alpha.setZero();     // the subject makes nothing,
+  prior.confounder_alpha.setZero();  // nor does any confounding element
   LearnHooks hooks;
   hooks.trajectory_name = [](int i) { return "demonstration[" + std::to_string(10 + i) + "]"; };
   try {
@@ -106,8 +106,9 @@ TEST(LearnSettingsSchema, EverySettingOnceAndChecked) {
     set(settings, s, s.get(defaults));  // its own default is in range
     EXPECT_EQ(to_json(settings), to_json(defaults)) << s.name;
     if (s.type == Setting::Type::kInteger || s.type == Setting::Type::kNumber) {
-      const nlohmann::json below = s.type == Setting::Type::kInteger ? nlohmann::json(static_cast<std::int64_t>(s.min) - 1)
-                                                                     : nlohmann::json(static_cast<double>(s.min) - 1.0);
+      const nlohmann::json below = s.type == Setting::Type::kInteger
+                                       ? nlohmann::json(static_cast<std::int64_t>(s.min) - 1)
+                                       : nlohmann::json(static_cast<double>(s.min) - 1.0);
       try {
         set(settings, s, below);
         ADD_FAILURE() << s.name << " took " << below;
@@ -135,7 +136,11 @@ TEST(LearnSettingsSchema, DefaultsAreTheLearners) {
 
 TEST(LearnSettingsSchema, TextAndJsonRoundTrip) {
   LearnSettings settings;
-  set_all(settings, {{"max_em_iterations", 7}, {"eta", "stated"}, {"alpha_update", "paper"}, {"c", 0.25}, {"seed", 18446744073709551615ull}});
+  set_all(settings, {{"max_em_iterations", 7},
+                     {"eta", "stated"},
+                     {"alpha_update", "paper"},
+                     {"c", 0.25},
+                     {"seed", 18446744073709551615ull}});
   EXPECT_EQ(settings.em.max_em_iterations, 7);
   EXPECT_EQ(settings.learn_eta, false);
   EXPECT_EQ(settings.alpha_update, AlphaUpdate::kPaper);

@@ -30,20 +30,22 @@ using hbirl::testing::slurp;
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hbirl_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("hbirl_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  Outcome run(const std::string& args) { return hbirl::testing::run_command(std::string("'") + HBIRL_BIN + "' " + args, dir_); }
+  Outcome run(const std::string& args) {
+    return hbirl::testing::run_command(std::string("'") + HBIRL_BIN + "' " + args, dir_);
+  }
 
   // `hbirl args` with its data (heap) limited to `bytes` (RLIMIT_DATA): a bound on what it
   // may take that does not depend on how a child's peak memory is counted (a spawned
   // child's ru_maxrss starts at its parent's).
   Outcome run_limited(const std::string& args, long bytes) {
-    return hbirl::testing::run_command("ulimit -d " + std::to_string(bytes >> 10) + " && '" + HBIRL_BIN + "' " + args, dir_);
+    return hbirl::testing::run_command("ulimit -d " + std::to_string(bytes >> 10) + " && '" + HBIRL_BIN + "' " + args,
+                                       dir_);
   }
 
   fs::path write(const std::string& name, const std::string& text) {
@@ -81,8 +83,8 @@ class Cli : public ::testing::Test {
 };
 
 TEST_F(Cli, HelpForEveryCommand) {
-  for (const char* args : {"--help", "learn --help", "validate --help", "generate --help",
-                           "generate gridworld --help", "report --help", "publish --help", "export --help"}) {
+  for (const char* args : {"--help", "learn --help", "validate --help", "generate --help", "generate gridworld --help",
+                           "report --help", "publish --help", "export --help"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 0) << args;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << args;
@@ -120,9 +122,9 @@ TEST_F(Cli, LearningCommandsLoadNothingElse) {
 }
 
 TEST_F(Cli, UsageErrors) {
-  for (const char* args : {"", "frobnicate", "learn", "learn --problem x.json --from nowhere",
-                           "learn --problem x.json --restarts 0", "learn --bogus", "report --out x",
-                           "report --log /nonexistent.lcmlog --out x"}) {
+  for (const char* args :
+       {"", "frobnicate", "learn", "learn --problem x.json --from nowhere", "learn --problem x.json --restarts 0",
+        "learn --bogus", "report --out x", "report --log /nonexistent.lcmlog --out x"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 2) << args;
     EXPECT_EQ(r.out, "") << args;
@@ -152,12 +154,14 @@ TEST_F(Cli, SameBitsWhateverTheThreadCount) {
   ASSERT_EQ(one.status, 0);
   EXPECT_EQ(one.out, four.out);
   EXPECT_EQ(one.out, run(base + " --threads 1").out);
-  EXPECT_NE(one.out, run("learn --from truth --restarts 6 --seed 10 --problem '" + example("gridworld_5x5.json") + "'").out);
+  EXPECT_NE(one.out,
+            run("learn --from truth --restarts 6 --seed 10 --problem '" + example("gridworld_5x5.json") + "'").out);
 }
 
 TEST_F(Cli, BothOptimisersRecoverTheCorridorPolicy) {
   for (const char* optimizer : {"lbfgs", "eg"}) {
-    const Outcome r = run(std::string("learn --from truth --optimizer ") + optimizer + " --problem '" + example("corridor.json") + "'");
+    const Outcome r = run(std::string("learn --from truth --optimizer ") + optimizer + " --problem '" +
+                          example("corridor.json") + "'");
     ASSERT_EQ(r.status, 0) << r.err;
     const json out = json::parse(r.out);
     EXPECT_EQ(out["optimizer"], optimizer);
@@ -188,8 +192,9 @@ TEST_F(Cli, ValidatesDomainFiles) {
   json bad = json::parse(in);
   bad["sensor"]["occlusion"] = 1.5;
   const fs::path p = write("bad_domain.json", bad.dump());
-  for (const std::string& args : {"validate --domain '" + p.string() + "'", "learn --log x.lcmlog --domain '" + p.string() + "'",
-                                   "report --log x.lcmlog --out x --domain '" + p.string() + "'"}) {
+  for (const std::string& args :
+       {"validate --domain '" + p.string() + "'", "learn --log x.lcmlog --domain '" + p.string() + "'",
+        "report --log x.lcmlog --out x --domain '" + p.string() + "'"}) {
     r = run(args);
     EXPECT_EQ(r.status, 2) << args;
     EXPECT_EQ(r.out, "") << args;
@@ -219,7 +224,8 @@ TEST_F(Cli, GenerateThenLearn) {
 TEST_F(Cli, EveryGeneratedRandomTaskValidates) {
   for (int seed = 1; seed <= 10; ++seed) {  // (the generator's own test checks 40 tasks in-process)
     const fs::path p = dir_ / ("task" + std::to_string(seed) + ".json");
-    const Outcome g = run("generate random-task --seed " + std::to_string(seed) + " --draw 1 --out '" + p.string() + "'");
+    const Outcome g =
+        run("generate random-task --seed " + std::to_string(seed) + " --draw 1 --out '" + p.string() + "'");
     ASSERT_EQ(g.status, 0) << g.err;
     const Outcome v = run("validate --problem '" + p.string() + "'");
     EXPECT_EQ(v.status, 0) << "seed " << seed << ": " << v.err;
@@ -313,8 +319,9 @@ TEST_F(Cli, UnknownKeysOnlyWarn) {
   const Outcome r = run("learn --from truth --problem '" + p.string() + "'");
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(json::accept(r.out)) << r.out;
-  EXPECT_NE(r.err.find("hbirl: warning: " + p.string() + ": mdp.discout: unknown key, ignored (did you mean \"discount\"?)"),
-            std::string::npos)
+  EXPECT_NE(
+      r.err.find("hbirl: warning: " + p.string() + ": mdp.discout: unknown key, ignored (did you mean \"discount\"?)"),
+      std::string::npos)
       << r.err;
 }
 
@@ -340,10 +347,14 @@ TEST_F(Cli, RenderWritesTheFramesItLists) {
 
 TEST_F(Cli, OnionExperimentAtSmallScale) {
   const fs::path out = dir_ / "onion";
-  const Outcome r = run("experiment onion --runs 2 --trajectories 1,3 --controlled-sorts 4 --threads 2 --out '" + out.string() + "'");
+  const Outcome r =
+      run("experiment onion --runs 2 --trajectories 1,3 --controlled-sorts 4 --threads 2 --out '" + out.string() + "'");
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("| trajectories | True Trajectories | ML Trajectories | ML Observations | Plausible eta | Uniform eta |"),
-            std::string::npos) << r.out;
+  EXPECT_NE(
+      r.out.find(
+          "| trajectories | True Trajectories | ML Trajectories | ML Observations | Plausible eta | Uniform eta |"),
+      std::string::npos)
+      << r.out;
   const std::string csv = slurp(out / "onion_runs.csv");
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "run,method,trajectories,ile,ile_relative,policy_agreement,em_evaluations,log_likelihood,seconds,error");
@@ -358,25 +369,32 @@ TEST_F(Cli, OnionExperimentAtSmallScale) {
 // bad lists refused in one line naming the option.
 TEST_F(Cli, EtaExperimentsAtSmallScale) {
   const fs::path out = dir_ / "beyond";
-  const Outcome eta = run("experiment eta-sensitivity --runs 1 --confounders 2 --masses 0.8 --accuracies 0.4,1 --per-step 8 "
-                          "--trajectories 6 --out '" + out.string() + "'");
+  const Outcome eta =
+      run("experiment eta-sensitivity --runs 1 --confounders 2 --masses 0.8 --accuracies 0.4,1 --per-step 8 "
+          "--trajectories 6 --out '" +
+          out.string() + "'");
   ASSERT_EQ(eta.status, 0) << eta.err;
   EXPECT_NE(eta.out.find("## |E| = 2"), std::string::npos) << eta.out;
   const std::string eta_csv = slurp(out / "eta_sensitivity_runs.csv");
-  EXPECT_EQ(std::count(eta_csv.begin(), eta_csv.end(), '\n'), 1 + 1 + 2 * 2);  // header, perfect, (fixed, learned) x 2 cells
-  const Outcome unlisted = run("experiment unlisted --runs 1 --confounders 0,2 --told 0 --per-step 8 --trajectories 6 --out '" +
-                               out.string() + "'");
+  EXPECT_EQ(std::count(eta_csv.begin(), eta_csv.end(), '\n'),
+            1 + 1 + 2 * 2);  // header, perfect, (fixed, learned) x 2 cells
+  const Outcome unlisted =
+      run("experiment unlisted --runs 1 --confounders 0,2 --told 0 --per-step 8 --trajectories 6 --out '" +
+          out.string() + "'");
   ASSERT_EQ(unlisted.status, 0) << unlisted.err;
   const std::string unlisted_csv = slurp(out / "unlisted_runs.csv");
   EXPECT_EQ(std::count(unlisted_csv.begin(), unlisted_csv.end(), '\n'), 1 + 2 * 4);
   EXPECT_TRUE(fs::exists(out / "unlisted_summary.md"));
-  const Outcome regimes = run("experiment onion-regimes --runs 1 --shares 0,0.9 --eta-powers 3 --trajectories 1 --controlled-sorts 2 "
-                              "--methods true_trajectories,plausible_eta --out '" + out.string() + "'");
+  const Outcome regimes =
+      run("experiment onion-regimes --runs 1 --shares 0,0.9 --eta-powers 3 --trajectories 1 --controlled-sorts 2 "
+          "--methods true_trajectories,plausible_eta --out '" +
+          out.string() + "'");
   ASSERT_EQ(regimes.status, 0) << regimes.err;
   const std::string regimes_csv = slurp(out / "onion_regimes_runs.csv");
   EXPECT_EQ(std::count(regimes_csv.begin(), regimes_csv.end(), '\n'), 1 + 2 * 2 * 2);  // shares x mirror x methods
-  for (const std::string bad : {"experiment eta-sensitivity --masses 0.8,x", "experiment eta-sensitivity --accuracies 1.5",
-                                 "experiment onion-regimes --shares 0.99"}) {
+  for (const std::string bad :
+       {"experiment eta-sensitivity --masses 0.8,x", "experiment eta-sensitivity --accuracies 1.5",
+        "experiment onion-regimes --shares 0.99"}) {
     const Outcome r = run(bad + " --out '" + out.string() + "'");
     EXPECT_EQ(r.status, 2) << bad;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -388,7 +406,10 @@ TEST_F(Cli, EtaExperimentsAtSmallScale) {
 TEST_F(Cli, GeneratedMiscalibratedLabellerLearnsEta) {
   const fs::path file = dir_ / "mis.json";
   ASSERT_EQ(run("generate gridworld --confounders 2 --per-step 10 --trajectories 6 --controlled 6 --labeller-mass 0.9 "
-                "--labeller-accuracy 0.5 -o '" + file.string() + "'").status, 0);
+                "--labeller-accuracy 0.5 -o '" +
+                file.string() + "'")
+                .status,
+            0);
   const Outcome r = run("learn --problem '" + file.string() + "'");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -404,21 +425,27 @@ TEST_F(Cli, GeneratedMiscalibratedLabellerLearnsEta) {
 
 TEST_F(Cli, GridworldExperimentAtSmallScale) {
   const fs::path out = dir_ / "gw";
-  const Outcome r = run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +
-                        out.string() + "'");
+  const Outcome r =
+      run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 2 --out '" +
+          out.string() + "'");
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("| |E| | True Trajectories | True Observation Function | Uniform eta | Plausible eta | Ignore CE |"),
-            std::string::npos) << r.out;
+  EXPECT_NE(
+      r.out.find("| |E| | True Trajectories | True Observation Function | Uniform eta | Plausible eta | Ignore CE |"),
+      std::string::npos)
+      << r.out;
   const std::string csv = slurp(out / "gridworld_runs.csv");
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,strength,seconds,error");
+            "run,method,confounders,goal,ile,ile_relative,goal_recovered,em_evaluations,log_likelihood,source_accuracy,"
+            "strength,seconds,error");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 2 * 5);
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.csv"));
   EXPECT_TRUE(fs::exists(out / "gridworld_summary.md"));
   // Same numbers whatever the thread count (timings aside).
   const fs::path out1 = dir_ / "gw1";
   ASSERT_EQ(run("experiment gridworld --runs 2 --confounders 0,2 --per-step 6 --trajectories 6 --threads 1 --out '" +
-                out1.string() + "'").status, 0);
+                out1.string() + "'")
+                .status,
+            0);
   auto without_seconds = [](const std::string& text) {  // drop the "seconds" column (the 12th)
     std::string kept;
     std::istringstream in(text);
@@ -447,7 +474,8 @@ TEST_F(Cli, HostileProblemFilesAreRefusedInOneLine) {
   d = corridor();
   d["observation_model"]["num_confounders"] = 65536;
   d["observation_model"]["num_symbols"] = 4096;
-  expect_rejected(d.dump(), "observation_model.num_symbols: (num_states * num_actions + num_confounders) * num_symbols is");
+  expect_rejected(d.dump(),
+                  "observation_model.num_symbols: (num_states * num_actions + num_confounders) * num_symbols is");
   d = corridor();
   d["mdp"]["features"][0][3] = 1.7e308;
   expect_rejected(d.dump(), "mdp.features[0][3]: expected a number in [-1000000, 1000000]");
@@ -491,7 +519,8 @@ TEST_F(Cli, SpecialFilesAreRefusedBeforeReading) {
   const std::string limit = "timeout -k 5 10 '";  // milliseconds are enough
   const auto bounded = [&](const std::string& args) {
     const fs::path out = dir_ / "stdout", err = dir_ / "stderr";
-    const int raw = std::system((limit + HBIRL_BIN + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'").c_str());
+    const int raw =
+        std::system((limit + HBIRL_BIN + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'").c_str());
     Outcome r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;  // 124: timed out
     r.out = slurp(out);
@@ -505,7 +534,8 @@ TEST_F(Cli, SpecialFilesAreRefusedBeforeReading) {
   const std::vector<Case> cases{
       {"learn --problem '" + f + "'", "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
       {"learn --from truth --problem '" + f + "'", "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
-      {"posterior --weights 1,0 --problem '" + f + "'", "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
+      {"posterior --weights 1,0 --problem '" + f + "'",
+       "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
       {"validate --problem '" + f + "'", "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
       {"validate --domain '" + f + "'", "--domain " + f + ": is a FIFO (named pipe), not a regular file"},
       {"publish --problem '" + f + "' --linger 0", "--problem " + f + ": is a FIFO (named pipe), not a regular file"},
@@ -548,7 +578,8 @@ TEST_F(Cli, IgnoredValuesTakeNoMemory) {
   for (int i = 0; i < 15000000; ++i) text += "0,";
   text += "0],\"_note\":{\"x\":[[1,2],[3,4]]}}";
   const fs::path p = write("junk.json", text);
-  const Outcome r = run_limited("validate --problem '" + p.string() + "'", 2 * static_cast<long>(text.size()) + (32L << 20));
+  const Outcome r =
+      run_limited("validate --problem '" + p.string() + "'", 2 * static_cast<long>(text.size()) + (32L << 20));
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(json::parse(r.out)["trajectories"], 6);
   EXPECT_EQ(r.err, "hbirl: warning: " + p.string() + ": junk: unknown key, ignored\n");
@@ -567,10 +598,12 @@ TEST_F(Cli, DuplicateTransitionsAreRefusedAtTheFirst) {
   const std::string list = "\"transitions\":[";
   text.insert(text.find(list) + list.size(), copies);
   const fs::path p = write("copies.json", text);
-  const Outcome r = run_limited("validate --problem '" + p.string() + "'", 2 * static_cast<long>(text.size()) + (32L << 20));
+  const Outcome r =
+      run_limited("validate --problem '" + p.string() + "'", 2 * static_cast<long>(text.size()) + (32L << 20));
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_EQ(r.out, "");
-  EXPECT_EQ(r.err, "hbirl: error: " + p.string() + ": mdp.transitions[1]: duplicate transition (also given at index 0)\n");
+  EXPECT_EQ(r.err,
+            "hbirl: error: " + p.string() + ": mdp.transitions[1]: duplicate transition (also given at index 0)\n");
 }
 
 // An observation no source can produce where its trajectory can be: refused before
@@ -607,7 +640,8 @@ TEST_F(Cli, UnwritableOutputFails) {
                           "' >/dev/full 2>'" + err.string() + "'";
   const int raw = std::system(cmd.c_str());
   EXPECT_EQ(WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, 1);
-  EXPECT_NE(slurp(err).find("could not write the output: stdout: No space left on device"), std::string::npos) << slurp(err);
+  EXPECT_NE(slurp(err).find("could not write the output: stdout: No space left on device"), std::string::npos)
+      << slurp(err);
 }
 
 TEST_F(Cli, LearnsFromObservations) {
@@ -654,12 +688,14 @@ TEST_F(Cli, LearnWithMcmcReportsConvergence) {
 }
 
 TEST_F(Cli, PosteriorWithMcmcReportsConvergence) {
-  const std::string base = "posterior --engine mcmc --mcmc-chains 2 --weights 1,0 --problem '" + example("corridor.json") + "'";
+  const std::string base =
+      "posterior --engine mcmc --mcmc-chains 2 --weights 1,0 --problem '" + example("corridor.json") + "'";
   const json few = expect_unconverged(run(base + " --mcmc-samples 20"), 2);
   // Many more sweeps: a better worst ESS.
   const Outcome many = run(base + " --mcmc-samples 4000");
   ASSERT_EQ(many.status, 0) << many.err;
-  EXPECT_GT(json::parse(many.out)["mcmc_diagnostics"]["worst_bulk_ess"].get<double>(), few["worst_bulk_ess"].get<double>());
+  EXPECT_GT(json::parse(many.out)["mcmc_diagnostics"]["worst_bulk_ess"].get<double>(),
+            few["worst_bulk_ess"].get<double>());
 }
 
 TEST_F(Cli, PosteriorInTheSpecShape) {
@@ -753,7 +789,8 @@ TEST_F(Cli, PosteriorMatchesBruteForce) {
       EXPECT_LT((reported - truth.marginals.row(step).transpose()).cwiseAbs().maxCoeff(), 1e-9) << i << " " << step;
       int n = tr.step_begin[static_cast<size_t>(step)];
       for (const auto& sources : t["steps"][static_cast<size_t>(step)]["sources"]) {
-        for (int z = 0; z < 3; ++z) EXPECT_NEAR(sources[static_cast<size_t>(z)].get<double>(), truth.sources(n, z), 1e-9);
+        for (int z = 0; z < 3; ++z)
+          EXPECT_NEAR(sources[static_cast<size_t>(z)].get<double>(), truth.sources(n, z), 1e-9);
         ++n;
       }
     }

@@ -73,7 +73,7 @@ class Recordings : public ::testing::Test {
 TEST_F(Recordings, A54ByteRecordingIsRefusedInOneLine) {
   std::string bytes = {'\xED', '\xA1', '\xDA', '\x01'};
   bytes += std::string(8, '\0') + std::string(7, '\0') + "\x01";  // event number, time
-  bytes += std::string("\0\0\0\x0c", 4) + "\x7f\xff\xff\xff";      // 12 bytes of channel, 2^31 - 1 of data
+  bytes += std::string("\0\0\0\x0c", 4) + "\x7f\xff\xff\xff";     // 12 bytes of channel, 2^31 - 1 of data
   bytes += "OBSERVATIONS" + std::string(14, 'x');
   ASSERT_EQ(bytes.size(), 54u);
   const fs::path log = dir_ / "hostile.lcmlog";
@@ -116,7 +116,8 @@ TEST_F(Recordings, TheWrongKeyAndAnUnfinishedRunAreSaidAsSuch) {
   const Outcome learn = hbirl("learn --log '" + log.string() + "' --key '" + run_key.string() + "'");
   EXPECT_EQ(learn.status, 2) << learn.err;
   EXPECT_NE(learn.err.find("not a complete run"), std::string::npos) << learn.err;
-  const Outcome report = hbirl("report --out '" + (dir_ / "report").string() + "' --log '" + log.string() + "' --key '" + run_key.string() + "'");
+  const Outcome report = hbirl("report --out '" + (dir_ / "report").string() + "' --log '" + log.string() +
+                               "' --key '" + run_key.string() + "'");
   EXPECT_EQ(report.status, 1) << report.err;
   EXPECT_NE(report.err.find("never finished learning"), std::string::npos) << report.err;
   EXPECT_TRUE(fs::exists(dir_ / "report" / "index.html"));
@@ -135,7 +136,9 @@ TEST_F(Recordings, ASignedRecordingIsNotReadWithoutItsKeyWhateverComesFirst) {
   }
   const Outcome r = hbirl("learn --log '" + mixed.string() + "'");
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find("--key: '" + mixed.string() + "' holds 3 messages signed with a run key: give it"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--key: '" + mixed.string() + "' holds 3 messages signed with a run key: give it"),
+            std::string::npos)
+      << r.err;
 }
 
 // Not a regular file: refused at once (a FIFO used to block the reader forever).

@@ -82,7 +82,8 @@ int connect_to(int port, std::uint32_t from = INADDR_LOOPBACK, bool nonblocking 
   addr.sin_port = htons(static_cast<std::uint16_t>(port));
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   if ((from != INADDR_LOOPBACK && ::bind(fd, reinterpret_cast<const sockaddr*>(&source), sizeof source) != 0) ||
-      (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 && !(nonblocking && errno == EINPROGRESS))) {
+      (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 &&
+       !(nonblocking && errno == EINPROGRESS))) {
     ::close(fd);
     return -1;
   }
@@ -112,7 +113,9 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // an ASSERT leaves the test early).
 struct Serving {
   explicit Serving(ServerLimits limits = {})
-      : server(state, HBIRL_DASHBOARD_WEB_DIR, limits), port(server.bind("127.0.0.1", 0)), thread([this] { server.run(); }) {}
+      : server(state, HBIRL_DASHBOARD_WEB_DIR, limits),
+        port(server.bind("127.0.0.1", 0)),
+        thread([this] { server.run(); }) {}
   ~Serving() {
     server.stop();
     thread.join();
@@ -210,7 +213,8 @@ class SlowClients {
         if (!c.started) {  // once the connection is up
           pollfd p{c.fd, POLLOUT, 0};
           if (::poll(&p, 1, 0) == 1 && (p.revents & POLLOUT)) {
-            c.started = ::send(c.fd, kStart, sizeof kStart - 1, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof kStart - 1);
+            c.started =
+                ::send(c.fd, kStart, sizeof kStart - 1, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof kStart - 1);
           }
         } else {
           (void)!::send(c.fd, "a", 1, MSG_NOSIGNAL);
@@ -254,8 +258,9 @@ TEST(DashboardServer, SlowClientsAtSeveralRatesDoNotDelayOthers) {
       slowest = std::max(slowest, waited);
       std::this_thread::sleep_for(std::chrono::milliseconds(300));
     }
-    std::printf("[          ] %d of %d requests answered within 1.5 s, the slowest after %.3f s; %d slow connections made\n",
-                answered, asked, slowest, slow.connections());
+    std::printf(
+        "[          ] %d of %d requests answered within 1.5 s, the slowest after %.3f s; %d slow connections made\n",
+        answered, asked, slowest, slow.connections());
   }
   EXPECT_EQ(answered, asked) << "the slowest request waited " << slowest << " s";
   EXPECT_GE(asked, 10);
@@ -316,7 +321,8 @@ TEST(DashboardServer, AHeadTooLargeIsClosed) {
   const int fd = connect_to(port);
   ASSERT_GE(fd, 0);
   std::string head = "GET /api/state HTTP/1.1\r\n";
-  while (head.size() < 2u * static_cast<std::size_t>(limits.max_head_bytes)) head += "X-Big: " + std::string(1000, 'a') + "\r\n";
+  while (head.size() < 2u * static_cast<std::size_t>(limits.max_head_bytes))
+    head += "X-Big: " + std::string(1000, 'a') + "\r\n";
   (void)!::send(fd, head.data(), head.size(), MSG_NOSIGNAL);  // may fail part way: the server has closed
   std::string answer;
   EXPECT_TRUE(closed_by_server(fd, 3000, &answer));

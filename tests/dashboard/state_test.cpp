@@ -329,7 +329,8 @@ TEST(DashboardState, BadMessagesOnTheBusAreCounted) {
   DashboardState state;
   state.subscribe(bus, counters);
   const char garbage[] = "garbage garbage garbage";
-  for (const std::string* channel : {&services::channels::kCamera.name, &services::channels::kPosterior.name, &services::channels::kStatus.name}) {
+  for (const std::string* channel :
+       {&services::channels::kCamera.name, &services::channels::kPosterior.name, &services::channels::kStatus.name}) {
     sender.publish(*channel, garbage, sizeof garbage);
   }
   hbirl::observation_model_t m{};

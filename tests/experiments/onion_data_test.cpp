@@ -24,7 +24,8 @@ TEST(OnionData, ControlledRunGivesTheSubjectPrior) {
     EXPECT_TRUE(d.observed[i].ends_in_terminal);
     for (int t = 0; t < d.observed[i].length(); ++t) EXPECT_GT(d.observed[i].observations_at(t), 0);  // never occluded
   }
-  const Eigen::MatrixXd alpha = controlled_run_prior(mdp, d.truth, d.observed, perception::kNumSymbols, controlled_prior_options());
+  const Eigen::MatrixXd alpha =
+      controlled_run_prior(mdp, d.truth, d.observed, perception::kNumSymbols, controlled_prior_options());
   ASSERT_EQ(alpha.cols(), perception::kNumSymbols);
   const int r = mdp.pair(index({kUnknown, kGripped, kAtInspection}), kInspect);
   // One frame = one gripper blob and one onion blob: 2 observations x 30 frames per step.
@@ -67,7 +68,8 @@ TEST(OnionData, LearnsTheSortingRuleFromFramesWithPlausibleEta) {
   ObservationPrior prior;
   prior.num_symbols = perception::kNumSymbols;
   prior.num_confounders = perception::kNumSources - 1;
-  prior.subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols, controlled_prior_options());
+  prior.subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols,
+                                             controlled_prior_options());
   prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
   prior.c = 0.5;
   ObservationEStepOptions estep_options;

@@ -10,7 +10,7 @@ namespace hbirl {
 namespace {
 
 // The first 20 seeds whose task has at most 30 states (a few seconds in Release).
-const std::vector<std::uint64_t> kSmallTasks = {1, 3, 10, 16, 17, 19, 27, 28, 38, 39,
+const std::vector<std::uint64_t> kSmallTasks = {1,  3,  10, 16, 17, 19, 27, 28, 38, 39,
                                                 40, 56, 57, 59, 61, 65, 66, 69, 71, 72};
 
 int optimal(const std::vector<RandomTaskRun>& runs, const std::string& method) {

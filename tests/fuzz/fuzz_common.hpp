@@ -44,10 +44,11 @@ inline const std::string& channel(int k) {
   // Trajectories go to one sampler's own channel: the fuzzed one's (fuzz_service_handlers).
   static const std::string trajectories = ch::trajectory_channel(kFuzzSampler).name;
   static const std::string* const names[] = {
-      &ch::kCamera.name,       &ch::kDetections.name, &ch::kObservations.name,     &ch::kEpisode.name,
-      &ch::kGroundTruth.name,  &ch::kMdp.name,        &trajectories,               &ch::kEStepRequest.name,
-      &ch::kEStepResult.name,  &ch::kEmProgress.name, &ch::kObservationModel.name, &ch::kPosterior.name,
-      &ch::kReward.name,       &ch::kFrameRequest.name, &ch::kStatus.name};
+      &ch::kCamera.name,     &ch::kDetections.name,       &ch::kObservations.name,
+      &ch::kEpisode.name,    &ch::kGroundTruth.name,      &ch::kMdp.name,
+      &trajectories,         &ch::kEStepRequest.name,     &ch::kEStepResult.name,
+      &ch::kEmProgress.name, &ch::kObservationModel.name, &ch::kPosterior.name,
+      &ch::kReward.name,     &ch::kFrameRequest.name,     &ch::kStatus.name};
   static_assert(sizeof(names) / sizeof(names[0]) == kNumChannels);
   return *names[k];
 }

@@ -74,8 +74,8 @@ struct Served {
     frame.data = png;
     state.on_camera(frame);
     hbirl::detections_t d{};
-    d.width = 32, d.height = 24, d.n = 1, d.cls = {hbirl::detections_t::CLASS_ONION}, d.x = {10}, d.y = {10}, d.area = {9},
-    d.box_x = {8}, d.box_y = {8}, d.box_w = {4}, d.box_h = {4}, d.dark_share = {0.5f};
+    d.width = 32, d.height = 24, d.n = 1, d.cls = {hbirl::detections_t::CLASS_ONION}, d.x = {10}, d.y = {10},
+    d.area = {9}, d.box_x = {8}, d.box_y = {8}, d.box_w = {4}, d.box_h = {4}, d.dark_share = {0.5f};
     state.on_detections(d);
     hbirl::observations_t o{};
     o.num_symbols = 4, o.num_sources = 2, o.n = 1, o.symbol = {1}, o.eta = {{0.75, 0.25}};

@@ -39,7 +39,8 @@ namespace fs = std::filesystem;
 
 void write(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
   fs::create_directories(file.parent_path());
-  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 int channel_index(const std::string& name) {
@@ -60,12 +61,15 @@ Counters quiet(const std::string& name) {
 class Recorder {
  public:
   explicit Recorder(std::shared_ptr<MemoryHub> hub) : bus_(std::move(hub)) {
-    bus_.subscribe(".*", [this](const Message& m) {
-      const int k = channel_index(m.channel);
-      if (k < 0 || m.size > 0xffff) return;
-      const std::vector<std::uint8_t> r = fuzz::record(k, std::vector<std::uint8_t>(m.data, m.data + m.size));
-      records_.push_back(r);
-    }, 1 << 20);
+    bus_.subscribe(
+        ".*",
+        [this](const Message& m) {
+          const int k = channel_index(m.channel);
+          if (k < 0 || m.size > 0xffff) return;
+          const std::vector<std::uint8_t> r = fuzz::record(k, std::vector<std::uint8_t>(m.data, m.data + m.size));
+          records_.push_back(r);
+        },
+        1 << 20);
   }
   std::vector<std::vector<std::uint8_t>> take() {
     bus_.handle(0);
@@ -175,10 +179,12 @@ std::vector<std::uint8_t> onion_chain(const std::vector<std::uint8_t>& png) {
   LabellerService labeller(bus, c);
   const cv::Mat image = hbirl::perception::decode_image(png);
   hbirl::episode_marker_t marker{};
-  marker.domain = "onion", marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE, marker.num_steps = 1, marker.frames_per_step = 1;
+  marker.domain = "onion", marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE, marker.num_steps = 1,
+  marker.frames_per_step = 1;
   publish(bus, channels::kEpisode, marker, c);
   hbirl::camera_frame_t f{};
-  f.width = image.cols, f.height = image.rows, f.encoding = "png", f.size = static_cast<std::int32_t>(png.size()), f.data = png;
+  f.width = image.cols, f.height = image.rows, f.encoding = "png", f.size = static_cast<std::int32_t>(png.size()),
+  f.data = png;
   publish(bus, channels::kCamera, f, c);
   for (int i = 0; i < 4; ++i) bus.handle(0);
   return join(rec.take(), 10);

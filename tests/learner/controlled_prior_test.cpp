@@ -73,7 +73,8 @@ TEST(ControlledPrior, BadRunsAreNamed) {
   EXPECT_EQ(field([&] { controlled_run_prior(run.mdp, run.truth, run.observed, 0); }), "observations.num_symbols");
   ControlledRun short_truth;
   short_truth.truth[0].pop_back();
-  EXPECT_EQ(field([&] { controlled_run_prior(short_truth.mdp, short_truth.truth, short_truth.observed, 3); }), "ground_truth");
+  EXPECT_EQ(field([&] { controlled_run_prior(short_truth.mdp, short_truth.truth, short_truth.observed, 3); }),
+            "ground_truth");
   ControlledRun outside;
   outside.truth[0][1].state = 2;
   EXPECT_EQ(field([&] { controlled_run_prior(outside.mdp, outside.truth, outside.observed, 3); }), "ground_truth");

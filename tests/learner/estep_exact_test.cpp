@@ -39,7 +39,7 @@ TEST(ExactEngine, EqualsBruteForceEnumeration) {
     }
   }
   EXPECT_GE(ends_tested, 3);  // trajectories known to end in a terminal state were covered
-  EXPECT_GE(scaled, 40);       // mostly by the scaled passes (RowsFarBelowTheMaximumStayExact covers the others)
+  EXPECT_GE(scaled, 40);      // mostly by the scaled passes (RowsFarBelowTheMaximumStayExact covers the others)
 }
 
 // Thousands of observations per step and long trajectories: a direct product of the
@@ -142,7 +142,9 @@ Reference reference_posterior(const Mdp& mdp, const SoftSolution& policy, const 
     }
   }
   std::vector<double> last;
-  for (int r = 0; r < P; ++r) last.push_back(la[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] + lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)]);
+  for (int r = 0; r < P; ++r)
+    last.push_back(la[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] +
+                   lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)]);
   ref.log_likelihood = reference_lse(last);
   return ref;
 }
@@ -203,7 +205,8 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
     const double ll = ref.log_likelihood;
     double spread = 0.0;
     for (int t = 0; t < T; ++t) {
-      const auto [lo, hi] = std::minmax_element(ref.log_emission[static_cast<size_t>(t)].begin(), ref.log_emission[static_cast<size_t>(t)].end());
+      const auto [lo, hi] = std::minmax_element(ref.log_emission[static_cast<size_t>(t)].begin(),
+                                                ref.log_emission[static_cast<size_t>(t)].end());
       spread = std::max(spread, *hi - *lo);
     }
     ASSERT_TRUE(std::isfinite(ll)) << "trial " << trial;
@@ -215,7 +218,7 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
     expect_marginals(ref, post, trial);
   }
   EXPECT_GE(extreme, 20);  // most heavy trials had log emissions more than 1000 apart within a step
-  EXPECT_GE(scaled, 20);  // the scaled passes were exact by themselves in many
+  EXPECT_GE(scaled, 20);   // the scaled passes were exact by themselves in many
 }
 
 // Two states that keep to themselves (one action, deterministic self-loops), started
@@ -225,8 +228,8 @@ TEST(ExactEngine, RowsFarBelowTheMaximumStayExact) {
 // emissions of each state's path, and B's marginal is 1 / (1 + e^{x_A - x_B}). The
 // engine must notice the mass it lost and go to log space.
 TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
-  const Mdp mdp = make_mdp(2, 1, 1, {{0, 0, 0, 1.0}, {1, 0, 1, 1.0}}, {{0, 0, 0, 1.0}},
-                           Eigen::Vector2d(0.5, 0.5), {}, 0.9);
+  const Mdp mdp =
+      make_mdp(2, 1, 1, {{0, 0, 0, 1.0}, {1, 0, 1, 1.0}}, {{0, 0, 0, 1.0}}, Eigen::Vector2d(0.5, 0.5), {}, 0.9);
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Zero(1)));
   ObservationModel model;
   model.subject.resize(2, 2);
@@ -234,8 +237,8 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
       1e-4, 1.0 - 1e-4;       // B almost never
   model.confounders.resize(0, 2);
   ObservedTrajectory tr;
-  const double log_ratio = std::log(0.9 / 1e-4);           // nats per symbol-0 observation for A
-  const double w0 = 800.0 / log_ratio;                     // step 0: symbol 0, A ahead by 800 nats
+  const double log_ratio = std::log(0.9 / 1e-4);            // nats per symbol-0 observation for A
+  const double w0 = 800.0 / log_ratio;                      // step 0: symbol 0, A ahead by 800 nats
   const double w1 = 1600.0 / std::log((1.0 - 1e-4) / 0.1);  // step 1: symbol 1, B ahead by 1,600
   tr.symbols = {0, 1};
   tr.weights = {w0, w1};
@@ -261,9 +264,9 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
 // Probabilities at the edge of the doubles, at random: start probabilities down to
 // 1e-320, policies from rewards up to 400x (log pi in the -1000s, pi flushed to 0 or
 // clamped), emission probabilities down to 1e-12 and exactly 0, observations weighing up
-// to thousands of nats, trajectories of 1-6 steps that may end in a terminal state, on random MDPs (terminal states, impossible actions, deterministic
-// transitions). Whatever the engine does -- the scaled passes or the log-space ones -- it
-// must agree with the plain log-space reference, impossible trajectories included.
+// to thousands of nats, trajectories of 1-6 steps that may end in a terminal state, on random MDPs (terminal states,
+// impossible actions, deterministic transitions). Whatever the engine does -- the scaled passes or the log-space ones
+// -- it must agree with the plain log-space reference, impossible trajectories included.
 TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
   Rng rng(4242);
   int scaled = 0, fallback = 0, impossible = 0;
@@ -279,7 +282,8 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
     }
     mdp.start /= mdp.start.sum();
     const double reward_scale = std::array<double, 3>{1.0, 50.0, 400.0}[static_cast<size_t>(trial % 3)];
-    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(testing::random_vector(o.features, rng, reward_scale)));
+    const SoftSolution policy =
+        soft_value_iteration(mdp, mdp.reward(testing::random_vector(o.features, rng, reward_scale)));
     ObservationModel model;
     const int symbols = 3;
     model.subject = testing::random_distributions(mdp.num_pairs(), symbols, rng);
@@ -438,8 +442,9 @@ TEST(ExactEngine, UnderflowingForwardProductsStayExact) {
 // they would fall below the smallest double before the scale divides them -- the
 // marginals of step 0 came out 0. The backward messages start divided by the normaliser.
 TEST(ExactEngine, SmallExitProbabilityKeepsTheMarginals) {
-  const Mdp mdp = make_mdp(2, 2, 1, {{0, 0, 0, 1 - 1e-249}, {0, 0, 1, 1e-249}, {0, 1, 0, 1 - 1e-249}, {0, 1, 1, 1e-249}},
-                           {{0, 1, 0, -300.0}}, Eigen::Vector2d(1.0, 0.0), {1}, 0.9);
+  const Mdp mdp =
+      make_mdp(2, 2, 1, {{0, 0, 0, 1 - 1e-249}, {0, 0, 1, 1e-249}, {0, 1, 0, 1 - 1e-249}, {0, 1, 1, 1e-249}},
+               {{0, 1, 0, -300.0}}, Eigen::Vector2d(1.0, 0.0), {1}, 0.9);
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(Eigen::VectorXd::Ones(1)));
   ObservationModel model;
   model.subject.resize(4, 2);

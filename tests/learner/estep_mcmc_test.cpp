@@ -22,7 +22,9 @@ bool possible(const testing::TinyProblem& p) {
 
 // The tiny MDPs have 2 successors per (s, a) out of 3 states: single-site moves alone
 // can be reducible there, so stochastic ones (trial % 3 != 0) also get the block move.
-McmcOptions::Block tiny_block(int trial) { return trial % 3 == 0 ? McmcOptions::Block::kAuto : McmcOptions::Block::kAlways; }
+McmcOptions::Block tiny_block(int trial) {
+  return trial % 3 == 0 ? McmcOptions::Block::kAuto : McmcOptions::Block::kAlways;
+}
 
 struct Agreement {
   double marginals = 0.0;  // max |MCMC - exact| over steps and pairs

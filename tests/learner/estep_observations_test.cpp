@@ -110,7 +110,8 @@ TEST(ObservationEStep, WatchedTrajectoryIsThePosteriorOfThatTrajectory) {
   const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d(0.3, 0, 0, 0.2)));
   const ObservationModel model = dirichlet_mean(fixed);
   const int watched = 17;
-  const TrajectoryPosterior alone = ExactEngine(g.task.mdp).posterior(policy, model, g.observations.trajectories[watched]);
+  const TrajectoryPosterior alone =
+      ExactEngine(g.task.mdp).posterior(policy, model, g.observations.trajectories[watched]);
   for (int max_kinds : {1024, 0}) {
     ObservationEStepOptions plain, watching;
     plain.max_kinds = watching.max_kinds = max_kinds;
@@ -263,7 +264,8 @@ TEST(ObservationEStep, AShareOfTheBlocksGivesTheirStatisticsBitForBit) {
     ObservationPrior prior;
     prior.num_symbols = 3;
     prior.num_confounders = 2;
-    prior.subject_alpha = Eigen::MatrixXd::Constant(mdp.num_pairs(), 3, 1.0) + Eigen::MatrixXd::Random(mdp.num_pairs(), 3).cwiseAbs();
+    prior.subject_alpha =
+        Eigen::MatrixXd::Constant(mdp.num_pairs(), 3, 1.0) + Eigen::MatrixXd::Random(mdp.num_pairs(), 3).cwiseAbs();
     prior.confounder_alpha = Eigen::MatrixXd::Ones(2, 3);
     prior.learn_eta = trial % 2 == 0;
     ObservationEStepOptions options;
@@ -275,7 +277,8 @@ TEST(ObservationEStep, AShareOfTheBlocksGivesTheirStatisticsBitForBit) {
     ASSERT_EQ(eta.has_value(), prior.learn_eta);
     RowMatrix moved;  // learned eta away from the stated one, as after some EM iterations
     if (eta) moved = (eta->array() + 0.2 * Eigen::ArrayXXd::Random(eta->rows(), eta->cols()).abs()).matrix();
-    for (const std::vector<int>& share : std::vector<std::vector<int>>{{0}, {5}, {1, 3}, {2, 4, 5}, {0, 1, 2, 3, 4, 5}}) {
+    for (const std::vector<int>& share :
+         std::vector<std::vector<int>>{{0}, {5}, {1, 3}, {2, 4, 5}, {0, 1, 2, 3, 4, 5}}) {
       std::vector<ObservedTrajectory> held;
       int watch = -1;
       for (int b : share) {
@@ -308,7 +311,9 @@ TEST(ObservationEStep, AShareOfTheBlocksGivesTheirStatisticsBitForBit) {
         ASSERT_LE(b.source_counts.rows(), a.source_counts.rows()) << what;
         EXPECT_EQ(a.source_counts.topRows(b.source_counts.rows()), b.source_counts) << what;
         if (b.source_counts.rows() < a.source_counts.rows()) {
-          EXPECT_TRUE((a.source_counts.bottomRows(a.source_counts.rows() - b.source_counts.rows()).array() == 0.0).all()) << what;
+          EXPECT_TRUE(
+              (a.source_counts.bottomRows(a.source_counts.rows() - b.source_counts.rows()).array() == 0.0).all())
+              << what;
         }
       }
     }
@@ -423,8 +428,8 @@ TEST(ObservationEStep, HeldOutLikelihoodByHand) {
     others.subject -= own[i].alpha_dot.subject;
     others.confounders -= own[i].alpha_dot.confounders;
     const AlphaCounts posterior = dirichlet_posterior(g.prior, g.prior.strength, others);
-    held_out += engine.log_likelihood(policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)},
-                                      estep.trajectories()[i]);
+    held_out += engine.log_likelihood(
+        policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)}, estep.trajectories()[i]);
   }
   EXPECT_NEAR(choice->current_score, held_out, 1e-8 * std::abs(held_out));
   EXPECT_GE(choice->best_score, choice->current_score);
@@ -449,7 +454,8 @@ TEST(ObservationEStep, LearnedEtaRecoversTheLabellersCalibration) {
   options.confounders = 3;
   options.per_step = 40;
   options.eta = EtaKind::kPlausible;
-  const GridworldObservations observed = observe_gridworld(task.mdp, task.trajectories, subject, elements, options, rng);
+  const GridworldObservations observed =
+      observe_gridworld(task.mdp, task.trajectories, subject, elements, options, rng);
   const SoftSolution policy = soft_value_iteration(task.mdp, task.mdp.reward(task.true_weights));
   for (double kappa : {10.0, 1e12}) {
     const ObservationEStep estep(task.mdp, observed.trajectories, known_o_prior(subject, elements, kappa));
@@ -518,7 +524,8 @@ TEST(HiddenDataEm, VeryStrongEtaPriorIsFixedEta) {
   EXPECT_LT((eta - learned_estep.context_eta()).cwiseAbs().maxCoeff(), 1e-9);
   // theta then differs only by where each EM run stopped (its tolerances; 4e-5 under the
   // sanitizers' floating point), not by eta.
-  EXPECT_LT((learned.theta - fixed.theta).lpNorm<Eigen::Infinity>(), 1e-3 * std::max(1.0, fixed.theta.lpNorm<Eigen::Infinity>()))
+  EXPECT_LT((learned.theta - fixed.theta).lpNorm<Eigen::Infinity>(),
+            1e-3 * std::max(1.0, fixed.theta.lpNorm<Eigen::Infinity>()))
       << learned.theta.transpose() << " vs " << fixed.theta.transpose();
 }
 

@@ -29,8 +29,7 @@ Eigen::VectorXd random_counts(const Mdp& mdp, Rng& rng) {
 
 // Expected visits of `trajectories` rollouts of `length` steps under a policy, by plain
 // forward propagation of the state distribution (independent of the learner's code).
-Eigen::VectorXd population_counts(const Mdp& mdp, const Eigen::VectorXd& policy, int trajectories,
-                                  int length) {
+Eigen::VectorXd population_counts(const Mdp& mdp, const Eigen::VectorXd& policy, int trajectories, int length) {
   Eigen::VectorXd counts = Eigen::VectorXd::Zero(mdp.num_pairs());
   Eigen::VectorXd d = mdp.start;
   for (int t = 0; t < length; ++t) {
@@ -84,8 +83,7 @@ TEST(CausalLikelihood, GradientMatchesFiniteDifferences) {
         return objective.evaluate(x, nullptr);
       };
       const double fd = (at(-2 * h) - 8 * at(-h) + 8 * at(h) - at(2 * h)) / (12 * h);
-      EXPECT_NEAR(gradient[k], fd, 1e-7 * std::max(1.0, std::abs(fd)))
-          << "trial " << trial << " feature " << k;
+      EXPECT_NEAR(gradient[k], fd, 1e-7 * std::max(1.0, std::abs(fd))) << "trial " << trial << " feature " << k;
     }
   }
 }
@@ -138,7 +136,8 @@ TEST(MaxCausalEnt, GridworldPopulationCountsRecoverTheExpert) {
       Eigen::Index best = 0;
       result.x.maxCoeff(&best);
       EXPECT_EQ(best, goal);
-      EXPECT_LT(inverse_learning_error(mdp, truth, result.x).relative(), 1e-6) << "goal " << goal << " " << to_string(kind);
+      EXPECT_LT(inverse_learning_error(mdp, truth, result.x).relative(), 1e-6)
+          << "goal " << goal << " " << to_string(kind);
     }
   }
 }

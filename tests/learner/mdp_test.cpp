@@ -10,8 +10,8 @@ namespace hbirl {
 namespace {
 
 Mdp two_state(double p01 = 1.0) {
-  return make_mdp(2, 2, 1, {{0, 0, 0, 1.0}, {0, 1, 1, p01}, {1, 0, 0, 1.0}, {1, 1, 1, 1.0}},
-                  {{1, 1, 0, 1.0}}, Eigen::Vector2d(1.0, 0.0), {}, 0.9);
+  return make_mdp(2, 2, 1, {{0, 0, 0, 1.0}, {0, 1, 1, p01}, {1, 0, 0, 1.0}, {1, 1, 1, 1.0}}, {{1, 1, 0, 1.0}},
+                  Eigen::Vector2d(1.0, 0.0), {}, 0.9);
 }
 
 std::string validation_error(const Mdp& mdp) {

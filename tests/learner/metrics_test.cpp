@@ -11,8 +11,7 @@ namespace {
 
 // Brute force: enumerate every (s, a) sequence of each length, weigh it by its
 // probability under the policy, and sum the features.
-void enumerate(const Mdp& mdp, const Eigen::VectorXd& policy, int s, int steps_left, double p,
-               Eigen::VectorXd& total) {
+void enumerate(const Mdp& mdp, const Eigen::VectorXd& policy, int s, int steps_left, double p, Eigen::VectorXd& total) {
   if (steps_left == 0 || p == 0.0) return;
   for (int a = 0; a < mdp.num_actions; ++a) {
     const double pa = p * policy[mdp.pair(s, a)];
@@ -53,7 +52,8 @@ TEST(FeatureCountError, ZeroWhenTheDataAreTheExpectation) {
   for (int t = 0; t < 4; ++t) {
     Eigen::VectorXd pairs(mdp.num_pairs());
     for (int s = 0; s < mdp.num_states; ++s) {
-      pairs.segment(s * mdp.num_actions, mdp.num_actions) = d[s] * sol.policy.segment(s * mdp.num_actions, mdp.num_actions);
+      pairs.segment(s * mdp.num_actions, mdp.num_actions) =
+          d[s] * sol.policy.segment(s * mdp.num_actions, mdp.num_actions);
     }
     counts += 3.0 * pairs;
     d = mdp.transitions.transpose() * pairs;

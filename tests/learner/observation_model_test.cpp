@@ -71,7 +71,8 @@ ObservationPrior random_prior(Rng& rng) {
   prior.subject_alpha = Eigen::MatrixXd(4, 3);
   prior.confounder_alpha = Eigen::MatrixXd(2, 3);
   for (Eigen::Index i = 0; i < prior.subject_alpha.size(); ++i) prior.subject_alpha.data()[i] = 0.5 + 5 * rng.uniform();
-  for (Eigen::Index i = 0; i < prior.confounder_alpha.size(); ++i) prior.confounder_alpha.data()[i] = 0.5 + rng.uniform();
+  for (Eigen::Index i = 0; i < prior.confounder_alpha.size(); ++i)
+    prior.confounder_alpha.data()[i] = 0.5 + rng.uniform();
   return prior;
 }
 
@@ -146,7 +147,8 @@ TEST(ObservationModel, PosteriorMeanMaximisesTheMapObjective) {
   auto objective = [&](const ObservationModel& o) {
     double f = 0.0;
     for (Eigen::Index i = 0; i < o.subject.size(); ++i) f += dot.subject.data()[i] * std::log(o.subject.data()[i]);
-    for (Eigen::Index i = 0; i < o.confounders.size(); ++i) f += dot.confounders.data()[i] * std::log(o.confounders.data()[i]);
+    for (Eigen::Index i = 0; i < o.confounders.size(); ++i)
+      f += dot.confounders.data()[i] * std::log(o.confounders.data()[i]);
     return f + log_prior_term(o, prior, alpha);
   };
   // By hand: beta log(O / mean of beta), beta = 1 + 2.5 (alpha - 1) above the base.
@@ -168,8 +170,10 @@ TEST(ObservationModel, PosteriorMeanMaximisesTheMapObjective) {
   const double at_best = objective(best);
   for (int trial = 0; trial < 200; ++trial) {
     ObservationModel other = best;
-    for (Eigen::Index i = 0; i < other.subject.size(); ++i) other.subject.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
-    for (Eigen::Index i = 0; i < other.confounders.size(); ++i) other.confounders.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
+    for (Eigen::Index i = 0; i < other.subject.size(); ++i)
+      other.subject.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
+    for (Eigen::Index i = 0; i < other.confounders.size(); ++i)
+      other.confounders.data()[i] *= std::exp(0.1 * (rng.uniform() - 0.5));
     other.subject = dirichlet_mean(other.subject);
     other.confounders = dirichlet_mean(other.confounders);
     EXPECT_LE(objective(other), at_best + 1e-9);

@@ -49,13 +49,17 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
       const int n = rng.uniform_int(3);
       for (int k = 0; k < n; ++k) {
         t.symbols.push_back(rng.uniform_int(prior.num_symbols));
-        const double subject = prior.num_confounders == 0 ? 1.0 : (rng.uniform() < 0.3 ? 1.0 : rng.uniform() < 0.3 ? 0.0 : 0.5);
+        const double subject = prior.num_confounders == 0 ? 1.0
+                                                          : (rng.uniform() < 0.3   ? 1.0
+                                                             : rng.uniform() < 0.3 ? 0.0
+                                                                                   : 0.5);
         eta.push_back(subject);
         if (prior.num_confounders == 1) eta.push_back(1.0 - subject);
       }
       t.step_begin.push_back(static_cast<int>(t.symbols.size()));
     }
-    t.eta = Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), 1 + prior.num_confounders);
+    t.eta =
+        Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), 1 + prior.num_confounders);
     t.ends_in_terminal = o.terminal > 0 && rng.uniform() < 0.5;
     ObservationModel model;
     model.subject = prior.subject_alpha.array().colwise() / prior.subject_alpha.rowwise().sum().array();

@@ -13,9 +13,9 @@ struct RandomMdpOptions {
   int actions = 3;
   int features = 4;
   int successors = 3;
-  int terminal = 0;           // the last `terminal` states are terminal
-  bool impossible = false;    // make some actions impossible (never all of a state's)
-  bool deterministic = false; // one successor per (s, a)
+  int terminal = 0;            // the last `terminal` states are terminal
+  bool impossible = false;     // make some actions impossible (never all of a state's)
+  bool deterministic = false;  // one successor per (s, a)
   double discount = 0.9;
 };
 

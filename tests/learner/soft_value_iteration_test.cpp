@@ -64,8 +64,8 @@ TEST(SoftValueIteration, ThreeStateWithTerminalAndImpossibleAction) {
 
 // The soft Bellman equation, checked directly (not through the solver's own residual).
 // The policy sums to 1 up to the rounding of V = m + log z at V's magnitude: sum_tol.
-void expect_soft_bellman(const Mdp& mdp, const Eigen::VectorXd& reward, const SoftSolution& sol,
-                         double tol, double sum_tol = 1e-12) {
+void expect_soft_bellman(const Mdp& mdp, const Eigen::VectorXd& reward, const SoftSolution& sol, double tol,
+                         double sum_tol = 1e-12) {
   for (int s = 0; s < mdp.num_states; ++s) {
     if (mdp.is_terminal(s)) {
       EXPECT_EQ(sol.value[s], 0.0);
@@ -105,7 +105,8 @@ TEST(SoftValueIteration, NewtonAndFixedPointSolveTheSoftBellmanEquation) {
     const SoftSolution plain = soft_value_iteration(mdp, reward, fixed);
     ASSERT_TRUE(newton.converged && plain.converged) << "trial " << trial;
     expect_soft_bellman(mdp, reward, newton, 1e-10);
-    EXPECT_LT((newton.value - plain.value).lpNorm<Eigen::Infinity>(), 1e-9 * std::max(1.0, plain.value.lpNorm<Eigen::Infinity>()))
+    EXPECT_LT((newton.value - plain.value).lpNorm<Eigen::Infinity>(),
+              1e-9 * std::max(1.0, plain.value.lpNorm<Eigen::Infinity>()))
         << "trial " << trial;
     EXPECT_LE(newton.iterations, plain.iterations);
     if (o.discount >= 0.9) {

@@ -15,8 +15,8 @@ namespace {
 // V*(1) = 1 / (1 - gamma); V*(0) = gamma V*(1) (move, then collect).
 TEST(ValueIteration, TwoStateHandComputed) {
   const double gamma = 0.8;
-  Mdp mdp = make_mdp(2, 2, 1, {{0, 0, 0, 1.0}, {0, 1, 1, 1.0}, {1, 0, 1, 1.0}, {1, 1, 0, 1.0}},
-                     {{1, 0, 0, 1.0}}, Eigen::Vector2d(1, 0), {}, gamma);
+  Mdp mdp = make_mdp(2, 2, 1, {{0, 0, 0, 1.0}, {0, 1, 1, 1.0}, {1, 0, 1, 1.0}, {1, 1, 0, 1.0}}, {{1, 0, 0, 1.0}},
+                     Eigen::Vector2d(1, 0), {}, gamma);
   mdp.validate();
   const OptimalPolicy opt = value_iteration(mdp, mdp.reward(Eigen::VectorXd::Ones(1)));
   EXPECT_NEAR(opt.value[1], 5.0, 1e-10);
@@ -114,7 +114,8 @@ TEST(ValueIteration, AgreesWithPlainValueIteration) {
     EXPECT_LT((opt.value - v).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << "trial " << trial;
     for (int s = 0; s < mdp.num_states; ++s) {
       if (mdp.is_terminal(s)) continue;
-      EXPECT_GE(q[mdp.pair(s, opt.actions[static_cast<size_t>(s)])], v[s] - 1e-9 * scale) << "trial " << trial << " state " << s;
+      EXPECT_GE(q[mdp.pair(s, opt.actions[static_cast<size_t>(s)])], v[s] - 1e-9 * scale)
+          << "trial " << trial << " state " << s;
     }
   }
 }

@@ -89,7 +89,8 @@ TEST(BlobDetector, StatisticsMatchConnectedComponentsWithStats) {
   for (int i = 0; i < 40; ++i) {
     const cv::Point centre(rng.uniform(-5, 325), rng.uniform(-5, 245));
     const cv::Scalar colour = i % 3 == 0 ? kBlue : i % 3 == 1 ? kOnion : kSpot;
-    cv::ellipse(frame, centre, cv::Size(rng.uniform(2, 25), rng.uniform(2, 25)), rng.uniform(0, 180), 0, 360, colour, cv::FILLED);
+    cv::ellipse(frame, centre, cv::Size(rng.uniform(2, 25), rng.uniform(2, 25)), rng.uniform(0, 180), 0, 360, colour,
+                cv::FILLED);
   }
   BlobOptions options;
   BlobDetector detector(options);
@@ -129,7 +130,7 @@ TEST(BlobDetector, StatisticsMatchConnectedComponentsWithStats) {
 TEST(BlobDetector, NoBlobsNoDetections) {
   cv::Mat frame = blank();
   cv::rectangle(frame, cv::Rect(0, 150, 320, 90), cv::Scalar(150, 150, 148), cv::FILLED);  // floor
-  cv::circle(frame, cv::Point(160, 100), 30, cv::Scalar(40, 40, 45), cv::FILLED);        // dark hair: not an onion
+  cv::circle(frame, cv::Point(160, 100), 30, cv::Scalar(40, 40, 45), cv::FILLED);          // dark hair: not an onion
   BlobDetector detector;
   EXPECT_TRUE(detector.detect(frame).empty());
 }
@@ -191,12 +192,12 @@ TEST(Labeller, EtaRules) {
   o.gripper_area = 400.0;
   o.onion_area = 180.0;
   const std::vector<Detection> d = {
-      blob(BlobClass::kGripper, 160, 120, 400),       // the gripper's size: subject 0.95
-      blob(BlobClass::kGripper, 10, 10, 100),         // a quarter of it: 0.25
-      blob(BlobClass::kGripper, 300, 200, 1600),      // four times it: 0.25
-      blob(BlobClass::kOnion, 160, 135, 150, 0.3),    // near the gripper, dark
-      blob(BlobClass::kOnion, 250, 60, 150),          // far, small: other onions
-      blob(BlobClass::kOnion, 60, 200, 5000, 0.01),   // far, large: the foreground person
+      blob(BlobClass::kGripper, 160, 120, 400),      // the gripper's size: subject 0.95
+      blob(BlobClass::kGripper, 10, 10, 100),        // a quarter of it: 0.25
+      blob(BlobClass::kGripper, 300, 200, 1600),     // four times it: 0.25
+      blob(BlobClass::kOnion, 160, 135, 150, 0.3),   // near the gripper, dark
+      blob(BlobClass::kOnion, 250, 60, 150),         // far, small: other onions
+      blob(BlobClass::kOnion, 60, 200, 5000, 0.01),  // far, large: the foreground person
   };
   const std::vector<Observation> obs = label(d, o);
   ASSERT_EQ(obs.size(), d.size());

@@ -16,7 +16,10 @@ cv::Mat noise_image(int width, int height, std::uint64_t seed) {
   cv::Mat image(height, width, CV_8UC3);
   Rng rng(seed);
   for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(rng.uniform_int(256)), static_cast<uchar>(rng.uniform_int(256)), static_cast<uchar>(rng.uniform_int(256)));
+    for (int x = 0; x < width; ++x)
+      image.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uchar>(rng.uniform_int(256)), static_cast<uchar>(rng.uniform_int(256)),
+                    static_cast<uchar>(rng.uniform_int(256)));
   }
   return image;
 }
@@ -51,8 +54,10 @@ TEST(ImageCodec, JpegRoundTripsCloselyInBgrOrder) {
 TEST(ImageCodec, RefusesWhatIsNotAWholeImage) {
   const std::vector<std::uint8_t> png = encode_png(noise_image(16, 16, 2));
   const std::vector<std::uint8_t> jpeg = encode_jpeg(noise_image(16, 16, 3), 80);
-  EXPECT_TRUE(decode_image(std::vector<std::uint8_t>(png.begin(), png.begin() + static_cast<long>(png.size() / 2))).empty());
-  EXPECT_TRUE(decode_image(std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2))).empty());
+  EXPECT_TRUE(
+      decode_image(std::vector<std::uint8_t>(png.begin(), png.begin() + static_cast<long>(png.size() / 2))).empty());
+  EXPECT_TRUE(
+      decode_image(std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2))).empty());
   EXPECT_TRUE(decode_image(std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 9}).empty());
   EXPECT_TRUE(decode_image(nullptr, 0).empty());
   std::vector<std::uint8_t> corrupt = png;

@@ -36,7 +36,9 @@ json tiny_domain() {
   })");
 }
 
-DomainSpec parse(const json& doc, std::vector<std::string>* warnings = nullptr) { return parse_domain(doc.dump(), "stem", warnings); }
+DomainSpec parse(const json& doc, std::vector<std::string>* warnings = nullptr) {
+  return parse_domain(doc.dump(), "stem", warnings);
+}
 
 TEST(DomainFile, ReadsEverySection) {
   std::vector<std::string> warnings;
@@ -83,18 +85,38 @@ TEST(DomainFile, BadFilesNameTheField) {
       {[](json& d) { d.erase("mdp"); }, "mdp: missing"},
       {[](json& d) { d["name"] = "two words"; }, "name: may hold"},
       {[](json& d) { d["name"] = ""; }, "name: must have"},
-      {[](json& d) { d["symbol_names"] = {"a", "b"}; }, "symbol_names: has 2 names, expected 3"},
+      {[](json& d) {
+         d["symbol_names"] = {"a", "b"};
+       },
+       "symbol_names: has 2 names, expected 3"},
       {[](json& d) { d["source_names"] = {"a"}; }, "source_names: has 1 names, expected 2"},
-      {[](json& d) { d["true_weights"] = {1.0, 2.0}; }, "true_weights: has 2 entries"},
-      {[](json& d) { d.erase("observation_model"); d.erase("symbol_names"); d.erase("source_names"); },
+      {[](json& d) {
+         d["true_weights"] = {1.0, 2.0};
+       },
+       "true_weights: has 2 entries"},
+      {[](json& d) {
+         d.erase("observation_model");
+         d.erase("symbol_names");
+         d.erase("source_names");
+       },
        "sensor: needs observation_model"},
       {[](json& d) { d.erase("true_weights"); }, "sensor: needs true_weights"},
-      {[](json& d) { d["sensor"]["subject_observation"][1][3] = 0.3; }, "sensor.subject_observation[0]: its row's probabilities sum to"},
+      {[](json& d) { d["sensor"]["subject_observation"][1][3] = 0.3; },
+       "sensor.subject_observation[0]: its row's probabilities sum to"},
       {[](json& d) { d["sensor"]["subject_observation"][0][2] = 3; }, "sensor.subject_observation[0][2]"},
       {[](json& d) { d["sensor"]["subject_observation"][0][0] = 5; }, "sensor.subject_observation[0][0]"},
-      {[](json& d) { d["sensor"]["subject_observation"][1] = {0, 0, 0, 0.2}; }, "sensor.subject_observation[1]: repeats"},
-      {[](json& d) { d["sensor"]["subject_observation"][0] = {0, 0, 0}; }, "sensor.subject_observation[0]"},
-      {[](json& d) { d["sensor"]["confounder_observation"][0] = {1, 2, 1.0}; }, "sensor.confounder_observation[0][0]"},
+      {[](json& d) {
+         d["sensor"]["subject_observation"][1] = {0, 0, 0, 0.2};
+       },
+       "sensor.subject_observation[1]: repeats"},
+      {[](json& d) {
+         d["sensor"]["subject_observation"][0] = {0, 0, 0};
+       },
+       "sensor.subject_observation[0]"},
+      {[](json& d) {
+         d["sensor"]["confounder_observation"][0] = {1, 2, 1.0};
+       },
+       "sensor.confounder_observation[0][0]"},
       {[](json& d) { d["sensor"]["confounder_observation"][0][2] = -0.5; }, "sensor.confounder_observation[0][2]"},
       {[](json& d) { d["sensor"]["eta"] = "perfect"; }, "sensor.eta: expected \"plausible\", \"uniform\" or \"true\""},
       {[](json& d) { d["sensor"]["occlusion"] = 1.0; }, "sensor.occlusion: must be below 1"},

@@ -30,9 +30,11 @@ TEST(JsonNode, PathNamesEveryKeyAndIndexAtAnyDepth) {
   EXPECT_EQ(six[0].as_int(0, 10), 7);
   // Failures name the path, and say what was expected and found.
   EXPECT_EQ(failure_of([&] { six[0].as_int(0, 5); }), "a[0][0][0][0][0][0]: expected an integer in [0, 5], got 7");
-  EXPECT_EQ(failure_of([&] { deep.as_int(0, 5); }), "a[0][0][0][0][0][1].b[1][1]: expected an integer in [0, 5], got the string \"x\"");
+  EXPECT_EQ(failure_of([&] { deep.as_int(0, 5); }),
+            "a[0][0][0][0][0][1].b[1][1]: expected an integer in [0, 5], got the string \"x\"");
   EXPECT_EQ(failure_of([&] { six[1].at("c"); }), "a[0][0][0][0][0][1].c: missing");
-  EXPECT_EQ(failure_of([&] { root.at("a")[0][0][0][0].as_number(); }), "a[0][0][0][0]: expected a number, got an array of 1");
+  EXPECT_EQ(failure_of([&] { root.at("a")[0][0][0][0].as_number(); }),
+            "a[0][0][0][0]: expected a number, got an array of 1");
 }
 
 TEST(JsonNode, UnknownKeysAreNamedWithTheirPath) {

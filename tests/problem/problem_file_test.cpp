@@ -44,8 +44,7 @@ json spec_example() {
 
 // Parses `doc` after `mutate` and expects an InputError naming `field` whose message
 // contains `fragment`.
-void expect_error(const std::function<void(json&)>& mutate, const std::string& field,
-                  const std::string& fragment) {
+void expect_error(const std::function<void(json&)>& mutate, const std::string& field, const std::string& fragment) {
   json doc = spec_example();
   mutate(doc);
   try {
@@ -149,9 +148,10 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
   expect_error([](json& e) { e["observation_model"]["prior_strength"] = "high"; }, "observation_model.prior_strength",
                "expected \"auto\" or a positive number");
   expect_error([](json& e) { e["observation_model"]["prior_strength"] = 0.0; }, "observation_model.prior_strength", "");
-  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = -1.0; }, "observation_model.eta_prior_strength",
-               "");
-  expect_error([](json& e) { e["observation_model"]["learn_eta"] = "yes"; }, "observation_model.learn_eta", "true or false");
+  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = -1.0; },
+               "observation_model.eta_prior_strength", "");
+  expect_error([](json& e) { e["observation_model"]["learn_eta"] = "yes"; }, "observation_model.learn_eta",
+               "true or false");
 }
 
 // Contexts ([symbol, eta, context]) and the unlisted catch-all round-trip through the
@@ -159,7 +159,8 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
 TEST(ProblemFile, ContextsAndUnlistedSource) {
   json d = spec_example();
   d["observation_model"]["unlisted_source"] = {{"eta", 0.2}};
-  d["demonstration"][0]["steps"][0]["observations"] = json::parse(R"([[3, [0.6, 0.2, 0.2], 4], [1, [0.1, 0.8, 0.1], 0]])");
+  d["demonstration"][0]["steps"][0]["observations"] =
+      json::parse(R"([[3, [0.6, 0.2, 0.2], 4], [1, [0.1, 0.8, 0.1], 0]])");
   const Problem p = parse_problem(d.dump());
   const Problem q = parse_problem(problem_to_json(p).dump());
   for (const Problem* x : {&p, &q}) {
@@ -171,21 +172,27 @@ TEST(ProblemFile, ContextsAndUnlistedSource) {
   EXPECT_TRUE(plain.demonstration[0].steps->contexts.empty());
   EXPECT_EQ(plain.observation_model->unlisted_eta, 0.0);
   const auto observations = [](json& e) -> json& { return e["demonstration"][0]["steps"][0]["observations"]; };
-  expect_error([&](json& e) { observations(e)[0].push_back(-1); }, "demonstration[0].steps[0].observations[0][2]", "integer");
-  expect_error([&](json& e) { observations(e)[0].push_back(1 << 16); }, "demonstration[0].steps[0].observations[0][2]", "");
-  expect_error([&](json& e) { observations(e)[0].push_back(0.5); }, "demonstration[0].steps[0].observations[0][2]", "integer");
+  expect_error([&](json& e) { observations(e)[0].push_back(-1); }, "demonstration[0].steps[0].observations[0][2]",
+               "integer");
+  expect_error([&](json& e) { observations(e)[0].push_back(1 << 16); }, "demonstration[0].steps[0].observations[0][2]",
+               "");
+  expect_error([&](json& e) { observations(e)[0].push_back(0.5); }, "demonstration[0].steps[0].observations[0][2]",
+               "integer");
   expect_error([&](json& e) { observations(e)[1].push_back(2); }, "demonstration[0].steps[0].observations[1]",
                "has a context, the trajectory's earlier observations none");
   expect_error([&](json& e) { observations(e)[0].push_back(2); }, "demonstration[0].steps[0].observations[1]",
                "has no context");
   for (double bad : {0.0, 1.0, -0.1, 2.0}) {
-    expect_error([&](json& e) { e["observation_model"]["unlisted_source"] = {{"eta", bad}}; },
-                 "observation_model.unlisted_source.eta", "(0, 1)");
+    expect_error(
+        [&](json& e) {
+          e["observation_model"]["unlisted_source"] = {{"eta", bad}};
+        },
+        "observation_model.unlisted_source.eta", "(0, 1)");
   }
-  expect_error([](json& e) { e["observation_model"]["unlisted_source"] = json::object(); }, "observation_model.unlisted_source.eta",
-               "missing");
-  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = 0.0; }, "observation_model.eta_prior_strength",
-               "(0, 1e12]");
+  expect_error([](json& e) { e["observation_model"]["unlisted_source"] = json::object(); },
+               "observation_model.unlisted_source.eta", "missing");
+  expect_error([](json& e) { e["observation_model"]["eta_prior_strength"] = 0.0; },
+               "observation_model.eta_prior_strength", "(0, 1e12]");
   // learn_eta said true with nothing to learn: one source, or no observations.
   expect_error(
       [](json& e) {
@@ -219,8 +226,11 @@ TEST(ProblemFile, WrongTypes) {
   expect_error([](json& d) { d["mdp"]["num_states"] = "3"; }, "mdp.num_states", "expected an integer");
   expect_error([](json& d) { d["mdp"]["num_states"] = 2.5; }, "mdp.num_states", "expected an integer");
   expect_error([](json& d) { d["mdp"]["transitions"] = json::object(); }, "mdp.transitions", "expected an array");
-  expect_error([](json& d) { d["mdp"]["transitions"][1] = {0, 1, 2}; }, "mdp.transitions[1]",
-               "expected [state, action, next_state, probability]");
+  expect_error(
+      [](json& d) {
+        d["mdp"]["transitions"][1] = {0, 1, 2};
+      },
+      "mdp.transitions[1]", "expected [state, action, next_state, probability]");
   expect_error([](json& d) { d["mdp"]["transitions"][1][3] = "0.7"; }, "mdp.transitions[1][3]", "expected a number");
   expect_error([](json& d) { d["observation_model"]["learn"] = 1; }, "observation_model.learn", "true or false");
   expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0] = 3; },
@@ -240,8 +250,11 @@ TEST(ProblemFile, ProbabilitiesNotSummingToOne) {
   expect_error([](json& d) { d["mdp"]["transitions"][1][3] = 0.6; }, "mdp.transitions[1]",
                "probabilities for (s=0, a=1) sum to 0.9");
   expect_error([](json& d) { d["mdp"]["start"] = {{0, 0.5}, {1, 0.4}}; }, "mdp.start", "sum to 0.9");
-  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.6, 0.2, 0.1}; },
-               "demonstration[0].steps[0].observations[0]", "eta sums to 0.9");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.6, 0.2, 0.1};
+      },
+      "demonstration[0].steps[0].observations[0]", "eta sums to 0.9");
   expect_error([](json& d) { d["mdp"]["transitions"].erase(0); }, "mdp.transitions", "no entries for (s=0, a=0)");
 }
 
@@ -261,8 +274,11 @@ TEST(ProblemFile, NonFiniteNumbers) {
   nan_text.replace(nan_text.find(needle), needle.size(), "NaN");
   EXPECT_THROW(parse_problem(nan_text), InputError);
   // An eta entry that is not a number (a string "NaN") names the field.
-  expect_error([](json& x) { x["demonstration"][0]["steps"][0]["observations"][0][1] = {"NaN", 0.2, 0.2}; },
-               "demonstration[0].steps[0].observations[0][1][0]", "expected a number");
+  expect_error(
+      [](json& x) {
+        x["demonstration"][0]["steps"][0]["observations"][0][1] = {"NaN", 0.2, 0.2};
+      },
+      "demonstration[0].steps[0].observations[0][1][0]", "expected a number");
   std::string eta_text = text;
   const std::string eta = "[0.6,0.2,0.2]";
   ASSERT_NE(eta_text.find(eta), std::string::npos);
@@ -279,41 +295,64 @@ TEST(ProblemFile, NonFiniteNumbers) {
 }
 
 TEST(ProblemFile, NegativeValues) {
-  expect_error([](json& d) { d["mdp"]["transitions"][1][3] = -0.7; }, "mdp.transitions[1][3]", "expected a number in [0, 1]");
+  expect_error([](json& d) { d["mdp"]["transitions"][1][3] = -0.7; }, "mdp.transitions[1][3]",
+               "expected a number in [0, 1]");
   expect_error([](json& d) { d["mdp"]["num_states"] = -3; }, "mdp.num_states", "expected an integer in [1,");
   expect_error([](json& d) { d["observation_model"]["subject_alpha"][0][3] = -1.0; },
                "observation_model.subject_alpha[0][3]", "expected a number in [0,");
-  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][1][1] = {-0.1, 1.0, 0.1}; },
-               "demonstration[0].steps[0].observations[1][1][0]", "expected a number in [0, 1]");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["steps"][0]["observations"][1][1] = {-0.1, 1.0, 0.1};
+      },
+      "demonstration[0].steps[0].observations[1][1][0]", "expected a number in [0, 1]");
   expect_error([](json& d) { d["mdp"]["discount"] = 0.9999999999999999; }, "mdp.discount", "got 0.99999999999999989");
-  expect_error([](json& d) { d["mdp"]["num_states"] = 1 << 20; }, "mdp.num_states", "is 1048576, but the file lists only");
-  expect_error([](json& d) { d["mdp"]["features"][0][3] = 1.7e308; }, "mdp.features[0][3]", "expected a number in [-1000000, 1000000]");
-  expect_error([](json& d) { d["true_weights"][0] = -1e308; }, "true_weights[0]", "expected a number in [-1000000, 1000000]");
+  expect_error([](json& d) { d["mdp"]["num_states"] = 1 << 20; }, "mdp.num_states",
+               "is 1048576, but the file lists only");
+  expect_error([](json& d) { d["mdp"]["features"][0][3] = 1.7e308; }, "mdp.features[0][3]",
+               "expected a number in [-1000000, 1000000]");
+  expect_error([](json& d) { d["true_weights"][0] = -1e308; }, "true_weights[0]",
+               "expected a number in [-1000000, 1000000]");
   expect_error([](json& d) { d["mdp"]["discount"] = -0.5; }, "mdp.discount", "expected a number in [0, 0.999999]");
 }
 
 TEST(ProblemFile, OutOfRangeIndices) {
-  expect_error([](json& d) { d["mdp"]["transitions"][0][2] = 3; }, "mdp.transitions[0][2]", "expected an integer in [0, 2]");
+  expect_error([](json& d) { d["mdp"]["transitions"][0][2] = 3; }, "mdp.transitions[0][2]",
+               "expected an integer in [0, 2]");
   expect_error([](json& d) { d["mdp"]["features"][0][2] = 2; }, "mdp.features[0][2]", "expected an integer in [0, 1]");
   expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][0] = 4; },
                "demonstration[0].steps[0].observations[0][0]", "expected an integer in [0, 3]");
-  expect_error([](json& d) { d["demonstration"][0]["truth"][1] = {5, 0}; }, "demonstration[0].truth[1][0]",
-               "expected an integer in [0, 2]");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["truth"][1] = {5, 0};
+      },
+      "demonstration[0].truth[1][0]", "expected an integer in [0, 2]");
   expect_error([](json& d) { d["observation_model"]["confounder_alpha"][0][0] = 2; },
                "observation_model.confounder_alpha[0][0]", "expected an integer in [0, 1]");
   expect_error([](json& d) { d["mdp"]["terminal"] = {7}; }, "mdp.terminal[0]", "expected an integer in [0, 2]");
 }
 
 TEST(ProblemFile, InconsistentContent) {
-  expect_error([](json& d) { d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.5, 0.5}; },
-               "demonstration[0].steps[0].observations[0]", "eta has 2 entries, expected 3");
-  expect_error([](json& d) { d["demonstration"][0]["truth"] = {{0, 1}, {1, 0}}; }, "demonstration[0].truth[1]",
-               "state 1 cannot follow (s=0, a=1)");
-  expect_error([](json& d) { d["demonstration"][0]["truth"] = {{0, 1}}; }, "demonstration[0].truth",
-               "has 1 steps but \"steps\" has 2");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["steps"][0]["observations"][0][1] = {0.5, 0.5};
+      },
+      "demonstration[0].steps[0].observations[0]", "eta has 2 entries, expected 3");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["truth"] = {{0, 1}, {1, 0}};
+      },
+      "demonstration[0].truth[1]", "state 1 cannot follow (s=0, a=1)");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["truth"] = {{0, 1}};
+      },
+      "demonstration[0].truth", "has 1 steps but \"steps\" has 2");
   expect_error([](json& d) { d["true_weights"] = {1.0}; }, "true_weights", "has 1 entries, expected 2");
-  expect_error([](json& d) { d["mdp"]["transitions"].push_back({0, 0, 1, 0.0}); }, "mdp.transitions[7]",
-               "duplicate transition (also given at index 0)");
+  expect_error(
+      [](json& d) {
+        d["mdp"]["transitions"].push_back({0, 0, 1, 0.0});
+      },
+      "mdp.transitions[7]", "duplicate transition (also given at index 0)");
   expect_error([](json& d) { d["mdp"]["terminal"] = {0}; }, "mdp.start[0]", "start state 0 is terminal");
   expect_error([](json& d) { d.erase("observation_model"); }, "demonstration[0].steps",
                "has observations but the file has no observation_model");
@@ -343,9 +382,12 @@ TEST(ProblemFile, TupleListsAreCheckedAsTheyAreRead) {
             "mdp.transitions[3]: duplicate transition (also given at index 1)");
   EXPECT_EQ(error_of(cut_after("transitions", "[0,0,1,1.0],[0,1,2],")),
             "mdp.transitions[1]: expected [state, action, next_state, probability], got an array of 3");
-  EXPECT_EQ(error_of(cut_after("features", "[1,0,0,1.0],[1.0,0,0,2.0],")), "mdp.features[1]: duplicate feature entry (also given at index 0)");
-  EXPECT_EQ(error_of(cut_after("start", "[0,0.5],[0,0.5]")), "mdp.start[1]: duplicate start state (also given at index 0)");
-  EXPECT_EQ(error_of(cut_after("truth", "[0,1],7")), "demonstration[0].truth[1]: expected [state, action], got the number 7");
+  EXPECT_EQ(error_of(cut_after("features", "[1,0,0,1.0],[1.0,0,0,2.0],")),
+            "mdp.features[1]: duplicate feature entry (also given at index 0)");
+  EXPECT_EQ(error_of(cut_after("start", "[0,0.5],[0,0.5]")),
+            "mdp.start[1]: duplicate start state (also given at index 0)");
+  EXPECT_EQ(error_of(cut_after("truth", "[0,1],7")),
+            "demonstration[0].truth[1]: expected [state, action], got the number 7");
 }
 
 // No problem or domain file nests deeper than 8 arrays and objects; each level held costs
@@ -402,7 +444,8 @@ TEST(ProblemFile, ReadingIsLinearInATrajectorysLength) {
       const Problem p = parse_problem(text);
       clock_gettime(CLOCK_THREAD_CPUTIME_ID, &end);
       EXPECT_EQ(p.demonstration.size(), 2u);
-      best = std::min(best, static_cast<double>(end.tv_sec - start.tv_sec) + 1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec));
+      best = std::min(best, static_cast<double>(end.tv_sec - start.tv_sec) +
+                                1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec));
     }
     return best;
   };
@@ -414,8 +457,12 @@ TEST(ProblemFile, ReadingIsLinearInATrajectorysLength) {
 TEST(ProblemFile, EmptyDemonstration) {
   expect_error([](json& d) { d["demonstration"] = json::array(); }, "demonstration", "is empty");
   expect_error([](json& d) { d["demonstration"][0] = json::object(); }, "demonstration[0]", "has neither");
-  expect_error([](json& d) { d["demonstration"][0]["steps"] = json::array(); d["demonstration"][0].erase("truth"); },
-               "demonstration[0].steps", "is empty");
+  expect_error(
+      [](json& d) {
+        d["demonstration"][0]["steps"] = json::array();
+        d["demonstration"][0].erase("truth");
+      },
+      "demonstration[0].steps", "is empty");
   expect_error([](json& d) { d["demonstration"][0]["truth"] = json::array(); }, "demonstration[0].truth", "is empty");
 }
 
@@ -457,8 +504,11 @@ TEST(ProblemFile, DefaultsAndExtensions) {
   EXPECT_DOUBLE_EQ(p.mdp.start[1], 0.0);
   EXPECT_TRUE(p.mdp.is_terminal(1));
   EXPECT_FALSE(p.mdp.available(2, 1));
-  expect_error([](json& x) { x["mdp"]["impossible_actions"] = {{0, 0}}; }, "mdp.transitions[0]",
-               "which mdp.impossible_actions lists as impossible");
+  expect_error(
+      [](json& x) {
+        x["mdp"]["impossible_actions"] = {{0, 0}};
+      },
+      "mdp.transitions[0]", "which mdp.impossible_actions lists as impossible");
   expect_error([](json& x) { x["demonstration"][0]["ends_in_terminal"] = true; }, "demonstration[0].ends_in_terminal",
                "the MDP has no terminal states");
   const Problem q = parse_problem(problem_to_json(p).dump());

@@ -117,7 +117,8 @@ TEST(LcmTypes, HostileLengthFieldsNeitherCrashNorBalloon) {
   long long decodes = 0;
   for (const auto& sample : samples) {
     covered.insert(sample.type.substr(sample.type.find('.') + 1));
-    ASSERT_EQ(sample.decode(sample.bytes.data(), static_cast<int>(sample.bytes.size()), {}), static_cast<int>(sample.bytes.size()))
+    ASSERT_EQ(sample.decode(sample.bytes.data(), static_cast<int>(sample.bytes.size()), {}),
+              static_cast<int>(sample.bytes.size()))
         << sample.type;
     for (size_t at = 8; at + 4 <= sample.bytes.size(); ++at) {  // after the 8-byte fingerprint
       for (const std::int32_t length : hbirl::test::hostile_lengths()) {
@@ -151,8 +152,11 @@ TEST(MemoryBus, DeliversTypedMessagesInOrder) {
     EXPECT_EQ(m.eta.size(), static_cast<size_t>(m.n));
     seen.push_back(m.seq);
   });
-  for (int s = 1; s <= 5; ++s) EXPECT_TRUE(publish(a, s % 2 ? channels::kObservations : Channel<hbirl::observations_t>{"OBS_B"}, observations(s, s), out));
-  EXPECT_TRUE(publish(a, Channel<hbirl::observations_t>{"XOBSERVATIONS"}, observations(9, 1), out));  // not a whole-name match
+  for (int s = 1; s <= 5; ++s)
+    EXPECT_TRUE(
+        publish(a, s % 2 ? channels::kObservations : Channel<hbirl::observations_t>{"OBS_B"}, observations(s, s), out));
+  EXPECT_TRUE(
+      publish(a, Channel<hbirl::observations_t>{"XOBSERVATIONS"}, observations(9, 1), out));  // not a whole-name match
   EXPECT_EQ(b.handle(0), 5);
   EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2, 3, 4, 5}));
   EXPECT_EQ(in.messages_in, 5);
@@ -230,7 +234,9 @@ TEST(MemoryBus, QueueCapacityDropsTheOldest) {
   MemoryBus bus(hub);
   Counters c = quiet_counters(), out = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); }, 3);
+  subscribe(
+      bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); },
+      3);
   for (int s = 1; s <= 5; ++s) publish(bus, channels::kObservations, observations(s, 1), out);
   EXPECT_EQ(bus.handle(0), 3);
   EXPECT_EQ(seen, (std::vector<std::int64_t>{3, 4, 5}));
@@ -274,7 +280,7 @@ TEST(LcmBus, RoundTripOverMemq) {
   Counters c = quiet_counters(), out = quiet_counters();
   std::vector<std::int64_t> seen;
   subscribe(bus, channels::kObservations, c,
-                                   [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+            [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
   publish(bus, channels::kObservations, observations(7, 2), out);
   const char garbage[] = "noise";
   bus.publish("OBSERVATIONS", garbage, sizeof garbage);
@@ -312,7 +318,8 @@ TEST(Bus, SubscriptionsEndWithTheirOwner) {
     subscribe(*bus, channels::kObservations, c, [&](const hbirl::observations_t&, const Message&) { ++kept; });
     {
       Subscriptions owner;
-      owner.add(*bus, subscribe(*bus, Channel<hbirl::observations_t>{"OBS.*"}, c, [&](const hbirl::observations_t&, const Message&) { ++ended; }));
+      owner.add(*bus, subscribe(*bus, Channel<hbirl::observations_t>{"OBS.*"}, c,
+                                [&](const hbirl::observations_t&, const Message&) { ++ended; }));
       Bus& to = bus == &memory ? sender : *bus;
       publish(to, channels::kObservations, observations(1, 1), out);
       for (int i = 0; i < 5 && kept < 1; ++i) bus->handle(50);
@@ -341,7 +348,8 @@ TEST(LcmBus, BadUrlIsAClearError) {
 // waits and returns 0, an event written in two parts is read once it is whole, and
 // nothing is skipped or read twice.
 TEST(LogBus, FollowsALogAsItGrows) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_follow_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("hbirl_follow_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string one = (dir / "one.lcmlog").string(), path = (dir / "growing.lcmlog").string();
   const auto event_bytes = [&](std::int64_t seq) {  // one event as lcm-logger writes it
@@ -364,7 +372,8 @@ TEST(LogBus, FollowsALogAsItGrows) {
   bus.follow(true);
   Counters c = quiet_counters();
   std::vector<std::int64_t> seen;
-  subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+  subscribe(bus, channels::kObservations, c,
+            [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
   EXPECT_EQ(bus.handle(0), 1);
   EXPECT_EQ(bus.handle(30), 0);  // the end, for now
   const std::string second = event_bytes(2);
@@ -380,8 +389,8 @@ TEST(LogBus, FollowsALogAsItGrows) {
 }
 
 // lcm-logger's event as bytes, its header stating what the caller says (a hostile file).
-std::string raw_event(const std::string& channel, const std::string& data, std::int64_t channel_len, std::int64_t data_len,
-                      std::uint32_t sync = 0xEDA1DA01) {
+std::string raw_event(const std::string& channel, const std::string& data, std::int64_t channel_len,
+                      std::int64_t data_len, std::uint32_t sync = 0xEDA1DA01) {
   std::string out;
   const auto be = [&out](std::uint64_t v, int bytes) {
     for (int k = bytes - 1; k >= 0; --k) out.push_back(static_cast<char>((v >> (8 * k)) & 0xFF));
@@ -396,7 +405,8 @@ std::string raw_event(const std::string& channel, const std::string& data, std::
 
 std::string good_event(std::int64_t seq) {
   const std::vector<std::uint8_t> bytes = encode(observations(seq, 2));
-  return raw_event("OBSERVATIONS", std::string(bytes.begin(), bytes.end()), 12, static_cast<std::int64_t>(bytes.size()));
+  return raw_event("OBSERVATIONS", std::string(bytes.begin(), bytes.end()), 12,
+                   static_cast<std::int64_t>(bytes.size()));
 }
 
 // A recording is hostile input too. After a good event, an event whose header states a data
@@ -406,7 +416,8 @@ std::string good_event(std::int64_t seq) {
 // following one skips to the next event and reads on. An event the file ends inside is the
 // end of the recording.
 TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_damaged_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("hbirl_damaged_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "damaged.lcmlog").string();
   const std::string first = good_event(1);
@@ -425,7 +436,8 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
     LogBus bus(path);
     Counters c = quiet_counters();
     std::vector<std::int64_t> seen;
-    subscribe(bus, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    subscribe(bus, channels::kObservations, c,
+              [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
     EXPECT_EQ(bus.handle(0), 1);
     try {
       bus.handle(0);
@@ -439,7 +451,8 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
     LogBus following(path);
     following.follow(true);
     seen.clear();
-    subscribe(following, channels::kObservations, c, [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
+    subscribe(following, channels::kObservations, c,
+              [&](const hbirl::observations_t& m, const Message&) { seen.push_back(m.seq); });
     for (int k = 0; k < 4; ++k) following.handle(0);
     EXPECT_EQ(seen, (std::vector<std::int64_t>{1, 2})) << says;
     EXPECT_GE(following.damaged(), 1) << says;
@@ -461,7 +474,8 @@ TEST(LogBus, DamagedRecordingsAreRefusedNamingTheByte) {
 }
 
 TEST(LogBus, ReplaysARecordedLogDeterministically) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hbirl_logbus_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("hbirl_logbus_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "run.lcmlog").string(), out_path = (dir / "out.lcmlog").string();
   {

@@ -68,7 +68,8 @@ TEST(BlockPlacement, NewWorkersOnTrialAndBlocksTheyCannotHold) {
   const std::vector<std::uint64_t> d = digests(6);
   std::vector<std::string> owners(6);
   const std::vector<int> todo = {0, 1, 2, 3, 4, 5};
-  EXPECT_EQ(shares(place_blocks(todo, {"new", "old"}, d, owners, roster)), (std::map<std::string, int>{{"new", 1}, {"old", 5}}));
+  EXPECT_EQ(shares(place_blocks(todo, {"new", "old"}, d, owners, roster)),
+            (std::map<std::string, int>{{"new", 1}, {"old", 5}}));
   roster["old"].unheld[d[2]] = 2;
   roster["old"].last_unheld = Worker::Clock::now();
   const std::vector<std::string> placed = place_blocks(todo, {"new", "old"}, d, owners, roster);

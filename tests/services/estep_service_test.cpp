@@ -46,7 +46,8 @@ const Task& task() {
     GridworldObservationOptions options;
     options.per_step = 6;
     out.observed = observe_gridworld(out.task.mdp, out.task.trajectories, subject, elements, options, rng).trajectories;
-    const std::vector<Trajectory> controlled = soft_expert_demonstration(out.task.mdp, out.task.true_weights, 20, 10, rng);
+    const std::vector<Trajectory> controlled =
+        soft_expert_demonstration(out.task.mdp, out.task.true_weights, 20, 10, rng);
     out.prior.num_symbols = 4;
     out.prior.num_confounders = 3;
     out.prior.subject_alpha = controlled_run_alpha(out.task.mdp, controlled, subject, 6, 1.0, rng);
@@ -79,7 +80,8 @@ Task with_learned_eta(bool given_contexts) {
   if (given_contexts) {
     for (auto& o : t.observed) {
       o.contexts.resize(static_cast<size_t>(o.num_observations()));
-      for (int n = 0; n < o.num_observations(); ++n) o.contexts[static_cast<size_t>(n)] = (7 * n + o.symbols[static_cast<size_t>(n)]) % 5;
+      for (int n = 0; n < o.num_observations(); ++n)
+        o.contexts[static_cast<size_t>(n)] = (7 * n + o.symbols[static_cast<size_t>(n)]) % 5;
     }
   }
   return t;
@@ -101,7 +103,8 @@ WorkerThread::WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id
 
 struct Optimiser {
   explicit Optimiser(std::shared_ptr<MemoryHub> hub, BusExecutorOptions options = {}, const Task& t = task())
-      : bus(std::move(hub)), counters(quiet("optimiser")),
+      : bus(std::move(hub)),
+        counters(quiet("optimiser")),
         executor(std::make_shared<BusBlockExecutor>(bus, t.task.mdp, "gridworld", counters, options)) {}
   MemoryBus bus;
   Counters counters;
@@ -112,7 +115,8 @@ TEST(EStepService, TrajectoriesRoundTrip) {
   const auto& observed = task().observed;
   std::vector<ObservedTrajectory> back;
   for (size_t i = 0; i < observed.size(); ++i) {
-    back.push_back(from_message(to_message(observed[i], static_cast<int>(i), static_cast<int>(observed.size()), 1, "w")));
+    back.push_back(
+        from_message(to_message(observed[i], static_cast<int>(i), static_cast<int>(observed.size()), 1, "w")));
   }
   EXPECT_EQ(dataset_digest(back), dataset_digest(observed));
   hbirl::trajectory_t bad = to_message(observed[0], 0, 1, 1, "w");
@@ -125,7 +129,8 @@ TEST(EStepService, TrajectoriesRoundTrip) {
   const std::vector<ObservedTrajectory> with_contexts = with_learned_eta(true).observed;
   back.clear();
   for (size_t i = 0; i < with_contexts.size(); ++i) {
-    back.push_back(from_message(to_message(with_contexts[i], static_cast<int>(i), static_cast<int>(with_contexts.size()), 1, "w")));
+    back.push_back(from_message(
+        to_message(with_contexts[i], static_cast<int>(i), static_cast<int>(with_contexts.size()), 1, "w")));
   }
   EXPECT_EQ(dataset_digest(back), dataset_digest(with_contexts));
   EXPECT_NE(dataset_digest(back), dataset_digest(observed));
@@ -165,9 +170,11 @@ TEST(EStepService, MdpRoundTripsInChunksAndBadOnesAreRefused) {
   EXPECT_EQ(got->start, mdp.start);
   const auto refused = [](std::vector<hbirl::mdp_t> messages, const std::string& field) {
     MdpAssembler a;
-    hbirl::testing::expect_refused([&] {
-      for (const auto& m : messages) a.add(m);
-    }, field);
+    hbirl::testing::expect_refused(
+        [&] {
+          for (const auto& m : messages) a.add(m);
+        },
+        field);
   };
   auto bad = chunks;
   bad[0].num_states = -3;
@@ -301,21 +308,27 @@ TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
   WorkerThread worker(behind, "sampler-a");
   MemoryBus front(hub), back(behind);
   std::atomic<int> forged{0};
-  const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
-  for (const std::string& channel : {channels::kEStepRequest.name, channels::kMdp.name, channels::trajectory_channel("sampler-a").name}) {
+  const auto forward_to = [](MemoryBus& to) {
+    return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); };
+  };
+  for (const std::string& channel :
+       {channels::kEStepRequest.name, channels::kMdp.name, channels::trajectory_channel("sampler-a").name}) {
     front.subscribe(channel, forward_to(back), 100000);
   }
   back.subscribe(channels::kStatus.name, forward_to(front), 1000);
-  back.subscribe(channels::kEStepResult.name, [&](const Message& m) {
-    front.publish(m.channel, m.data, m.size);
-    hbirl::estep_result_t r;
-    if (r.decode(m.data, 0, m.size) < 0 || r.block != 0 || r.counts.empty()) return;
-    r.counts[0] += 1.0;
-    std::vector<std::uint8_t> bytes(static_cast<size_t>(r.getEncodedSize()));
-    r.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    front.publish(m.channel, bytes.data(), static_cast<int>(bytes.size()));
-    ++forged;
-  }, 100000);
+  back.subscribe(
+      channels::kEStepResult.name,
+      [&](const Message& m) {
+        front.publish(m.channel, m.data, m.size);
+        hbirl::estep_result_t r;
+        if (r.decode(m.data, 0, m.size) < 0 || r.block != 0 || r.counts.empty()) return;
+        r.counts[0] += 1.0;
+        std::vector<std::uint8_t> bytes(static_cast<size_t>(r.getEncodedSize()));
+        r.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+        front.publish(m.channel, bytes.data(), static_cast<int>(bytes.size()));
+        ++forged;
+      },
+      100000);
   std::atomic<bool> stop{false};
   std::thread relay([&] {
     while (!stop) {
@@ -331,8 +344,8 @@ TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
   const auto stats = opt.executor->stats();
   EXPECT_GT(forged, 0);
   EXPECT_EQ(stats.conflicts, stats.requests);  // block 0 of every pass
-  EXPECT_EQ(stats.remote_blocks, 0);            // no answer under the name was used
-  EXPECT_EQ(stats.liars, 0);                    // and it was not benched
+  EXPECT_EQ(stats.remote_blocks, 0);           // no answer under the name was used
+  EXPECT_EQ(stats.liars, 0);                   // and it was not benched
   EXPECT_GT(worker.worker().blocks_computed(), 3);
 }
 
@@ -389,11 +402,16 @@ TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
   WorkerThread missing(behind, "sampler-b");
   MemoryBus front(hub), back(behind);
   std::atomic<int> dropped{0};
-  const auto forward_to = [](MemoryBus& to) { return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); }; };
-  front.subscribe(channels::kEStepRequest.name, [&](const Message& m) {
-    if (dropped++ == 0) return;  // the first request never reaches it
-    back.publish(m.channel, m.data, m.size);
-  }, 100000);
+  const auto forward_to = [](MemoryBus& to) {
+    return [&to](const Message& m) { to.publish(m.channel, m.data, m.size); };
+  };
+  front.subscribe(
+      channels::kEStepRequest.name,
+      [&](const Message& m) {
+        if (dropped++ == 0) return;  // the first request never reaches it
+        back.publish(m.channel, m.data, m.size);
+      },
+      100000);
   front.subscribe(channels::kMdp.name, forward_to(back), 100000);
   front.subscribe(channels::trajectory_channel("sampler-b").name, forward_to(back), 100000);
   back.subscribe(channels::kStatus.name, forward_to(front), 1000);
@@ -441,21 +459,22 @@ TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   MemoryBus meddler(hub);
   Counters meddler_counters = quiet("meddler");
   std::atomic<bool> stop{false};
-  subscribe(meddler, channels::kEStepResult, meddler_counters,
-                                   [&](const hbirl::estep_result_t& m, const Message&) {
-                                     if (m.worker == "meddler") return;
-                                     hbirl::estep_result_t copy = m;
-                                     copy.worker = "meddler";
-                                     publish(meddler, channels::kEStepResult, copy, meddler_counters);
-                                     copy.request_id -= 1;
-                                     publish(meddler, channels::kEStepResult, copy, meddler_counters);
-                                     const char garbage[] = "garbage";
-                                     for (const std::string& ch : {channels::kEStepResult.name, channels::kEStepRequest.name,
-                                                                   channels::trajectory_channel("sampler-a").name, channels::kStatus.name}) {
-                                       meddler.publish(ch, garbage, sizeof garbage);
-                                     }
-                                   },
-                                   1000);
+  subscribe(
+      meddler, channels::kEStepResult, meddler_counters,
+      [&](const hbirl::estep_result_t& m, const Message&) {
+        if (m.worker == "meddler") return;
+        hbirl::estep_result_t copy = m;
+        copy.worker = "meddler";
+        publish(meddler, channels::kEStepResult, copy, meddler_counters);
+        copy.request_id -= 1;
+        publish(meddler, channels::kEStepResult, copy, meddler_counters);
+        const char garbage[] = "garbage";
+        for (const std::string& ch : {channels::kEStepResult.name, channels::kEStepRequest.name,
+                                      channels::trajectory_channel("sampler-a").name, channels::kStatus.name}) {
+          meddler.publish(ch, garbage, sizeof garbage);
+        }
+      },
+      1000);
   std::thread meddling([&] {
     while (!stop) meddler.handle(20);
   });
@@ -488,7 +507,7 @@ TEST(SamplerWorker, AWorkerOfEveryRunFollowsTheOptimiserItHears) {
   KeyedBus optimiser_bus(std::make_unique<MemoryBus>(hub), run_a, co);
   std::vector<std::string> heard;
   subscribe(optimiser_bus, channels::kStatus, co,
-                                     [&](const hbirl::service_status_t& m, const Message&) { heard.push_back(m.id); });
+            [&](const hbirl::service_status_t& m, const Message&) { heard.push_back(m.id); });
   SamplerWorker worker(worker_bus, "sampler-late", cw);
   worker.publish_status();
   optimiser_bus.handle(0);
@@ -524,8 +543,10 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   EXPECT_EQ(counters.bad_messages, 0);  // a fine message: its block is just not complete
   // The first trajectory of 1000 made-up blocks, each ~2.5 KB held: past 1 MB after ~430.
   for (int i = 0; i < 1000; ++i) {
-    publish(sender, channel, to_message(task().observed[0], i * ObservationEStep::kBlockSize, 1000 * ObservationEStep::kBlockSize,
-                                        static_cast<std::uint64_t>(1000 + i), "sampler-a"), out);
+    publish(sender, channel,
+            to_message(task().observed[0], i * ObservationEStep::kBlockSize, 1000 * ObservationEStep::kBlockSize,
+                       static_cast<std::uint64_t>(1000 + i), "sampler-a"),
+            out);
   }
   bus.handle(0);
   EXPECT_GT(counters.bad_messages, 0);
@@ -544,8 +565,8 @@ TEST(SamplerWorker, DeclaredDataSetSizesTakeNoMemory) {
   EXPECT_EQ(b.trajectories_held(), 0);
   // Sent under its own digest, it is held.
   for (int i = 0; i < ObservationEStep::kBlockSize; ++i) {
-    publish(sender, channels::trajectory_channel("sampler-b"), to_message(first[static_cast<size_t>(i)], i, 40, dataset_digest(first), "sampler-b"),
-            out);
+    publish(sender, channels::trajectory_channel("sampler-b"),
+            to_message(first[static_cast<size_t>(i)], i, 40, dataset_digest(first), "sampler-b"), out);
   }
   bus.handle(0);
   EXPECT_EQ(b.trajectories_held(), ObservationEStep::kBlockSize);
@@ -646,29 +667,30 @@ TEST(EStepService, ForgedAnswersDoNotChangeTheta) {
     MemoryBus forger(hub);
     Counters forger_counters = quiet("forger");
     std::atomic<bool> stop{false};
-    subscribe(forger, channels::kEStepRequest, forger_counters,
-                                      [&](const hbirl::estep_request_t& m, const Message&) {
-                                        for (int b = 0; b < m.num_blocks; ++b) {
-                                          const std::string& to = m.assigned_worker[static_cast<size_t>(b)];
-                                          if (to.empty()) continue;
-                                          hbirl::estep_result_t r{};
-                                          r.request_id = m.request_id;
-                                          r.worker = name_the_assigned_worker ? to : "forger";
-                                          r.block_digest = m.block_digest[static_cast<size_t>(b)];
-                                          r.block = b;
-                                          r.num_pairs = m.num_pairs;
-                                          r.counts.assign(static_cast<size_t>(m.num_pairs), 1.0);
-                                          r.num_symbols = m.num_symbols;
-                                          r.num_confounders = m.num_confounders;
-                                          r.alpha_subject.assign(static_cast<size_t>(m.num_pairs),
-                                                                 std::vector<double>(static_cast<size_t>(m.num_symbols), 1.0));
-                                          r.alpha_confounder.assign(static_cast<size_t>(m.num_confounders),
-                                                                    std::vector<double>(static_cast<size_t>(m.num_symbols), 1.0));
-                                          r.log_likelihood = -1.0;
-                                          publish(forger, channels::kEStepResult, r, forger_counters);
-                                        }
-                                      },
-                                      1000);
+    subscribe(
+        forger, channels::kEStepRequest, forger_counters,
+        [&](const hbirl::estep_request_t& m, const Message&) {
+          for (int b = 0; b < m.num_blocks; ++b) {
+            const std::string& to = m.assigned_worker[static_cast<size_t>(b)];
+            if (to.empty()) continue;
+            hbirl::estep_result_t r{};
+            r.request_id = m.request_id;
+            r.worker = name_the_assigned_worker ? to : "forger";
+            r.block_digest = m.block_digest[static_cast<size_t>(b)];
+            r.block = b;
+            r.num_pairs = m.num_pairs;
+            r.counts.assign(static_cast<size_t>(m.num_pairs), 1.0);
+            r.num_symbols = m.num_symbols;
+            r.num_confounders = m.num_confounders;
+            r.alpha_subject.assign(static_cast<size_t>(m.num_pairs),
+                                   std::vector<double>(static_cast<size_t>(m.num_symbols), 1.0));
+            r.alpha_confounder.assign(static_cast<size_t>(m.num_confounders),
+                                      std::vector<double>(static_cast<size_t>(m.num_symbols), 1.0));
+            r.log_likelihood = -1.0;
+            publish(forger, channels::kEStepResult, r, forger_counters);
+          }
+        },
+        1000);
     std::thread forging([&] {
       while (!stop) forger.handle(5);
     });
@@ -801,7 +823,8 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
       s.id = "sampler-other-build";
       s.seq = seq;
       s.state = "running";
-      s.mdp_digest = static_cast<std::int64_t>(worker.worker().mdp_digest());  // it could take work but for its numerics
+      s.mdp_digest =
+          static_cast<std::int64_t>(worker.worker().mdp_digest());  // it could take work but for its numerics
       s.numerics = static_cast<std::int64_t>(numerics_fingerprint() ^ 1);
       publish(other, channels::kStatus, s, other_counters);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -48,7 +48,7 @@ TEST(KeyedBus, OnlyMessagesSignedWithTheKeyArrive) {
   MemoryBus raw(hub);
   std::vector<int> seen;
   subscribe(receiver, Channel<hbirl::episode_marker_t>{"EPISODE|OTHER"}, in,
-                                     [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
+            [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
   // What the raw endpoint sees of the sender's messages: to tamper with and replay.
   std::vector<std::vector<std::uint8_t>> wire;
   raw.subscribe("EPISODE", [&](const Message& m) { wire.emplace_back(m.data, m.data + m.size); });
@@ -111,7 +111,8 @@ TEST(RunKey, FilesAreOwnerOnlyAndWellFormed) {
     EXPECT_NE(std::string(e.what()).find("chmod 600"), std::string::npos) << e.what();
   }
   const auto bad = scratch("bad.key");
-  for (const std::string& text : std::vector<std::string>{"", "abc\n", std::string(64, 'g') + "\n", std::string(63, 'a') + "\n", std::string(66, 'a')}) {
+  for (const std::string& text : std::vector<std::string>{"", "abc\n", std::string(64, 'g') + "\n",
+                                                          std::string(63, 'a') + "\n", std::string(66, 'a')}) {
     std::filesystem::remove(bad);
     std::ofstream(bad) << text;
     ::chmod(bad.c_str(), 0600);
@@ -129,9 +130,9 @@ TEST(RunKey, FilesAreOwnerOnlyAndWellFormed) {
   ::chmod(path.c_str(), 0600);
   EXPECT_FALSE(RunKey::read(path.string()).run().has_value());
   const std::string hex(64, 'a');
-  for (const std::string& text : std::vector<std::string>{hex + "\nrun 0000000000000000\n", hex + "\nrun 12345\n",
-                                                          hex + "\nrum 0123456789abcdef\n", hex + "\nrun 0123456789abcdeg\n",
-                                                          hex + "\nrun 0123456789abcdef\nmore\n"}) {
+  for (const std::string& text : std::vector<std::string>{
+           hex + "\nrun 0000000000000000\n", hex + "\nrun 12345\n", hex + "\nrum 0123456789abcdef\n",
+           hex + "\nrun 0123456789abcdeg\n", hex + "\nrun 0123456789abcdef\nmore\n"}) {
     std::filesystem::remove(bad);
     std::ofstream(bad) << text;
     ::chmod(bad.c_str(), 0600);
@@ -143,7 +144,6 @@ TEST(RunKey, FilesAreOwnerOnlyAndWellFormed) {
   EXPECT_EQ(*RunKey::read(bad.string()).run(), 0x0123456789abcdefULL);
   std::filesystem::remove_all(path.parent_path());
 }
-
 
 // One key, many runs: every run's key file names its run, and its messages are signed for
 // it. A bus of run A drops run B's messages, signed with the same key (counted once as bad
@@ -161,9 +161,12 @@ TEST(KeyedBus, AKeySharedByRunsKeepsEachRunsMessagesApart) {
   KeyedBus reader(std::make_unique<MemoryBus>(hub), shared, cr, KeyUse::kReader);
   std::vector<int> seen_a, seen_b, seen_reader;
   std::vector<std::pair<int, RunId>> seen_worker;
-  subscribe(a, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen_a.push_back(m.episode); });
-  subscribe(b, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, cb, [&](const hbirl::episode_marker_t& m, const Message&) { seen_b.push_back(m.episode); });
-  subscribe(reader, channels::kEpisode, cr, [&](const hbirl::episode_marker_t& m, const Message&) { seen_reader.push_back(m.episode); });
+  subscribe(a, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, ca,
+            [&](const hbirl::episode_marker_t& m, const Message&) { seen_a.push_back(m.episode); });
+  subscribe(b, Channel<hbirl::episode_marker_t>{"EPISODE|ANSWER"}, cb,
+            [&](const hbirl::episode_marker_t& m, const Message&) { seen_b.push_back(m.episode); });
+  subscribe(reader, channels::kEpisode, cr,
+            [&](const hbirl::episode_marker_t& m, const Message&) { seen_reader.push_back(m.episode); });
   subscribe(worker, channels::kEpisode, cw, [&](const hbirl::episode_marker_t& m, const Message& raw) {
     seen_worker.emplace_back(m.episode, raw.run);
   });
@@ -207,7 +210,8 @@ TEST(KeyedBus, AWorkerOfEveryRunSignsForNoneUntilItHearsOne) {
   KeyedBus worker(std::make_unique<MemoryBus>(hub), shared, cw, KeyUse::kWorker);
   KeyedBus a(std::make_unique<MemoryBus>(hub), run_a, ca);
   std::vector<int> seen;
-  subscribe(a, Channel<hbirl::episode_marker_t>{"STATUS"}, ca, [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
+  subscribe(a, Channel<hbirl::episode_marker_t>{"STATUS"}, ca,
+            [&](const hbirl::episode_marker_t& m, const Message&) { seen.push_back(m.episode); });
   subscribe(worker, channels::kEpisode, cw, [](const hbirl::episode_marker_t&, const Message&) {});
   publish(worker, Channel<hbirl::episode_marker_t>{"STATUS"}, marker(1), cw);  // before any run: not sent
   a.handle(0);
@@ -235,9 +239,12 @@ TEST(KeyedBus, AServiceNeedsAKeyFileThatNamesItsRun) {
     EXPECT_EQ(e.field(), "--key");
     EXPECT_NE(std::string(e.what()).find("names no run"), std::string::npos) << e.what();
   }
-  EXPECT_NO_THROW(with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), run.string(), c, KeyUse::kService));
-  EXPECT_NO_THROW(with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), shared.string(), c, KeyUse::kWorker));
-  EXPECT_NO_THROW(with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), shared.string(), c, KeyUse::kReader));
+  EXPECT_NO_THROW(
+      with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), run.string(), c, KeyUse::kService));
+  EXPECT_NO_THROW(
+      with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), shared.string(), c, KeyUse::kWorker));
+  EXPECT_NO_THROW(
+      with_key(std::make_unique<MemoryBus>(std::make_shared<MemoryHub>()), shared.string(), c, KeyUse::kReader));
   std::filesystem::remove_all(shared.parent_path());
 }
 

@@ -49,7 +49,8 @@ int forge_end_run(lcm::LCM& lcm, int episodes, int after) {
     lcm.publish(hbirl::services::channels::kEpisode.name, &forged);
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  std::printf("forged END_RUN of %d episodes (5 times) after episode %d ended (%s)\n", episodes, seen.episode, seen.domain.c_str());
+  std::printf("forged END_RUN of %d episodes (5 times) after episode %d ended (%s)\n", episodes, seen.episode,
+              seen.domain.c_str());
   return 0;
 }
 
@@ -67,7 +68,9 @@ int ghosts(lcm::LCM& lcm, int count, double hz) {
         *have = true;
       }
     }
-    void on_reward(const lcm::ReceiveBuffer*, const std::string&, const hbirl::reward_t* r) { *learned = *learned || r->final; }
+    void on_reward(const lcm::ReceiveBuffer*, const std::string&, const hbirl::reward_t* r) {
+      *learned = *learned || r->final;
+    }
   } watch{&real, &have, &learned};
   lcm.subscribe(hbirl::services::channels::kStatus.name, &Watch::on_status, &watch);
   lcm.subscribe(hbirl::services::channels::kReward.name, &Watch::on_reward, &watch);

@@ -23,7 +23,8 @@ namespace {
 // Every channel's own message type, each 4 bytes after the fingerprint set to INT_MIN in turn.
 std::vector<std::vector<std::uint8_t>> hostile_variants(const hbirl::test::SampleMessage& sample) {
   std::vector<std::vector<std::uint8_t>> out;
-  for (size_t at = 8; at + 4 <= sample.bytes.size(); ++at) out.push_back(hbirl::test::with_int32_at(sample.bytes, at, INT_MIN));
+  for (size_t at = 8; at + 4 <= sample.bytes.size(); ++at)
+    out.push_back(hbirl::test::with_int32_at(sample.bytes, at, INT_MIN));
   return out;
 }
 

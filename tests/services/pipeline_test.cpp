@@ -37,7 +37,6 @@ using testing::quiet;
 using testing::ServiceThread;
 using testing::WorkerThread;
 
-
 SimDriverOptions small_run() {
   SimDriverOptions o;
   o.simulation.scene.fps = 5;  // 10 frames per step: a short run
@@ -51,8 +50,9 @@ SimDriverOptions small_run() {
 // The simulator publishes the run once the optimiser listens, then serves FRAME_REQUEST
 // until the optimiser is done; returns what the optimiser learned (and how many frames
 // the simulator sent again).
-std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const Domain& domain, const SimDriverOptions& run,
-                                                    int resend_after_ms, std::int64_t* resent = nullptr) {
+std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const Domain& domain,
+                                                    const SimDriverOptions& run, int resend_after_ms,
+                                                    std::int64_t* resent = nullptr) {
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
   SimDriver driver(sim_bus, domain, run, sim_counters);
@@ -89,14 +89,17 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
     MemoryBus recorder_bus(hub);
     lcm::LogFile log(log_path.string(), "w");
     ASSERT_TRUE(log.good());
-    recorder_bus.subscribe(".*", [&log](const Message& m) {
-      lcm::LogEvent e;
-      e.timestamp = m.recv_utime;
-      e.channel = m.channel;
-      e.datalen = m.size;
-      e.data = const_cast<std::uint8_t*>(m.data);
-      log.writeEvent(&e);
-    }, 1 << 20);
+    recorder_bus.subscribe(
+        ".*",
+        [&log](const Message& m) {
+          lcm::LogEvent e;
+          e.timestamp = m.recv_utime;
+          e.channel = m.channel;
+          e.datalen = m.size;
+          e.data = const_cast<std::uint8_t*>(m.data);
+          log.writeEvent(&e);
+        },
+        1 << 20);
     std::atomic<bool> stop_recorder{false};
     std::thread recorder([&] {
       while (!stop_recorder) recorder_bus.handle(20);
@@ -241,11 +244,13 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
   controlled_sorts.sorts = run.simulation.controlled_sorts;
   controlled_sorts.rule_contexts = true;
   const onion::OnionDemonstration c = onion::demonstrate(mdp, controlled, controlled_sorts, run.simulation.seed + 1);
-  for (const auto& t : c.truth) demo_sorts.start_time += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
-  EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed).observed));
+  for (const auto& t : c.truth)
+    demo_sorts.start_time += static_cast<double>(t.size()) * run.simulation.scene.step_seconds;
+  EXPECT_EQ(dataset_digest(live->data.observed),
+            dataset_digest(onion::demonstrate(mdp, run.simulation.scene, demo_sorts, run.simulation.seed).observed));
   EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(c.observed))
-      << live->data.controlled_observed.size() << " controlled episodes (" << live->data.skipped_controlled << " left out) vs "
-      << c.observed.size();
+      << live->data.controlled_observed.size() << " controlled episodes (" << live->data.skipped_controlled
+      << " left out) vs " << c.observed.size();
 }
 
 SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int controlled) {
@@ -389,7 +394,7 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   Counters sim_counters = quiet("sim_driver"), watch_counters = quiet("watch");
   std::atomic<int> progress{0}, rewards{0};
   subscribe(watch_bus, channels::kEmProgress, watch_counters,
-                                  [&](const hbirl::em_progress_t&, const Message&) { ++progress; });
+            [&](const hbirl::em_progress_t&, const Message&) { ++progress; });
   subscribe(watch_bus, channels::kReward, watch_counters, [&](const hbirl::reward_t&, const Message&) { ++rewards; });
   std::atomic<bool> done{false};
   std::thread watch([&] {
@@ -405,8 +410,8 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   Counters opt_counters = quiet("optimiser");
   OptimiserOptions options;
   options.workers = 1;
-  const auto stopped = run_optimiser(opt_bus, options, opt_counters, [&] { return progress >= 2; }, nullptr,
-                                     [&] { listening.set_value(); });
+  const auto stopped = run_optimiser(
+      opt_bus, options, opt_counters, [&] { return progress >= 2; }, nullptr, [&] { listening.set_value(); });
   sim.join();
   EXPECT_FALSE(stopped.has_value());
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the watcher hears the last of it
@@ -458,10 +463,12 @@ TEST(DatasetBuilder, ContextsAreAllOrNoneAndInRange) {
     o.context = {3, 65535};
     b.on_observations(o);
     const auto refused = [&b](const hbirl::observations_t& m, const std::string& field) {
-      hbirl::testing::expect_refused([&] {  // as the bus hands it over (typed subscribe)
-        validate(m);
-        b.on_observations(m);
-      }, field);
+      hbirl::testing::expect_refused(
+          [&] {  // as the bus hands it over (typed subscribe)
+            validate(m);
+            b.on_observations(m);
+          },
+          field);
     };
     o.step = 1;
     hbirl::observations_t bad = o;
@@ -596,7 +603,8 @@ TEST(DatasetBuilder, CopiesThatDisagreeContradictTheRun) {
     hbirl::observations_t other = o;
     other.symbol = {1};
     b.on_observations(other);
-    EXPECT_NE(b.contradiction().find("two different observations of episode 0, step 0, frame 0"), std::string::npos) << b.contradiction();
+    EXPECT_NE(b.contradiction().find("two different observations of episode 0, step 0, frame 0"), std::string::npos)
+        << b.contradiction();
   }
   {
     DatasetBuilder b;
@@ -615,7 +623,8 @@ TEST(DatasetBuilder, CopiesThatDisagreeContradictTheRun) {
     EXPECT_NE(b.contradiction().find("two different ground truths"), std::string::npos) << b.contradiction();
   }
   for (const auto& change : std::vector<std::function<void(hbirl::episode_marker_t&)>>{
-           [](auto& m) { m.num_steps = 2; }, [](auto& m) { m.ends_in_terminal = true; }, [](auto& m) { m.frames_per_step = 2; }}) {
+           [](auto& m) { m.num_steps = 2; }, [](auto& m) { m.ends_in_terminal = true; },
+           [](auto& m) { m.frames_per_step = 2; }}) {
     DatasetBuilder b;
     b.on_marker(end);
     hbirl::episode_marker_t other = end;
@@ -677,7 +686,7 @@ TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
   end_run.kind = hbirl::episode_marker_t::END_RUN;
   end_run.num_steps = 1;
   end_run.frames_per_step = 1;
-  EXPECT_THROW(b.on_marker(end_run), InputError);  // before any episode ended
+  EXPECT_THROW(b.on_marker(end_run), InputError);            // before any episode ended
   hbirl::observations_t o = one_observation(2, {1.0}, 999);  // a stray sender's
   b.on_observations(o);
   o.episode = 0;
@@ -693,7 +702,8 @@ TEST(DatasetBuilder, EndRunStatesTheRunsEpisodes) {
   EXPECT_TRUE(b.complete());
   EXPECT_EQ(b.build().observed.size(), 1u);
   // ... but a run with an episode 999 cannot have had 1 episode: it contradicts itself.
-  EXPECT_NE(b.contradiction().find("END_RUN of 1 episodes after a message about episode 999"), std::string::npos) << b.contradiction();
+  EXPECT_NE(b.contradiction().find("END_RUN of 1 episodes after a message about episode 999"), std::string::npos)
+      << b.contradiction();
   end_run.num_steps = 2;
   EXPECT_THROW(b.on_marker(end_run), InputError);  // contradicts the first
 }
@@ -729,7 +739,8 @@ TEST(DatasetBuilder, AnEndRunTheRunContradictsFailsIt) {
     episode(b, 1);
     EXPECT_TRUE(b.complete());  // what a forger wants: 2 of the run's episodes make a data set
     b.on_marker(marker(2, M::BEGIN_EPISODE, 0));
-    EXPECT_NE(b.contradiction().find("episode 2 after END_RUN said the run had 2"), std::string::npos) << b.contradiction();
+    EXPECT_NE(b.contradiction().find("episode 2 after END_RUN said the run had 2"), std::string::npos)
+        << b.contradiction();
   }
   {  // the same, the sensor's next episode only heard once the data set was taken
     DatasetBuilder b;
@@ -891,7 +902,7 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
     std::map<int, Sent> sent;
     bool run_ended = false;
     const int stated = static_cast<int>(1 + rng.uniform_int(6));  // what an END_RUN that says states
-    int run_episodes = 0;  // 0: no END_RUN has said
+    int run_episodes = 0;                                         // 0: no END_RUN has said
     const auto in_run = [&](int id) { return !run_ended || run_episodes == 0 || id < run_episodes; };
     for (int message = 0; message < 300; ++message) {
       const int id = static_cast<int>(rng.uniform_int(8));
@@ -1059,8 +1070,9 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   // A 167-byte PNG whose header states 30000 x 30000 in a 320 x 240 message (the fuzzer's
   // finding, tests/fuzz/RESULTS.md): refused before decoding, nothing allocated for it.
   {
-    std::ifstream in(std::string(HBIRL_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_png_frame/finding-png-header-30000x30000.png",
-                     std::ios::binary);
+    std::ifstream in(
+        std::string(HBIRL_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_png_frame/finding-png-header-30000x30000.png",
+        std::ios::binary);
     const std::vector<std::uint8_t> bomb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     ASSERT_GT(bomb.size(), 24u);
     f.encoding = "png";
@@ -1175,7 +1187,8 @@ TEST(Pipeline, MessagesThatDoNotFitTheDomainAreRefusedOneByOne) {
   EXPECT_EQ(opt_counters.bad_messages, 5);
   EXPECT_NE(opt_counters.last_problem.find("episode_marker.domain"), std::string::npos) << opt_counters.last_problem;
   EXPECT_EQ(attacked->learned.digest, clean->learned.digest);
-  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(attacked->learned.theta[k], clean->learned.theta[k]);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k)
+    EXPECT_EQ(attacked->learned.theta[k], clean->learned.theta[k]);
 }
 
 // Forgeries from a process without the run's key -- an END_RUN before the run, another
@@ -1237,7 +1250,8 @@ TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
   const auto keyed = corridor_run(forge(true), keyed_counters, &key);
   ASSERT_TRUE(keyed.has_value());
   EXPECT_EQ(keyed->learned.digest, clean->learned.digest);
-  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(keyed->learned.theta[k], clean->learned.theta[k]);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k)
+    EXPECT_EQ(keyed->learned.theta[k], clean->learned.theta[k]);
   EXPECT_GE(keyed_counters.bad_messages, forged) << "every forgery on the optimiser's channels is counted";
   EXPECT_NE(keyed_counters.last_problem.find("not signed"), std::string::npos) << keyed_counters.last_problem;
 
@@ -1246,7 +1260,8 @@ TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
   ASSERT_TRUE(unkeyed.has_value());
   EXPECT_EQ(unkeyed_counters.bad_messages, 2);
   EXPECT_EQ(unkeyed->learned.digest, clean->learned.digest);
-  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k) EXPECT_EQ(unkeyed->learned.theta[k], clean->learned.theta[k]);
+  for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k)
+    EXPECT_EQ(unkeyed->learned.theta[k], clean->learned.theta[k]);
 }
 
 // The simulator as a whole service (SimDriver::serve): it starts once the optimiser's
@@ -1268,7 +1283,8 @@ TEST(Pipeline, SimulatorWaitsForTheOptimiserAndStopsAtItsReward) {
   Heartbeat heartbeat(opt_bus, opt_counters, "optimiser", "optimiser-test");
   OptimiserOptions options;
   options.beat = [&heartbeat](const std::string& state) { heartbeat.tick(state); };
-  const auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { heartbeat.tick("starting", true); });
+  const auto result =
+      run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { heartbeat.tick("starting", true); });
   sim.join();
   ASSERT_TRUE(result.has_value());
   EXPECT_TRUE(served);

@@ -89,14 +89,16 @@ inline std::vector<SampleMessage> sample_messages() {
   }
   {
     hbirl::trajectory_t m{};
-    m.block_digest = 9, m.index = 0, m.num_trajectories = 1, m.block_size = 16, m.worker = "sampler-a", m.num_steps = 2, m.step_begin = {0, 1}, m.n = 2, m.symbol = {0, 1},
-    m.num_sources = 2, m.eta = {{1, 0}, {0.5, 0.5}}, m.num_weights = 2, m.weights = {1, 2};
+    m.block_digest = 9, m.index = 0, m.num_trajectories = 1, m.block_size = 16, m.worker = "sampler-a", m.num_steps = 2,
+    m.step_begin = {0, 1}, m.n = 2, m.symbol = {0, 1}, m.num_sources = 2, m.eta = {{1, 0}, {0.5, 0.5}},
+    m.num_weights = 2, m.weights = {1, 2};
     m.num_context = 2, m.context = {1, 0};
     all.push_back(sample_of("TRAJECTORY", m));
   }
   {
     hbirl::estep_request_t m{};
-    m.request_id = 7, m.num_trajectories = 1, m.block_size = 1, m.num_blocks = 2, m.assigned_worker = {"sampler-a", "b"};
+    m.request_id = 7, m.num_trajectories = 1, m.block_size = 1, m.num_blocks = 2,
+    m.assigned_worker = {"sampler-a", "b"};
     m.block_digest = {3, 4}, m.kind_table = true;
     m.engine = "exact", m.watch = -1, m.num_pairs = 2, m.log_policy = {0, 0}, m.policy = {1, 1}, m.num_symbols = 2,
     m.num_confounders = 1, m.subject_o = {{0.5, 0.5}, {0.5, 0.5}}, m.confounder_o = {{0.5, 0.5}};
@@ -105,8 +107,9 @@ inline std::vector<SampleMessage> sample_messages() {
   }
   {
     hbirl::estep_result_t m{};
-    m.request_id = 7, m.worker = "sampler-a", m.block_digest = 3, m.num_pairs = 2, m.counts = {1, 2}, m.num_symbols = 2, m.num_confounders = 1,
-    m.alpha_subject = {{1, 0}, {0, 1}}, m.alpha_confounder = {{1, 1}}, m.num_watched_steps = 1, m.watched = {{0.5, 0.5}};
+    m.request_id = 7, m.worker = "sampler-a", m.block_digest = 3, m.num_pairs = 2, m.counts = {1, 2}, m.num_symbols = 2,
+    m.num_confounders = 1, m.alpha_subject = {{1, 0}, {0, 1}}, m.alpha_confounder = {{1, 1}}, m.num_watched_steps = 1,
+    m.watched = {{0.5, 0.5}};
     m.num_contexts = 2, m.num_sources = 2, m.source_counts = {{1.5, 0.5}, {0, 2}};
     all.push_back(sample_of("ESTEP_RESULT", m));
   }
@@ -119,7 +122,8 @@ inline std::vector<SampleMessage> sample_messages() {
     hbirl::observation_model_t m{};
     m.domain = "onion", m.num_states = 1, m.num_actions = 2, m.num_pairs = 2, m.num_symbols = 2, m.num_confounders = 1,
     m.subject = {{1, 0}, {0, 1}}, m.confounders = {{0.5, 0.5}};
-    m.num_contexts = 1, m.num_sources = 2, m.stated_eta = {{0.8, 0.2}}, m.learned_eta = {{0.6, 0.4}}, m.context_observations = {3};
+    m.num_contexts = 1, m.num_sources = 2, m.stated_eta = {{0.8, 0.2}}, m.learned_eta = {{0.6, 0.4}},
+    m.context_observations = {3};
     all.push_back(sample_of("OBSERVATION_MODEL", m));
   }
   {

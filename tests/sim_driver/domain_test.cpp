@@ -35,7 +35,8 @@ std::string tiny_domain(const std::string& name, const std::string& eta, double 
                                        [1, 0, 1, 0.7], [1, 0, 0, 0.15], [1, 0, 2, 0.15],
                                        [1, 1, 1, 0.7], [1, 1, 0, 0.15], [1, 1, 2, 0.15]],
                "confounder_observation": [[0, 2, 1.0]],
-               "observations_per_step": 4, "eta": ")" + eta + R"(", "occlusion": )" + std::to_string(occlusion) + R"(,
+               "observations_per_step": 4, "eta": ")" +
+         eta + R"(", "occlusion": )" + std::to_string(occlusion) + R"(,
                "trajectories": 400, "length": 6, "controlled_trajectories": 50}})";
 }
 

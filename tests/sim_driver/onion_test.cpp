@@ -16,11 +16,13 @@ TEST(OnionMdp, TransitionTable) {
   };
   const State start{kUnknown, kOnConveyor, kAtConveyor};
   EXPECT_EQ(p(start, kGrip, {kUnknown, kGripped, kAtConveyor}), 1.0);
-  EXPECT_EQ(p({kUnknown, kOnConveyor, kAtBin}, kGrip, {kUnknown, kOnConveyor, kAtBin}), 1.0);  // not at the conveyor: no effect
+  EXPECT_EQ(p({kUnknown, kOnConveyor, kAtBin}, kGrip, {kUnknown, kOnConveyor, kAtBin}),
+            1.0);  // not at the conveyor: no effect
   EXPECT_EQ(p({kUnknown, kGripped, kAtConveyor}, kMoveToInspection, {kUnknown, kGripped, kAtInspection}), 1.0);
   EXPECT_DOUBLE_EQ(p({kUnknown, kGripped, kAtInspection}, kInspect, {kGood, kGripped, kAtInspection}), 0.7);
   EXPECT_DOUBLE_EQ(p({kUnknown, kGripped, kAtInspection}, kInspect, {kBlemished, kGripped, kAtInspection}), 0.3);
-  EXPECT_EQ(p({kUnknown, kGripped, kAtConveyor}, kInspect, {kUnknown, kGripped, kAtConveyor}), 1.0);  // only at inspection
+  EXPECT_EQ(p({kUnknown, kGripped, kAtConveyor}, kInspect, {kUnknown, kGripped, kAtConveyor}),
+            1.0);  // only at inspection
   EXPECT_EQ(p({kGood, kGripped, kAtInspection}, kInspect, {kGood, kGripped, kAtInspection}), 1.0);  // already known
   EXPECT_EQ(p({kGood, kGripped, kAtBin}, kRelease, {kGood, kInBin, kAtBin}), 1.0);
   EXPECT_EQ(p({kBlemished, kGripped, kAtConveyor}, kRelease, {kBlemished, kOnConveyor, kAtConveyor}), 1.0);

@@ -73,8 +73,8 @@ TEST(RandomTask, DrawsStayInTheirRanges) {
     EXPECT_EQ(t.prior.confounder_alpha.rows(), t.num_confounders);
     for (Eigen::Index r = 0; r < t.subject_o.rows(); ++r) EXPECT_NEAR(t.subject_o.row(r).sum(), 1.0, 1e-12);
   }
-  EXPECT_EQ(layouts.size(), 2u);         // grids and graphs
-  EXPECT_GE(confounders.size(), 5u);     // many numbers of elements
+  EXPECT_EQ(layouts.size(), 2u);      // grids and graphs
+  EXPECT_GE(confounders.size(), 5u);  // many numbers of elements
 }
 
 // A seed is a task: the same bits every time. Another draw is the same task watched

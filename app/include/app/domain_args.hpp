@@ -17,7 +17,8 @@ inline std::shared_ptr<const Domain> open_domain_args(const DomainArgs& args, co
   if (args.spec.empty()) return nullptr;
   std::vector<std::string> warnings;
   std::shared_ptr<const Domain> domain = open_domain(args.spec, args.options, &warnings);
-  for (const auto& w : warnings) std::fprintf(stderr, "%s: warning: %s\n", program.c_str(), printable(args.spec + ": " + w).c_str());
+  for (const auto& w : warnings)
+    std::fprintf(stderr, "%s: warning: %s\n", program.c_str(), printable(args.spec + ": " + w).c_str());
   return domain;
 }
 

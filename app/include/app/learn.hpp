@@ -25,7 +25,7 @@ struct Iterate {
   double objective = 0.0;
   const Eigen::VectorXd& theta;
   const EStepResult& estep;
-  const ObservationPrior* refined;  // the observation model's learned parameters; null when O is not learned
+  const ObservationPrior* refined;   // the observation model's learned parameters; null when O is not learned
   const ObservationEStep* observed;  // the E-step (null when learning from true trajectories)
 };
 
@@ -39,8 +39,8 @@ struct LearnHooks {
 };
 
 struct Learned {
-  LearnResult em;                 // theta, the log-likelihood and every restart
-  std::unique_ptr<EStep> estep;   // what EM learned with
+  LearnResult em;                              // theta, the log-likelihood and every restart
+  std::unique_ptr<EStep> estep;                // what EM learned with
   const ObservationEStep* observed = nullptr;  // the same, when learned from observations
   // Learned from observations:
   ObservationPrior given;    // the prior with the settings applied, before the catch-all

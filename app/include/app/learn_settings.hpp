@@ -31,8 +31,8 @@ struct LearnSettings {
   // What overrides the prior's own choices (unset: as the problem file or the domain says).
   std::optional<bool> learn_observation_model;
   std::optional<AlphaUpdate> alpha_update;
-  std::optional<double> c;          // the paper's step size (alpha_update paper)
-  std::optional<bool> learn_eta;    // eta "learned" per context or "stated"
+  std::optional<double> c;        // the paper's step size (alpha_update paper)
+  std::optional<bool> learn_eta;  // eta "learned" per context or "stated"
 
   // R-hat compares chains: four unless told (Vehtari et al. 2021 run 4 by default).
   static McmcOptions four_chains() {
@@ -64,8 +64,8 @@ struct Setting {
   // The kPrior group's settings are these.
   bool optional = false;
   std::string unset_help;
-  bool hidden_data = false;   // only when learning from observations (not from true trajectories)
-  bool optimiser = true;      // hbirl-optimiser takes it
+  bool hidden_data = false;  // only when learning from observations (not from true trajectories)
+  bool optimiser = true;     // hbirl-optimiser takes it
   std::function<nlohmann::json(const LearnSettings&)> get;
   std::function<void(LearnSettings&, const nlohmann::json&)> put;  // a value check() accepted
 };

@@ -15,14 +15,14 @@ struct Report {
   std::vector<std::string> figures;   // stems drawn (each .png, .svg and its .gp script)
   std::vector<std::string> problems;  // figures that could not be drawn, and why
   long long messages = 0, bad_messages = 0;
-  bool finished = false;              // the run's final reward is in the recording
+  bool finished = false;  // the run's final reward is in the recording
 };
 
 // Throws InputError for a log that cannot be read (damaged, signed with another key,
 // nothing in it readable, messages of several runs) or a folder that cannot be written.
 // `domain`: the run's domain file, when it is one (else the built-in domain it names).
 // `key_file`: the run's key when its messages were signed (services/keyed_bus.hpp).
-Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain = nullptr,
-                    const std::string& key_file = "");
+Report write_report(const std::string& log_path, const std::string& out_dir,
+                    std::shared_ptr<const Domain> domain = nullptr, const std::string& key_file = "");
 
 }  // namespace hbirl::dashboard

@@ -83,9 +83,9 @@ class DashboardState {
  private:
   using Key = std::tuple<int, int, int>;  // (episode, step, frame)
   struct Pending {
-    std::uint64_t order = 0;               // arrival: the oldest are dropped first
-    std::vector<unsigned char> image;      // encoded, as sent
-    std::int64_t utime = 0;                // the camera's
+    std::uint64_t order = 0;           // arrival: the oldest are dropped first
+    std::vector<unsigned char> image;  // encoded, as sent
+    std::int64_t utime = 0;            // the camera's
     std::optional<hbirl::detections_t> detections;
   };
   struct Frame {

@@ -49,9 +49,9 @@ struct EtaRun {
   double ile = 0.0;
   double ile_relative = 0.0;
   bool goal_recovered = false;
-  double subject_eta = -1.0;       // learned eta of the context "pick = subject", its subject share (-1: n/a)
-  double label_accuracy = -1.0;    // subject-or-not labels right (gridworld_scenario.hpp)
-  int em_evaluations = 0;           // EM evaluations (the cost)
+  double subject_eta = -1.0;     // learned eta of the context "pick = subject", its subject share (-1: n/a)
+  double label_accuracy = -1.0;  // subject-or-not labels right (gridworld_scenario.hpp)
+  int em_evaluations = 0;        // EM evaluations (the cost)
   double seconds = 0.0;
   std::string error;
 };

@@ -43,14 +43,14 @@ struct GridworldExperimentOptions {
   // tolerances that left the greedy policy -- hence ILE -- unchanged when they were chosen
   // (not re-measured with the exact posterior step: docs/MODEL.md).
   AlphaUpdate update = AlphaUpdate::kPosterior;  // observation-model refinement (observation_model.hpp)
-  double c = 0.5;                  // the paper's step size (Algorithm 1; update paper only)
-  int max_alpha_iterations = 1;    // alpha refinements per E-step (see ObservationEStepOptions)
+  double c = 0.5;                                // the paper's step size (Algorithm 1; update paper only)
+  int max_alpha_iterations = 1;                  // alpha refinements per E-step (see ObservationEStepOptions)
   double alpha_tolerance = 1e-3;
-  double theta_tolerance = 1e-3;   // EM stopping rule, see LearnOptions
+  double theta_tolerance = 1e-3;  // EM stopping rule, see LearnOptions
   double likelihood_tolerance = 1e-6;
-  bool accelerate = true;          // SQUAREM-accelerated EM (see LearnOptions; converges properly)
+  bool accelerate = true;  // SQUAREM-accelerated EM (see LearnOptions; converges properly)
   int restarts = 1;
-  int threads = 0;       // over (run, |E|, method) items; results do not depend on it
+  int threads = 0;                                    // over (run, |E|, method) items; results do not depend on it
   std::function<void(int done, int total)> progress;  // called from worker threads
 };
 

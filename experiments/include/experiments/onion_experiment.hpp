@@ -27,7 +27,7 @@ namespace hbirl::onion {
 
 enum class OnionMethod { kTrueTrajectories, kMlTrajectories, kMlObservations, kPlausibleEta, kUniformEta };
 
-const std::vector<OnionMethod> & all_onion_methods();
+const std::vector<OnionMethod>& all_onion_methods();
 std::string method_label(OnionMethod method);  // as in the paper's legend
 std::string method_key(OnionMethod method);
 bool parse_method(const std::string& key, OnionMethod& method);

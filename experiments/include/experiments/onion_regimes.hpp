@@ -16,7 +16,7 @@ namespace hbirl::onion {
 struct OnionRegime {
   double foreground_share = 0.0;  // 0: no foreground person
   bool mirror = true;
-  double eta_power = 1.0;         // 1: eta as the labeller states it
+  double eta_power = 1.0;  // 1: eta as the labeller states it
 };
 
 struct OnionRegimesOptions {

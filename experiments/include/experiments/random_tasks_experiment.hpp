@@ -22,8 +22,8 @@
 namespace hbirl {
 
 struct RandomTaskMethod {
-  std::string key;       // as above
-  std::string kind;      // "truth", "fixed", "paper", "posterior"
+  std::string key;   // as above
+  std::string kind;  // "truth", "fixed", "paper", "posterior"
   double c = 0.1;
   int restarts = 1;
 };
@@ -33,10 +33,10 @@ const std::vector<RandomTaskMethod>& all_random_task_methods();
 std::vector<RandomTaskMethod> parse_random_task_methods(const std::string& keys);
 
 struct RandomTasksOptions {
-  int tasks = 200;               // task seeds first_seed .. first_seed + tasks - 1
+  int tasks = 200;  // task seeds first_seed .. first_seed + tasks - 1
   std::uint64_t first_seed = 1;
   std::vector<std::uint64_t> seeds;  // these task seeds instead, when not empty
-  int draws = 3;                 // data sets per task
+  int draws = 3;                     // data sets per task
   std::vector<RandomTaskMethod> methods = all_random_task_methods();
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads

@@ -30,7 +30,8 @@ std::vector<SummaryRow> summarise(const std::vector<std::string>& methods, const
                                   const std::vector<double>& values);
 
 std::string summary_csv(const std::vector<SummaryRow>& rows, const std::string& x_name);
-std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::string& x_name, const std::string& value_name);
+std::string summary_markdown(const std::vector<SummaryRow>& rows, const std::string& x_name,
+                             const std::string& value_name);
 
 struct FigureSpec {
   std::string title;

@@ -24,7 +24,7 @@ struct EStepResult {
   // What EM maximises, at the input point: log_likelihood, plus with the posterior
   // observation-model update the prior's term (observation_model.hpp, log_prior_term).
   double objective = 0.0;
-  int alpha_iterations = 0;     // observation-model refinements made by this call
+  int alpha_iterations = 0;  // observation-model refinements made by this call
   bool alpha_converged = true;
   int impossible_trajectories = 0;  // probability 0 under the model: left out
   // The watched trajectory's posterior from the E-step's last pass (observation E-steps

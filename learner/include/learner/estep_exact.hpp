@@ -30,14 +30,14 @@ struct TrajectoryPosterior {
 
 // What the E-step sums over trajectories.
 struct EStepStatistics {
-  Eigen::VectorXd counts;       // expected visits per (s, a) pair
-  AlphaCounts alpha_dot;        // expected source-labelled counts
+  Eigen::VectorXd counts;  // expected visits per (s, a) pair
+  AlphaCounts alpha_dot;   // expected source-labelled counts
   // Expected number of observations of each context (rows) made by each source
   // (columns): what learned eta is fitted to. Only filled when it has rows (contexts > 0)
   // and the observations carry contexts.
   RowMatrix source_counts;
   double log_likelihood = 0.0;
-  int impossible = 0;           // trajectories with probability 0 under the model (skipped)
+  int impossible = 0;  // trajectories with probability 0 under the model (skipped)
   // The watched trajectory's posterior (ObservationEStepOptions::watch), when this sum
   // holds it: its (s, a) marginals per step (steps x pairs) and its log-likelihood.
   RowMatrix watched;
@@ -90,23 +90,23 @@ class ExactEngine {
   }
   // The same with the emissions of the trajectory's observation kinds precomputed (see
   // accumulate below): the same number, without a log per observation and pair.
-  double log_likelihood(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
-                        const KindEmissions& table) {
+  double log_likelihood(const SoftSolution& policy, const ObservedTrajectory& trajectory,
+                        const std::vector<int>& kinds_of, const KindEmissions& table) {
     emissions(trajectory, kinds_of, table);
     return passes(policy, trajectory, false);
   }
   // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out` (and,
   // when `watch`, its marginals and log-likelihood as out.watched).
-  void accumulate(const SoftSolution& policy, const ObservationModel& model,
-                  const ObservedTrajectory& trajectory, EStepStatistics& out, bool watch = false);
+  void accumulate(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory,
+                  EStepStatistics& out, bool watch = false);
   // The same with the emissions of the trajectory's observation kinds (`kinds_of`, one per
   // observation row) precomputed: adds the expected visits and the log-likelihood to
   // `out`, and weight_n * gamma_t to row kinds_of[n] of kind_gamma (kinds x pairs), from
   // which add_kind_alpha_dot gives alpha_dot. Kinds seen for the first time (a zero entry
   // in `seen`) are appended to `touched`.
   void accumulate(const SoftSolution& policy, const ObservedTrajectory& trajectory, const std::vector<int>& kinds_of,
-                  const KindEmissions& emissions, EStepStatistics& out, RowMatrix& kind_gamma,
-                  std::vector<char>& seen, std::vector<int>& touched, bool watch = false);
+                  const KindEmissions& emissions, EStepStatistics& out, RowMatrix& kind_gamma, std::vector<char>& seen,
+                  std::vector<int>& touched, bool watch = false);
   // Whether the last trajectory went through the scaled passes (else the log-space ones);
   // tests check that both are covered.
   bool last_passes_scaled() const { return scaled_; }
@@ -151,24 +151,24 @@ class ExactEngine {
   RowMatrix log_emission_;           // T x (S*A)
   RowMatrix log_alpha_;
   RowMatrix log_beta_;
-  bool scaled_ = false;              // the last passes were the scaled ones
-  RowMatrix alpha_hat_;              // T x (S*A): Pr(r at t | observations up to t)
-  RowMatrix beta_hat_;               // T x (S*A): the backward messages over the later scales
-  RowMatrix emission_;               // T x (S*A): exp(log_emission_ - m_t)
-  Eigen::VectorXd scale_;            // c_t
-  Eigen::VectorXd lost_;             // log of a bound on the forward mass lost by step t, in units of alpha_hat_t
-  double normaliser_ = 1.0;          // sum_r alpha_hat_{T-1} beta_{T-1}
-  double backward_total_ = 1.0;      // sum_r alpha_hat_t beta_hat_t (normaliser_, or 1 when that was small)
-  Eigen::VectorXd prior_;            // per pair: d_t(s) pi(a|s) (forward); pi e beta_hat (backward)
+  bool scaled_ = false;          // the last passes were the scaled ones
+  RowMatrix alpha_hat_;          // T x (S*A): Pr(r at t | observations up to t)
+  RowMatrix beta_hat_;           // T x (S*A): the backward messages over the later scales
+  RowMatrix emission_;           // T x (S*A): exp(log_emission_ - m_t)
+  Eigen::VectorXd scale_;        // c_t
+  Eigen::VectorXd lost_;         // log of a bound on the forward mass lost by step t, in units of alpha_hat_t
+  double normaliser_ = 1.0;      // sum_r alpha_hat_{T-1} beta_{T-1}
+  double backward_total_ = 1.0;  // sum_r alpha_hat_t beta_hat_t (normaliser_, or 1 when that was small)
+  Eigen::VectorXd prior_;        // per pair: d_t(s) pi(a|s) (forward); pi e beta_hat (backward)
   Eigen::VectorXd marginal_;
-  RowMatrix p_;                      // one row per observation: p(w | r) per pair (kept for the posteriors)
-  Eigen::ArrayXd ratio_;             // gamma / p of one observation
+  RowMatrix p_;           // one row per observation: p(w | r) per pair (kept for the posteriors)
+  Eigen::ArrayXd ratio_;  // gamma / p of one observation
   Eigen::VectorXd scratch_;
-  Eigen::ArrayXd shift_;             // per pair, backward pass
-  Eigen::VectorXd shifted_;          // log_product's workspace
-  Eigen::VectorXd previous_;         // log alpha of the step before, forward pass
-  Eigen::VectorXd row_;              // log beta of one step, backward pass
-  std::vector<int> low_rows_;        // log_product's rows summed again in log space
+  Eigen::ArrayXd shift_;       // per pair, backward pass
+  Eigen::VectorXd shifted_;    // log_product's workspace
+  Eigen::VectorXd previous_;   // log alpha of the step before, forward pass
+  Eigen::VectorXd row_;        // log beta of one step, backward pass
+  std::vector<int> low_rows_;  // log_product's rows summed again in log space
 };
 
 }  // namespace hbirl

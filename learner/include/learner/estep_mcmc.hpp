@@ -44,15 +44,15 @@ class McmcEngine final : public PosteriorEngine {
   McmcEngine(const Mdp& mdp, McmcOptions options);
   TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
                                 const ObservedTrajectory& trajectory, Rng& rng) override;
-  void accumulate(const SoftSolution& policy, const ObservationModel& model,
-                  const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) override;
+  void accumulate(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory,
+                  Rng& rng, EStepStatistics& out) override;
 
  private:
   // Runs the chains; fills marginals (T x P), per-observation source frequencies,
   // alpha_dot and the chains' convergence diagnostics. Returns false if no trajectory of
   // positive probability was found.
-  bool sample(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory,
-              Rng& rng, RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot, McmcDiagnostics& diagnostics);
+  bool sample(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory, Rng& rng,
+              RowMatrix& marginals, RowMatrix& sources, AlphaCounts& alpha_dot, McmcDiagnostics& diagnostics);
 
   const Mdp& mdp_;
   McmcOptions options_;

@@ -41,8 +41,8 @@ class ExactPosteriorEngine final : public PosteriorEngine {
                                 const ObservedTrajectory& trajectory, Rng&) override {
     return engine_.posterior(policy, model, trajectory);
   }
-  void accumulate(const SoftSolution& policy, const ObservationModel& model,
-                  const ObservedTrajectory& trajectory, Rng&, EStepStatistics& out) override {
+  void accumulate(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory, Rng&,
+                  EStepStatistics& out) override {
     engine_.accumulate(policy, model, trajectory, out);
   }
   ExactEngine* exact() override { return &engine_; }

@@ -15,8 +15,8 @@
 //
 // When the E-step has a hyper-parameter to choose from the data (the posterior update's
 // prior strength), EM runs to convergence, the E-step chooses it there, and EM resumes
-// with the new value until the choice stands (at most 4 times). Restarts run in parallel; the result is bit-identical for any
-// thread count.
+// with the new value until the choice stands (at most 4 times). Restarts run in parallel; the result is bit-identical
+// for any thread count.
 #include <cstdint>
 #include <functional>
 #include <string>

@@ -35,8 +35,7 @@ class CausalLikelihood {
  public:
   // counts: N(s,a) per pair (non-negative; none on impossible pairs or terminal states).
   // l2: penalty weight, see evaluate(). Throws InputError for invalid counts.
-  CausalLikelihood(const Mdp& mdp, Eigen::VectorXd counts, double l2 = 0.0,
-                   SoftViOptions soft_vi = {});
+  CausalLikelihood(const Mdp& mdp, Eigen::VectorXd counts, double l2 = 0.0, SoftViOptions soft_vi = {});
 
   // J(theta) = L(theta) / M - (l2 / 2) ||theta||^2, with M = sum N the number of
   // visited steps (so tolerances and l2 do not depend on the data size).

@@ -45,10 +45,10 @@ struct FeatureEntry {
 struct Mdp {
   int num_states = 0;
   int num_actions = 0;
-  SparseRowMatrix transitions;      // (S*A) x S
-  Eigen::MatrixXd features;         // (S*A) x K
-  Eigen::VectorXd start;            // S, a distribution over non-terminal states
-  std::vector<char> terminal;       // S, 1 = terminal
+  SparseRowMatrix transitions;  // (S*A) x S
+  Eigen::MatrixXd features;     // (S*A) x K
+  Eigen::VectorXd start;        // S, a distribution over non-terminal states
+  std::vector<char> terminal;   // S, 1 = terminal
   double discount = 0.95;
 
   int num_features() const { return static_cast<int>(features.cols()); }
@@ -76,8 +76,7 @@ std::uint64_t dynamics_digest(const Mdp& mdp);
 
 // Builds an MDP from entry lists (duplicate transition entries are summed).
 // Indices are checked; call validate() for the probabilistic properties.
-Mdp make_mdp(int num_states, int num_actions, int num_features,
-             const std::vector<TransitionEntry>& transitions,
+Mdp make_mdp(int num_states, int num_actions, int num_features, const std::vector<TransitionEntry>& transitions,
              const std::vector<FeatureEntry>& features, const Eigen::VectorXd& start,
              const std::vector<int>& terminal_states, double discount);
 

@@ -20,8 +20,7 @@ InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorX
 
 // Share of non-terminal states where the learned reward's optimal action is also optimal
 // under the true reward (ties within 1e-9 of the value scale count as optimal).
-double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta,
-                        const Eigen::VectorXd& learned_theta);
+double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta);
 
 // Both, from one optimal policy per reward (what the two above would compute twice each).
 struct PolicyMetrics {
@@ -33,12 +32,11 @@ PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, 
 // E[phi] of a policy (one probability per pair), averaged over rollouts from the start
 // distribution, one rollout per entry of `lengths` (trajectories stop early when they
 // enter a terminal state).
-Eigen::VectorXd expected_feature_counts(const Mdp& mdp, const Eigen::VectorXd& policy,
-                                        const std::vector<int>& lengths);
+Eigen::VectorXd expected_feature_counts(const Mdp& mdp, const Eigen::VectorXd& policy, const std::vector<int>& lengths);
 
 // ||phi_hat - E_pi[phi]||_1 per trajectory: phi_hat from the visit counts of the data,
 // E_pi[phi] from rollouts with the data's lengths.
-double feature_count_error(const Mdp& mdp, const Eigen::VectorXd& counts,
-                           const std::vector<int>& lengths, const Eigen::VectorXd& policy);
+double feature_count_error(const Mdp& mdp, const Eigen::VectorXd& counts, const std::vector<int>& lengths,
+                           const Eigen::VectorXd& policy);
 
 }  // namespace hbirl

@@ -63,10 +63,10 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
 // of millions of observations has a few dozen kinds, and the E-step computes each kind's
 // emission p(w | s,a) once per pass instead of once per observation.
 struct ObservationKinds {
-  std::vector<int> symbols;             // per kind
-  RowMatrix eta;                        // per kind
-  std::vector<int> contexts;            // per kind (-1: none)
-  std::vector<std::vector<int>> of;     // per trajectory, per observation row: its kind
+  std::vector<int> symbols;          // per kind
+  RowMatrix eta;                     // per kind
+  std::vector<int> contexts;         // per kind (-1: none)
+  std::vector<std::vector<int>> of;  // per trajectory, per observation row: its kind
   int num_kinds() const { return static_cast<int>(symbols.size()); }
 };
 
@@ -115,10 +115,9 @@ struct ObservationPrior {
   // (ObservedTrajectory::contexts; by default each distinct eta) gets a Dirichlet prior
   // centred on its stated eta with eta_strength pseudo-observations, and is refined inside
   // the E-step by MAP-EM's exact step, to the Dirichlet posterior of that prior and the
-  // context's expected source counts (whatever `update` is: c never applies to eta). eta_alpha holds the refined parameters, one row per context
-  // (set by the E-step).
-  // On by default with the posterior update; callers turn it off with the paper's
-  // update (the paper's model takes eta as given).
+  // context's expected source counts (whatever `update` is: c never applies to eta). eta_alpha holds the refined
+  // parameters, one row per context (set by the E-step). On by default with the posterior update; callers turn it off
+  // with the paper's update (the paper's model takes eta as given).
   bool learn_eta = true;
   double eta_strength = 10.0;
   RowMatrix eta_alpha;
@@ -142,7 +141,9 @@ constexpr int kMaxContexts = 1 << 16;
 void add_unlisted_source(ObservationPrior& prior, std::vector<ObservedTrajectory>& trajectories);
 // Whether add_unlisted_source would change anything: a caller that holds the data need
 // copy them only then.
-inline bool adds_unlisted_source(const ObservationPrior& prior) { return prior.unlisted_eta != 0.0 && !prior.unlisted_added; }
+inline bool adds_unlisted_source(const ObservationPrior& prior) {
+  return prior.unlisted_eta != 0.0 && !prior.unlisted_added;
+}
 
 // Sets the update and its companion default: eta is learned with the posterior update,
 // taken as given with the paper's.

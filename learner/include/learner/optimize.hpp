@@ -44,8 +44,7 @@ OptimizeResult maximize_lbfgs(const Objective& f, Eigen::VectorXd x0, const Opti
 // negative part),
 //   w_t ∝ exp(beta_t - eta m_t),   beta_{t+1} = beta_t - eta z_t - eta^2 (z_t - m_t)^2,
 // with losses z = -d J / d w scaled into [-1, 1] by the largest gradient seen so far.
-OptimizeResult maximize_exponentiated_gradient(const Objective& f, Eigen::VectorXd x0,
-                                               const OptimizerOptions& options);
+OptimizeResult maximize_exponentiated_gradient(const Objective& f, Eigen::VectorXd x0, const OptimizerOptions& options);
 
 OptimizeResult maximize(const Objective& f, Eigen::VectorXd x0, const OptimizerOptions& options);
 

@@ -40,12 +40,12 @@ class PolicyMatrix {
   bool run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance);
 
   const Mdp& mdp_;
-  SparseRowMatrix matrix_;          // S x S
-  SparseRowMatrix transposed_;      // its pattern fixed at construction, its values copied on demand
+  SparseRowMatrix matrix_;      // S x S
+  SparseRowMatrix transposed_;  // its pattern fixed at construction, its values copied on demand
   bool transposed_stale_ = true;
   std::vector<int> transposed_slot_;  // transposed_ entry -> index into matrix_ values
-  std::vector<int> entry_slot_;     // transitions nnz -> index into matrix_ values
-  std::vector<int> diagonal_slot_;  // state -> index of its diagonal entry
+  std::vector<int> entry_slot_;       // transitions nnz -> index into matrix_ values
+  std::vector<int> diagonal_slot_;    // state -> index of its diagonal entry
   Solver solver_;
   Solver transposed_solver_;
 };

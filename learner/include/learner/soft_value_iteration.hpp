@@ -81,8 +81,7 @@ class SoftBellmanSolver {
 };
 
 // One-shot convenience: solve from V = 0.
-SoftSolution soft_value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward,
-                                  const SoftViOptions& options = {});
+SoftSolution soft_value_iteration(const Mdp& mdp, const Eigen::VectorXd& reward, const SoftViOptions& options = {});
 
 // The stationary soft policy pi(a|s) = exp(Q(s,a) - V(s)) of a solved soft Bellman
 // equation, one probability per (s, a) pair.

@@ -14,10 +14,10 @@ enum class BlobClass { kGripper, kOnion };
 
 struct Detection {
   BlobClass cls = BlobClass::kGripper;
-  double x = 0.0, y = 0.0;   // centroid, pixels
-  int area = 0;              // pixels
+  double x = 0.0, y = 0.0;  // centroid, pixels
+  int area = 0;             // pixels
   cv::Rect box;
-  double dark_share = 0.0;   // onions: share of the blob's pixels that are dark
+  double dark_share = 0.0;  // onions: share of the blob's pixels that are dark
 };
 
 struct BlobOptions {
@@ -25,8 +25,8 @@ struct BlobOptions {
   cv::Scalar blue_low{95, 100, 60}, blue_high{130, 255, 255};
   cv::Scalar onion_low{12, 110, 90}, onion_high{32, 255, 255};
   cv::Scalar dark_low{4, 70, 25}, dark_high{32, 255, 89};  // the blemish: dark, onion-hued
-  double min_area_share = 1.2e-4;  // blobs smaller than this share of the frame are noise
-  int expected_width = 0;          // 0: any size
+  double min_area_share = 1.2e-4;                          // blobs smaller than this share of the frame are noise
+  int expected_width = 0;                                  // 0: any size
   int expected_height = 0;
 };
 

@@ -38,11 +38,11 @@ constexpr int kNumSymbols = kDarkOnion + 1;                 // 22
 constexpr int kNumSources = 4;
 enum Source { kSubject = 0, kBlueShirtPerson = 1, kOtherOnions = 2, kForegroundPerson = 3 };
 
-constexpr int kGripperRatioRules = 19;                         // r = 0.05, 0.10, .., 0.95
-constexpr int kOnionNearGripperRule = kGripperRatioRules;      // 19
-constexpr int kLargeOnionRule = kOnionNearGripperRule + 1;     // 20
-constexpr int kSmallOnionRule = kLargeOnionRule + 1;           // 21
-constexpr int kNumRules = kSmallOnionRule + 1;                 // 22
+constexpr int kGripperRatioRules = 19;                      // r = 0.05, 0.10, .., 0.95
+constexpr int kOnionNearGripperRule = kGripperRatioRules;   // 19
+constexpr int kLargeOnionRule = kOnionNearGripperRule + 1;  // 20
+constexpr int kSmallOnionRule = kLargeOnionRule + 1;        // 21
+constexpr int kNumRules = kSmallOnionRule + 1;              // 22
 
 struct Observation {
   int symbol = 0;
@@ -51,13 +51,13 @@ struct Observation {
 };
 
 struct LabellerOptions {
-  int width = 320, height = 240;     // the frame's size
-  double gripper_area = 0.0;         // the gripper's bounding box in pixels (A above)
-  double onion_area = 0.0;           // an onion's area in pixels
-  double near = 1.2;                 // "near": centroids closer than this many gripper-blob diagonals
-  double large_onion = 4.0;          // "large": more than this many onion areas
-  double dark_share = 0.08;          // Dark above this share of dark pixels
-  bool uniform_eta = false;          // the Uniform-eta variant: eta = 1/4 everywhere
+  int width = 320, height = 240;  // the frame's size
+  double gripper_area = 0.0;      // the gripper's bounding box in pixels (A above)
+  double onion_area = 0.0;        // an onion's area in pixels
+  double near = 1.2;              // "near": centroids closer than this many gripper-blob diagonals
+  double large_onion = 4.0;       // "large": more than this many onion areas
+  double dark_share = 0.08;       // Dark above this share of dark pixels
+  bool uniform_eta = false;       // the Uniform-eta variant: eta = 1/4 everywhere
 };
 
 int gripper_region(double x, double y, int width, int height);

@@ -8,6 +8,7 @@
 namespace hbirl::perception {
 
 // detections[i] was labelled observations[i].
-void draw_detections(cv::Mat& frame, const std::vector<Detection>& detections, const std::vector<Observation>& observations);
+void draw_detections(cv::Mat& frame, const std::vector<Detection>& detections,
+                     const std::vector<Observation>& observations);
 
 }  // namespace hbirl::perception

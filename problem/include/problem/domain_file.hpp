@@ -16,15 +16,15 @@ namespace hbirl {
 
 // How the simulator watches the expert (the paper's Gridworld scheme, §Experiments A).
 struct SensorSpec {
-  Eigen::MatrixXd subject_o;     // (S*A) x symbols: the subject's true O (unlisted rows uniform)
-  Eigen::MatrixXd confounder_o;  // E x symbols: each element's true O (unlisted rows uniform)
-  int observations_per_step = 40;  // drawn equally from the subject and every element
-  std::string eta = "plausible";   // "plausible", "uniform" or "true"
-  double occlusion = 0.0;          // chance that a step has no observations
-  int trajectories = 20;           // demonstrations
-  int length = 10;                 // at most this many steps each (fewer when a terminal state is entered)
+  Eigen::MatrixXd subject_o;         // (S*A) x symbols: the subject's true O (unlisted rows uniform)
+  Eigen::MatrixXd confounder_o;      // E x symbols: each element's true O (unlisted rows uniform)
+  int observations_per_step = 40;    // drawn equally from the subject and every element
+  std::string eta = "plausible";     // "plausible", "uniform" or "true"
+  double occlusion = 0.0;            // chance that a step has no observations
+  int trajectories = 20;             // demonstrations
+  int length = 10;                   // at most this many steps each (fewer when a terminal state is entered)
   int controlled_trajectories = 20;  // the controlled run: the subject alone, true steps known
-  double step_seconds = 1.0;       // sim time per step (the messages' utime)
+  double step_seconds = 1.0;         // sim time per step (the messages' utime)
 };
 
 struct DomainSpec {

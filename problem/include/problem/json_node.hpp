@@ -52,11 +52,12 @@ class JsonNode {
 
  private:
   static constexpr int kHeldIndices = 4;  // deeper nesting writes the path out once
-  JsonNode(const nlohmann::json& value, std::shared_ptr<const std::string> base) : value_(&value), base_(std::move(base)) {}
+  JsonNode(const nlohmann::json& value, std::shared_ptr<const std::string> base)
+      : value_(&value), base_(std::move(base)) {}
 
   std::string describe() const;  // "a string", "the number 3.5", ...
   const nlohmann::json* value_;
-  std::shared_ptr<const std::string> base_;  // the path down to the last key
+  std::shared_ptr<const std::string> base_;   // the path down to the last key
   std::array<size_t, kHeldIndices> index_{};  // then these array indices
   int depth_ = 0;                             // how many of them
 };

@@ -29,7 +29,7 @@ struct DemonstratedTrajectory {
 
 struct Problem {
   Mdp mdp;
-  std::vector<std::string> state_names;    // empty when the file gives none
+  std::vector<std::string> state_names;  // empty when the file gives none
   std::vector<std::string> action_names;
   std::vector<std::string> feature_names;
   std::optional<ObservationPrior> observation_model;

@@ -38,21 +38,21 @@ struct Channel {
 namespace hbirl::services::channels {
 
 // The sensor side.
-inline const Channel<hbirl::camera_frame_t> kCamera{"CAMERA"};                  // one frame (PNG)
-inline const Channel<hbirl::episode_marker_t> kEpisode{"EPISODE"};              // episode and step begin/end
-inline const Channel<hbirl::ground_truth_t> kGroundTruth{"GROUND_TRUTH"};       // controlled run's prior, ILE
-inline const Channel<hbirl::detections_t> kDetections{"DETECTIONS"};            // the blobs of one frame
-inline const Channel<hbirl::observations_t> kObservations{"OBSERVATIONS"};      // symbols and eta
+inline const Channel<hbirl::camera_frame_t> kCamera{"CAMERA"};              // one frame (PNG)
+inline const Channel<hbirl::episode_marker_t> kEpisode{"EPISODE"};          // episode and step begin/end
+inline const Channel<hbirl::ground_truth_t> kGroundTruth{"GROUND_TRUTH"};   // controlled run's prior, ILE
+inline const Channel<hbirl::detections_t> kDetections{"DETECTIONS"};        // the blobs of one frame
+inline const Channel<hbirl::observations_t> kObservations{"OBSERVATIONS"};  // symbols and eta
 // The learning side.
-inline const Channel<hbirl::mdp_t> kMdp{"MDP"};                                 // the MDP the samplers compute on
-inline const Channel<hbirl::estep_request_t> kEStepRequest{"ESTEP_REQUEST"};    // one block of an E-step
-inline const Channel<hbirl::estep_result_t> kEStepResult{"ESTEP_RESULT"};       // a block's counts
-inline const Channel<hbirl::em_progress_t> kEmProgress{"EM_PROGRESS"};          // one EM iteration
+inline const Channel<hbirl::mdp_t> kMdp{"MDP"};                               // the MDP the samplers compute on
+inline const Channel<hbirl::estep_request_t> kEStepRequest{"ESTEP_REQUEST"};  // one block of an E-step
+inline const Channel<hbirl::estep_result_t> kEStepResult{"ESTEP_RESULT"};     // a block's counts
+inline const Channel<hbirl::em_progress_t> kEmProgress{"EM_PROGRESS"};        // one EM iteration
 inline const Channel<hbirl::observation_model_t> kObservationModel{"OBSERVATION_MODEL"};  // the learned O
-inline const Channel<hbirl::posterior_t> kPosterior{"POSTERIOR"};               // the newest demonstration's marginals
-inline const Channel<hbirl::reward_t> kReward{"REWARD"};                        // the learned reward
-inline const Channel<hbirl::frame_request_t> kFrameRequest{"FRAME_REQUEST"};    // frames asked for again
-inline const Channel<hbirl::service_status_t> kStatus{"STATUS"};                // every service's heartbeat
+inline const Channel<hbirl::posterior_t> kPosterior{"POSTERIOR"};             // the newest demonstration's marginals
+inline const Channel<hbirl::reward_t> kReward{"REWARD"};                      // the learned reward
+inline const Channel<hbirl::frame_request_t> kFrameRequest{"FRAME_REQUEST"};  // frames asked for again
+inline const Channel<hbirl::service_status_t> kStatus{"STATUS"};              // every service's heartbeat
 
 // trajectory_t: the blocks of the data set one sampler worker is given, on a channel of
 // its own -- "TRAJECTORY_" and 16 hexadecimal digits of a digest of its id (an LCM channel

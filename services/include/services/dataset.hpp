@@ -25,16 +25,16 @@ namespace hbirl::services {
 struct Dataset {
   std::string domain;
   int num_symbols = 0;
-  int num_sources = 0;                          // 1 + confounding elements
-  std::vector<int> episodes;                    // the demonstrations' episode numbers
-  std::vector<ObservedTrajectory> observed;     // the demonstrations
-  std::vector<Trajectory> truth;                // their true steps, when ground truth came
+  int num_sources = 0;                                  // 1 + confounding elements
+  std::vector<int> episodes;                            // the demonstrations' episode numbers
+  std::vector<ObservedTrajectory> observed;             // the demonstrations
+  std::vector<Trajectory> truth;                        // their true steps, when ground truth came
   std::vector<ObservedTrajectory> controlled_observed;  // the controlled run
   std::vector<Trajectory> controlled_truth;
   std::optional<Eigen::VectorXd> true_weights;  // the expert's, when the ground truth gave them
   std::int64_t last_utime = 0;                  // sim time of the newest message used
   int skipped_controlled = 0;                   // controlled episodes left out: ground truth incomplete
-  std::string contexts_note;                    // non-empty: contexts were given for some observations only, and ignored
+  std::string contexts_note;  // non-empty: contexts were given for some observations only, and ignored
 };
 
 class DatasetBuilder {
@@ -68,9 +68,9 @@ class DatasetBuilder {
   // The run has ended and every episode has every frame's observations.
   // ... and every controlled episode has every step's ground truth (its prior needs them).
   bool complete() const;
-  std::int64_t missing_frames() const;   // of episodes that ended
-  int unfinished_episodes() const;       // begun, never ended
-  std::int64_t missing_truth() const;    // steps of controlled episodes that ended
+  std::int64_t missing_frames() const;  // of episodes that ended
+  int unfinished_episodes() const;      // begun, never ended
+  std::int64_t missing_truth() const;   // steps of controlled episodes that ended
   // Up to `limit` missing (episode, step, frame), in order; a controlled step without its
   // ground truth is asked for as its frame 0 (the simulator sends the truth of every step
   // it sends frames of).
@@ -93,7 +93,7 @@ class DatasetBuilder {
  private:
   struct Frame {
     std::vector<int> symbols;
-    std::vector<double> eta;  // rows of num_sources
+    std::vector<double> eta;    // rows of num_sources
     std::vector<int> contexts;  // one per symbol, or none
   };
   std::uint64_t frame_digest(const Frame& f) const;
@@ -107,13 +107,13 @@ class DatasetBuilder {
     int frames_per_step = 0;
     std::map<std::pair<int, int>, Frame> frames;  // (step, frame)
     std::map<int, StateAction> truth;             // step -> (s, a)
-    std::int64_t have_frames = 0;  // once ended: frames within num_steps x frames_per_step
-    std::int64_t have_truth = 0;   // once ended: truth steps within num_steps
+    std::int64_t have_frames = 0;                 // once ended: frames within num_steps x frames_per_step
+    std::int64_t have_truth = 0;                  // once ended: truth steps within num_steps
   };
   Episode& episode(int id);
   void count(const Episode& e, int id, int sign);
   static void recount(Episode& e);
-  Dataset empty_dataset() const;  // the run's facts, no episodes yet
+  Dataset empty_dataset() const;                                 // the run's facts, no episodes yet
   void add_episode(Dataset& d, int id, const Episode& e) const;  // if it ended and belongs to the run
   static void finish_dataset(Dataset& d);
   void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
@@ -136,14 +136,14 @@ class DatasetBuilder {
   // digest, and (episode, step) -> its truth; sorted (24 and 16 bytes a frame and a step).
   std::vector<std::pair<std::tuple<int, int, int>, std::uint64_t>> taken_frames_;
   std::vector<std::pair<std::pair<int, int>, StateAction>> taken_truth_;
-  std::map<int, Episode> taken_episodes_;  // without their frames and truth
-  bool taken_complete_ = false;            // the run was complete when taken
+  std::map<int, Episode> taken_episodes_;      // without their frames and truth
+  bool taken_complete_ = false;                // the run was complete when taken
   std::array<std::uint8_t, 16> digest_key_{};  // frame_digest's, random
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;
-  int run_episodes_ = 0;  // as END_RUN states it (0: not stated)
+  int run_episodes_ = 0;                                           // as END_RUN states it (0: not stated)
   std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept
   std::int64_t frames_ = 0;
   // Kept as messages come (count): of the ended episodes of the run, the frames and the

@@ -67,12 +67,12 @@ struct Stopped : std::runtime_error {
 };
 
 struct BusExecutorOptions {
-  std::function<bool()> stop;  // checked while waiting for answers; true: run() throws Stopped
-  std::function<void()> idle;  // called while waiting (the process beats its heartbeat there)
-  int timeout_ms = 2000;       // wait this long without progress (an answer, a block received) before re-asking
-  int max_attempts = 3;        // attempts over the bus; then the optimiser computes the rest
+  std::function<bool()> stop;     // checked while waiting for answers; true: run() throws Stopped
+  std::function<void()> idle;     // called while waiting (the process beats its heartbeat there)
+  int timeout_ms = 2000;          // wait this long without progress (an answer, a block received) before re-asking
+  int max_attempts = 3;           // attempts over the bus; then the optimiser computes the rest
   double worker_silence_s = 3.0;  // workers not heard from for this long get no work
-  int local_threads = 1;       // for blocks the optimiser computes itself
+  int local_threads = 1;          // for blocks the optimiser computes itself
   // Give work only to workers whose numerics_fingerprint() equals the optimiser's: theta
   // bit-identical to a one-process run whatever machines join. Off: they all work, and
   // stats().other_numerics counts the ones that may change the last bits.
@@ -103,9 +103,11 @@ class BusBlockExecutor final : public BlockExecutor {
   // `mdp`: what the workers are sent and must hold to get work; `domain` names it in its
   // messages. Each pass's trajectories are the E-step's own (run()): each worker is sent
   // those of its blocks when it is first given them.
-  BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters, BusExecutorOptions options = {});
-  std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy, const ObservationModel& model,
-                                   std::uint64_t seed, const RowMatrix* eta = nullptr) override;
+  BusBlockExecutor(Bus& bus, const Mdp& mdp, const std::string& domain, Counters& counters,
+                   BusExecutorOptions options = {});
+  std::vector<EStepStatistics> run(const ObservationEStep& estep, const SoftSolution& policy,
+                                   const ObservationModel& model, std::uint64_t seed,
+                                   const RowMatrix* eta = nullptr) override;
 
   // Publishes the MDP now.
   void publish_mdp();
@@ -118,10 +120,11 @@ class BusBlockExecutor final : public BlockExecutor {
     std::int64_t stale = 0, duplicates = 0, foreign = 0;  // ignored answers
     std::int64_t unassigned = 0;                          // answers from a worker not given that block (refused)
     std::int64_t spot_checks = 0, liars = 0;              // blocks checked here; workers caught answering wrong
-    std::int64_t conflicts = 0;                           // two different answers to a block under one name (a pass's blocks of that name computed here)
-    std::int64_t other_numerics = 0;                      // workers heard from with another fingerprint (each once)
-    double round_trip_s = 0.0;                            // summed over requests
-    std::int64_t trajectories_sent = 0, bytes_sent = 0;   // TRAJECTORY_<tag> messages to workers, and their bytes
+    std::int64_t conflicts =
+        0;  // two different answers to a block under one name (a pass's blocks of that name computed here)
+    std::int64_t other_numerics = 0;                     // workers heard from with another fingerprint (each once)
+    double round_trip_s = 0.0;                           // summed over requests
+    std::int64_t trajectories_sent = 0, bytes_sent = 0;  // TRAJECTORY_<tag> messages to workers, and their bytes
     // Passes that waited on a worker that had never answered (its one trial block left
     // unanswered): at most kMaxTrialPasses, whatever the number and rate of fake workers.
     std::int64_t trial_passes = 0;
@@ -147,10 +150,10 @@ class BusBlockExecutor final : public BlockExecutor {
   struct Pass {
     ResultShape shape;
     std::vector<std::optional<EStepStatistics>> received;
-    std::set<std::string> answered;                // workers that answered this request
-    std::vector<std::set<std::string>> assigned;   // per block: the workers it was given to (any attempt)
-    std::vector<std::string> answered_by;          // per block: who answered it
-    std::set<std::string> doubted;                 // names that gave two different answers to a block in this pass
+    std::set<std::string> answered;               // workers that answered this request
+    std::vector<std::set<std::string>> assigned;  // per block: the workers it was given to (any attempt)
+    std::vector<std::string> answered_by;         // per block: who answered it
+    std::set<std::string> doubted;                // names that gave two different answers to a block in this pass
     std::vector<int> missing() const;
   };
 
@@ -163,7 +166,8 @@ class BusBlockExecutor final : public BlockExecutor {
   std::vector<std::string> workers_for(int attempt);
   void wait_for_answers(const ObservationEStep& estep, const std::vector<std::string>& assigned);
   void judge_silence(const std::vector<std::string>& assigned);
-  void check_spots(const std::vector<int>& spots, std::vector<EStepStatistics>& here, const std::vector<std::string>& given);
+  void check_spots(const std::vector<int>& spots, std::vector<EStepStatistics>& here,
+                   const std::vector<std::string>& given);
   void distrust(const std::string& worker, const std::string& why);
   void forget_answers_of(const std::string& worker);
   int pump(const ObservationEStep& estep);
@@ -187,7 +191,7 @@ class BusBlockExecutor final : public BlockExecutor {
   bool said_too_many_contexts_ = false;
   Stats stats_;
   mutable std::recursive_mutex mutex_;  // handlers run inside run() with it held; stats() reads under it
-  Subscriptions subs_;  // last: ends first
+  Subscriptions subs_;                  // last: ends first
 };
 
 }  // namespace hbirl::services

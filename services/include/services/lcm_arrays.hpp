@@ -17,9 +17,11 @@ std::vector<double> lcm_vector(const Eigen::DenseBase<Derived>& v) {
 
 template <class Derived>
 std::vector<std::vector<double>> lcm_rows(const Eigen::DenseBase<Derived>& m) {
-  std::vector<std::vector<double>> out(static_cast<size_t>(m.rows()), std::vector<double>(static_cast<size_t>(m.cols())));
+  std::vector<std::vector<double>> out(static_cast<size_t>(m.rows()),
+                                       std::vector<double>(static_cast<size_t>(m.cols())));
   for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    for (Eigen::Index c = 0; c < m.cols(); ++c) out[static_cast<size_t>(r)][static_cast<size_t>(c)] = m.derived().coeff(r, c);
+    for (Eigen::Index c = 0; c < m.cols(); ++c)
+      out[static_cast<size_t>(r)][static_cast<size_t>(c)] = m.derived().coeff(r, c);
   }
   return out;
 }

@@ -20,11 +20,11 @@ namespace hbirl::services {
 struct Learned {
   Eigen::VectorXd theta;
   double log_likelihood = 0.0;
-  std::optional<double> ile;         // when the ground truth gave the expert's true weights
+  std::optional<double> ile;  // when the ground truth gave the expert's true weights
   int em_iterations = 0;
   int trajectories = 0;
-  std::uint64_t digest = 0;          // of the demonstrations learned from
-  std::optional<LearnedEta> eta;     // when eta was learned
+  std::uint64_t digest = 0;       // of the demonstrations learned from
+  std::optional<LearnedEta> eta;  // when eta was learned
 };
 
 // Called after every EM iteration: iteration, log-likelihood, theta, the observation

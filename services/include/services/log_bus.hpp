@@ -59,7 +59,7 @@ class LogBus final : public Bus {
   };
   std::string path_;
   std::unique_ptr<std::FILE, CloseFile> in_;
-  std::string channel_;              // the event being delivered
+  std::string channel_;  // the event being delivered
   std::vector<std::uint8_t> data_;
   std::unique_ptr<lcm::LogFile> out_;
   std::vector<Subscription> subscriptions_;

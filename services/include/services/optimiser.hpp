@@ -26,9 +26,9 @@ struct OptimiserOptions {
   std::shared_ptr<const Domain> domain;
   app::LearnSettings learning;  // how it learns (app/learn_settings.hpp)
   BusExecutorOptions executor;
-  int workers = 0;              // wait for this many sampler workers before learning
+  int workers = 0;  // wait for this many sampler workers before learning
   int wait_workers_ms = 10000;
-  int resend_after_ms = 1000;   // after END_RUN, ask for missing frames when none came for this long
+  int resend_after_ms = 1000;  // after END_RUN, ask for missing frames when none came for this long
   // A run whose frames stop coming before it is complete: learned from what came (and
   // said so: OptimiserResult::incomplete) only when allowed, after quiet_ms without a
   // frame; otherwise it fails (RunFailed) after incomplete_after_ms without one, asking
@@ -55,11 +55,11 @@ struct RunFailed : std::runtime_error {
 struct OptimiserResult {
   Learned learned;
   Dataset data;
-  std::int64_t missing_frames = 0;   // never came, even when asked for again
-  int frame_requests = 0;            // FRAME_REQUEST messages sent
+  std::int64_t missing_frames = 0;  // never came, even when asked for again
+  int frame_requests = 0;           // FRAME_REQUEST messages sent
   int workers = 0;
   BusBlockExecutor::Stats estep;
-  std::string incomplete;            // learned with allow_incomplete from a run that lacks this ("" when complete)
+  std::string incomplete;  // learned with allow_incomplete from a run that lacks this ("" when complete)
 };
 // Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
 // to stop first; throws RunFailed for a run that is incomplete (unless allowed) or

@@ -24,8 +24,8 @@ class SendWindow {
 
   // Queues each block of `todo` for the worker `assigned` to it, unless that worker holds it
   // (its heartbeat says so) or was sent it less than `resend_after` ago. Replaces the queue.
-  void queue(const std::vector<int>& todo, const std::vector<std::string>& assigned, const std::vector<std::uint64_t>& digests,
-             WorkerRoster& roster);
+  void queue(const std::vector<int>& todo, const std::vector<std::string>& assigned,
+             const std::vector<std::uint64_t>& digests, WorkerRoster& roster);
   // Sends queued blocks while the window has room (one block at least when nothing is in
   // flight, whatever its size); returns how many it sent.
   int pump(const ObservationEStep& estep, const std::vector<std::uint64_t>& digests, WorkerRoster& roster);

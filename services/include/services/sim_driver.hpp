@@ -54,11 +54,11 @@ class SimDriver {
   // markers every second until the optimiser's final REWARD comes or `stop` says so.
   // `beat(state)` is called often (the process's heartbeat), `log` with what happened.
   // Returns false if stopped before the run was published.
-  bool serve(const std::function<bool()>& stop, double start_delay_s, const std::function<void(const std::string&)>& beat,
-             const std::function<void(const std::string&)>& log);
+  bool serve(const std::function<bool()>& stop, double start_delay_s,
+             const std::function<void(const std::string&)>& beat, const std::function<void(const std::string&)>& log);
 
  private:
-  hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time) ;
+  hbirl::episode_marker_t marker(int episode, std::int8_t kind, double time);
   hbirl::episode_marker_t end_marker(int episode);
   hbirl::episode_marker_t end_of_run();
   void on_request(const hbirl::frame_request_t& m);
@@ -78,7 +78,6 @@ class SimDriver {
 
 // Publishes the run with a SimDriver (the in-process tests' way).
 bool run_sim_driver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters,
-                    const std::function<bool()>& stop,
-                    const std::function<void()>& idle = nullptr);
+                    const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
 
 }  // namespace hbirl::services

@@ -26,13 +26,13 @@ struct Counters {
   std::int64_t messages_out = 0;
   std::int64_t bad_messages = 0;
   std::int64_t send_failures = 0;
-  std::int64_t gaps = 0;         // sequence numbers skipped by publishers
-  std::int64_t other_run = 0;    // signed with the key for another run (keyed_bus.hpp): dropped, also counted as bad
+  std::int64_t gaps = 0;           // sequence numbers skipped by publishers
+  std::int64_t other_run = 0;      // signed with the key for another run (keyed_bus.hpp): dropped, also counted as bad
   std::int64_t signed_unread = 0;  // signed with a run key, read without one: not decoded, also counted as bad
   std::string last_problem;
-  bool quiet = false;            // no reports on stderr (tests)
-  bool authenticated = false;    // the bus checks every message against a run key (keyed_bus.hpp)
-  int restarts = 0;              // times the supervisor restarted this process's service before
+  bool quiet = false;          // no reports on stderr (tests)
+  bool authenticated = false;  // the bus checks every message against a run key (keyed_bus.hpp)
+  int restarts = 0;            // times the supervisor restarted this process's service before
 
   // Counts a bad message and reports it: the first 20, then every 1000th.
   void bad(const std::string& channel, const std::string& why);
@@ -115,10 +115,11 @@ bool publish(Bus& bus, const Channel<T>& channel, const std::type_identity_t<T>&
 }
 
 // Calls handler(msg, message) for every message on `channel` (a name or a pattern) that
-// decodes as its type T and passes its validate() when it has one (messages.hpp). A handler throws InputError (or any std::exception) to reject a
-// message: it is counted as bad, reported, and dropped.
+// decodes as its type T and passes its validate() when it has one (messages.hpp). A handler throws InputError (or any
+// std::exception) to reject a message: it is counted as bad, reported, and dropped.
 template <class T, class Handler>
-SubscriptionId subscribe(Bus& bus, const Channel<T>& channel, Counters& counters, Handler handler, int queue_capacity = 0) {
+SubscriptionId subscribe(Bus& bus, const Channel<T>& channel, Counters& counters, Handler handler,
+                         int queue_capacity = 0) {
   return bus.subscribe(
       channel.name,
       [&counters, handler](const Message& m) mutable {
@@ -154,6 +155,7 @@ class SequenceTracker {
     last_ = seq;
     return skipped;
   }
+
  private:
   bool started_ = false;
   std::int64_t last_ = 0;

@@ -28,10 +28,10 @@ struct Worker {
   std::uint64_t numerics = 0;
   bool suspect = false;  // left blocks unanswered; gets work again once heard from (a heartbeat after suspect_since)
   Clock::time_point suspect_since;
-  bool distrusted = false;  // answered a spot-checked block wrong: no more work while it is remembered
-  std::int64_t answers = 0;  // blocks it answered: a worker that never did gets little work
+  bool distrusted = false;     // answered a spot-checked block wrong: no more work while it is remembered
+  std::int64_t answers = 0;    // blocks it answered: a worker that never did gets little work
   bool ever_answered = false;  // answered a block in this run (answers is reset by silence, this is not)
-  bool checked = false;      // one of its answers matched the optimiser's own computation
+  bool checked = false;        // one of its answers matched the optimiser's own computation
   // Per block sent to it: how many heartbeats after its sending said it was not held (lost
   // on the way, or refused: over its --max-dataset-mb, a digest that did not match). Twice,
   // and the block goes to other workers (for this data set, and for a minute after the

@@ -20,7 +20,8 @@ class SpotChecks {
   // Whether `worker`'s `answer` is the optimiser's own `here`: bit for bit when it computes
   // with the optimiser's numerics, else to a relative 1e-9 (the last bits may differ). A
   // match marks the worker checked.
-  bool matches(const std::string& worker, const EStepStatistics& answer, const EStepStatistics& here, WorkerRoster& roster);
+  bool matches(const std::string& worker, const EStepStatistics& answer, const EStepStatistics& here,
+               WorkerRoster& roster);
 
  private:
   // Unpredictable to the workers (the request's seed is not); it never changes a result (a

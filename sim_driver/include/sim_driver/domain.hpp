@@ -47,7 +47,7 @@ struct SimulationOptions {
   int controlled_trajectories = 20;  // controlled run: the subject alone, true states known
   int length = 10;                   // steps per trajectory
   EtaKind eta = EtaKind::kPlausible;
-  double step_seconds = 1.0;         // sim time per step
+  double step_seconds = 1.0;  // sim time per step
 };
 
 // A simulated run, planned up front so any frame can be produced again, identical: the
@@ -99,8 +99,8 @@ class Domain {
   // The subject's Dirichlet prior (paper §Experiments): from a controlled run's observations and true steps.
   // Throws InputError when there is none and the domain states no prior of its own, or for
   // steps or symbols outside the domain.
-  virtual Eigen::MatrixXd subject_prior(const std::vector<Trajectory>& truth, const std::vector<ObservedTrajectory>& observed,
-                                        int num_symbols) const;
+  virtual Eigen::MatrixXd subject_prior(const std::vector<Trajectory>& truth,
+                                        const std::vector<ObservedTrajectory>& observed, int num_symbols) const;
   // A simulated run; throws InputError("domain", ...) for a domain without a simulator.
   virtual std::unique_ptr<Simulation> simulate(const SimulationOptions& options) const = 0;
 

@@ -37,11 +37,10 @@ struct GridworldTask {
   std::vector<Trajectory> trajectories;
 };
 
-GridworldTask make_gridworld_task(const GridworldOptions& options, int num_trajectories,
-                                  int length, Rng& rng);
+GridworldTask make_gridworld_task(const GridworldOptions& options, int num_trajectories, int length, Rng& rng);
 
 // The soft expert's demonstration for given weights (used by the task above).
-std::vector<Trajectory> soft_expert_demonstration(const Mdp& mdp, const Eigen::VectorXd& weights,
-                                                  int num_trajectories, int length, Rng& rng);
+std::vector<Trajectory> soft_expert_demonstration(const Mdp& mdp, const Eigen::VectorXd& weights, int num_trajectories,
+                                                  int length, Rng& rng);
 
 }  // namespace hbirl

@@ -55,7 +55,7 @@ State next_state(const State& s, int action, int inspected);
 bool is_terminal(const State& s);
 
 struct OnionOptions {
-  double blemished = 0.5;   // probability that an inspected onion is blemished
+  double blemished = 0.5;  // probability that an inspected onion is blemished
   double discount = 0.95;
 };
 

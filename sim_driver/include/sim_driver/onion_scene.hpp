@@ -81,11 +81,11 @@ class OnionScene {
 
  private:
   struct Pose {
-    double gx, gy;          // gripper centre
-    double ox, oy;          // onion centre
-    double onion_angle;     // onion rotation
+    double gx, gy;       // gripper centre
+    double ox, oy;       // onion centre
+    double onion_angle;  // onion rotation
     bool onion_visible;
-    bool onion_in_bin;      // drawn behind the bin's front
+    bool onion_in_bin;  // drawn behind the bin's front
   };
   Pose pose(const Episode& episode, int t, double u) const;
   void draw_background(cv::Mat& img) const;
@@ -98,11 +98,11 @@ class OnionScene {
 
   SceneConfig config_;
   std::uint64_t seed_;
-  double walk_phase_;        // blue-shirt person
+  double walk_phase_;  // blue-shirt person
   double walk_period_;
-  double occlusion_phase_;   // foreground person
+  double occlusion_phase_;  // foreground person
   double occlusion_period_;
-  double occlusion_stay_ = 6.0;  // seconds in front of the expert per period
+  double occlusion_stay_ = 6.0;                  // seconds in front of the expert per period
   static constexpr double kOcclusionWalk = 1.5;  // seconds to walk in (and out)
   cv::Mat background_;
 };
@@ -118,8 +118,8 @@ struct DemonstrationOptions {
   // with probability `blemished`.
   bool alternate_quality = true;
   double blemished = 0.5;
-  bool uniform_eta = false;    // the labeller's Uniform-eta variant (labeller_options)
-  double start_time = 0.0;     // sim time of the first sort
+  bool uniform_eta = false;  // the labeller's Uniform-eta variant (labeller_options)
+  double start_time = 0.0;   // sim time of the first sort
   // Give each observation the labeller's rule as its context, as the labeller service
   // does (perception/labeller.hpp); off, each distinct eta is a context (the experiments).
   bool rule_contexts = false;

@@ -70,10 +70,10 @@ struct RandomTask {
   Eigen::MatrixXd subject_o;     // (S*A) x symbols, the truth
   Eigen::MatrixXd confounder_o;  // E x symbols, the truth
 
-  std::vector<Trajectory> demonstrations;                 // the truth
-  GridworldObservations observed;                         // what the sensor saw, true sources kept
-  std::vector<Trajectory> controlled;                     // the controlled run
-  ObservationPrior prior;                                 // subject from the controlled run, elements flat
+  std::vector<Trajectory> demonstrations;  // the truth
+  GridworldObservations observed;          // what the sensor saw, true sources kept
+  std::vector<Trajectory> controlled;      // the controlled run
+  ObservationPrior prior;                  // subject from the controlled run, elements flat
 };
 
 RandomTask make_random_task(std::uint64_t seed, int draw = 0, const RandomTaskOverrides& overrides = {});

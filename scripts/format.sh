@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Formats every C++ source of the project with clang-format (.clang-format), or with
+# --check says which files are not formatted and exits 1 (./test.sh runs that).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+format=clang-format-14
+command -v "$format" >/dev/null 2>&1 || format=clang-format
+mapfile -t files < <(git ls-files '*.cpp' '*.hpp' '*.h')
+if [ "${1:-}" = --check ]; then
+  bad=()
+  for f in "${files[@]}"; do
+    "$format" --style=file --dry-run --Werror "$f" >/dev/null 2>&1 || bad+=("$f")
+  done
+  if [ ${#bad[@]} -gt 0 ]; then
+    printf 'format.sh: not formatted (run scripts/format.sh): %s\n' "${bad[@]}" >&2
+    exit 1
+  fi
+  exit 0
+fi
+"$format" --style=file -i "${files[@]}"
