@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Every test: install what is missing, build with warnings as errors, run the test
+# Every test: install what is missing, check the scripts (shellcheck) and the C++ form
+# (clang-format), build with warnings as errors, run the test
 # suite, then build and run it again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (clang; the same build gives the libFuzzer targets, run 10 s each at the end),
 # and check that learner/ and problem/ build and pass alone, without OpenCV, LCM, CLI11
@@ -19,6 +20,9 @@ jobs="$(nproc)"
 stage "shellcheck"
 shellcheck services/launch.sh demo.sh test.sh .ci/run scripts/*.sh bench/*.sh tests/in_private_netns.sh \
   tests/services/netns_test.sh tests/dashboard/browser_test.sh
+# The C++ form (.clang-format): every source as clang-format writes it.
+stage "format"
+scripts/format.sh --check
 
 # Ninja when there is one: it compiles a library's sources while the libraries it links
 # are still being built, and so keeps both cores busy (the Makefiles wait per target).
