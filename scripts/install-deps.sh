@@ -12,7 +12,7 @@ packages=(
   libcpp-httplib-dev libjs-chart.js ca-certificates libsodium-dev
   chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang clang-format libclang-rt-14-dev ninja-build shellcheck
+  clang clang-format-14 libclang-rt-14-dev ninja-build shellcheck
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-scipy
   python3-pip python3-venv python3-setuptools python3-wheel
 )

@@ -23,8 +23,7 @@ const char* type_name(const Setting& s) {
 // The help text: the setting's, its range, and what unset means.
 std::string help_of(const Setting& s, Front front) {
   std::string help = s.help + " (" + describe_range(s) + ")";
-  if (front == Front::kCommandLine && s.hidden_data && s.group != Setting::Group::kPrior)
-    help += "; not with --from truth";
+  if (front == Front::kCommandLine && s.hidden_data) help += "; not with --from truth";
   return help;
 }
 

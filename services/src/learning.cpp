@@ -44,6 +44,10 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app:
   one_at_a_time.em.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)
   app::LearnHooks hooks;
   hooks.executor = std::move(executor);
+  // An observation impossible under the domain's observation model names its episode.
+  hooks.trajectory_name = [&data](int i) {
+    return "episode[" + std::to_string(data.episodes[static_cast<size_t>(i)]) + "]";
+  };
   if (progress) {
     hooks.watch = static_cast<int>(data.observed.size()) - 1;  // the newest demonstration, for display
     hooks.on_iteration = [&progress](const app::Iterate& i) {

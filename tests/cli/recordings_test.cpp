@@ -98,6 +98,21 @@ TEST_F(Recordings, A54ByteRecordingIsRefusedInOneLine) {
   EXPECT_NE(d.err.find("2147483647 bytes of data"), std::string::npos) << d.err;
 }
 
+// hbirl learn --log learns as hbirl-optimiser did: a setting the optimiser has not (the
+// engine's, --restarts) would give a theta the run could not, and is refused by its flag
+// before the recording is read; one it has is taken.
+TEST_F(Recordings, LearnFromALogTakesOnlyTheOptimisersSettings) {
+  const fs::path log = dir_ / "absent.lcmlog";
+  for (const std::string flag : {"--engine mcmc", "--restarts 2", "--mcmc-chains 2"}) {
+    const Outcome r = hbirl("learn --log '" + log.string() + "' " + flag);
+    EXPECT_EQ(r.status, 2) << flag << ": " << r.err;
+    EXPECT_NE(r.err.find(flag.substr(0, flag.find(' ')) + ": not with --log"), std::string::npos) << r.err;
+  }
+  const Outcome taken = hbirl("learn --log '" + log.string() + "' --max-em-iterations 5 --threads 2");
+  EXPECT_EQ(taken.status, 2);
+  EXPECT_EQ(taken.err.find("not with --log"), std::string::npos) << taken.err;  // refused for the missing file only
+}
+
 // A recording signed with another key: one line saying it is the wrong key (it used to be
 // a page of bad messages ending in "no END_RUN"). A run that never finished learning gives
 // a report, but not a success (it used to exit 0 with no figures).

@@ -38,6 +38,8 @@ struct LearnHooks {
   std::function<std::string(int)> trajectory_name;
 };
 
+// Moved, never copied: `observed` points into `estep`, and a moved-from Learned must not be
+// used. Iterate (above) holds references: use it inside on_iteration, do not keep it.
 struct Learned {
   LearnResult em;                              // theta, the log-likelihood and every restart
   std::unique_ptr<EStep> estep;                // what EM learned with

@@ -46,7 +46,8 @@ std::optional<Eigen::VectorXd> true_weights_of(const Domain& domain, const Datas
 ObservationPrior observation_prior(const Domain& domain, const Dataset& data);
 
 // Throws InputError when the data set cannot be learned from (no demonstrations, no
-// subject prior, symbols outside the domain).
+// subject prior, symbols outside the domain, an observation no source can make under the
+// domain's observation model: "episode[N].steps[t]...", as `hbirl learn` refuses it).
 // Learned as `hbirl learn` learns (app::learn) with these settings, the same data and
 // prior: so a run learned live and the same data learned offline give the same theta. One
 // E-step at a time (the same bits whatever the thread count); the workers get each pass's

@@ -4,6 +4,8 @@
 // message must be whatever the domain. Typed subscribe() (typed.hpp) calls it before the
 // handler, so no reader can skip it; a reader adds only what its own job needs (the
 // domain's alphabet, what the dashboard can draw). Each throws InputError naming the field.
+// Declare every validate() here: typed subscribe finds those declared before it (messages
+// are in namespace hbirl, these in hbirl::services, so argument-dependent lookup does not).
 #include "hbirl/observations_t.hpp"
 
 namespace hbirl::services {
