@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "app/learn_settings.hpp"
 #include "commands.hpp"
 #include "learner/input_error.hpp"
 
@@ -90,10 +91,7 @@ CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
   const std::map<std::string, AlphaUpdate> names{{"posterior", AlphaUpdate::kPosterior},
                                                  {"paper", AlphaUpdate::kPaper}};
   return cmd
-      ->add_option("--alpha-update", update,
-                   "How the observation model is learned: 'posterior' (the Dirichlet posterior of the prior and the "
-                   "data, the prior's weight chosen from the data; docs/MODEL.md) or 'paper' (alpha = c alpha_dot + "
-                   "(1 - c) alpha, which forgets the prior at its fixed point)")
+      ->add_option("--alpha-update", update, app::learn_setting("alpha_update").help)  // hbirl learn's words
       ->transform(CLI::CheckedTransformer(names))
       ->default_str("posterior");
 }

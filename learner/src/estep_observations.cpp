@@ -36,7 +36,6 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
     }
   }
   if (options_.executor) input_digest_ = dataset_digest(trajectories_);
-  exact_engine_ = options_.engine(mdp)->exact() != nullptr;  // asked once: an engine may be large
   if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();

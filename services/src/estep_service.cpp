@@ -69,6 +69,8 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) {
     blocks_.digests.push_back(dataset_digest(block_of(estep.trajectories(), b)));
   blocks_.current = std::set<std::uint64_t>(blocks_.digests.begin(), blocks_.digests.end());
   blocks_.data_digest = dataset_digest(estep.trajectories());
+  blocks_.exact =
+      estep.options().engine(estep.mdp())->exact() != nullptr;  // asked once per data set: an engine may be large
   if (owners_.size() != blocks_.digests.size()) owners_.assign(blocks_.digests.size(), std::string());
   roster_.new_data_set();
 }
@@ -327,14 +329,14 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   // The workers compute with the exact engine on this executor's MDP: the pass must too.
   if (dynamics_digest(estep.mdp()) != mdp_digest_)
     throw std::logic_error("BusBlockExecutor: the E-step's MDP is not the workers'");
-  if (!estep.exact_engine()) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
+  prepare_blocks(estep);
+  if (!blocks_.exact) throw std::logic_error("BusBlockExecutor: workers run the exact engine only");
   ++request_id_;
   ++stats_.requests;
   if (eta && (eta->rows() != estep.num_contexts() || eta->cols() != 1 + model.num_confounders())) {
     throw std::logic_error("BusBlockExecutor: learned eta does not have one row per context and a column per source");
   }
   if (eta && eta->rows() > options_.max_contexts) return compute_here(estep, policy, model, seed, eta);
-  prepare_blocks(estep);
   const int blocks = estep.num_blocks();
   pass_ = Pass{};
   pass_.shape = {blocks,

@@ -158,8 +158,6 @@ class ObservationEStep final : public EStep {
   static ObservedTrajectory with_eta(const ObservedTrajectory& trajectory, const RowMatrix& eta);
   // Whether the exact engine's passes use one emission per observation kind (see max_kinds).
   bool uses_kind_table() const { return kinds_.has_value(); }
-  // Whether its engine is the exact one (what sampler workers compute with).
-  bool exact_engine() const { return exact_engine_; }
   const ObservationPrior& prior() const { return prior_; }
   const ObservationEStepOptions& options() const { return options_; }
 
@@ -173,7 +171,6 @@ class ObservationEStep final : public EStep {
   const Mdp& mdp_;
   std::vector<ObservedTrajectory> trajectories_;
   std::optional<ObservationKinds> kinds_;
-  bool exact_engine_ = false;
   RowMatrix context_eta_;
   Eigen::VectorXd context_observations_;
   std::uint64_t input_digest_ = 0;

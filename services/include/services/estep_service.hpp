@@ -145,6 +145,7 @@ class BusBlockExecutor final : public BlockExecutor {
     std::vector<std::uint64_t> digests;
     std::set<std::uint64_t> current;  // the same, to look up
     std::uint64_t data_digest = 0;
+    bool exact = false;  // its engine is the exact one, what the workers compute with
   };
   // The pass in flight: what came back, from whom, and who was given what.
   struct Pass {
