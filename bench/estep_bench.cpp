@@ -8,7 +8,7 @@
 
 #include "learner/estep_mcmc.hpp"
 #include "learner/estep_observations.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 namespace {

@@ -5,7 +5,7 @@
 #include "learner/maxcausalent.hpp"
 #include "learner/metrics.hpp"
 #include "learner/value_iteration.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 namespace {

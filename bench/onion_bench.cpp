@@ -4,8 +4,8 @@
 
 #include "perception/blobs.hpp"
 #include "perception/labeller.hpp"
-#include "sim_driver/onion.hpp"
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/onion.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 namespace hbirl::onion {
 namespace {

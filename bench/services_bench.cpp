@@ -20,8 +20,8 @@
 #include "services/lcm_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/sampler_worker.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl::services {
 namespace {

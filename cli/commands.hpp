@@ -47,7 +47,7 @@ void warn_all(const std::string& source, const std::vector<std::string>& warning
 #include "learner/mcmc_diagnostics.hpp"
 #include "problem/json_format.hpp"
 #include "problem/problem_file.hpp"
-#include "sim_driver/domain_options.hpp"
+#include "sim_driver/registry/domain_options.hpp"
 
 namespace hbirl::cli {
 // Read a problem file; warnings go to stderr, errors are rethrown as InputError whose

@@ -4,8 +4,8 @@
 #include "commands.hpp"
 #include "learner/input_error.hpp"
 #include "problem/json_format.hpp"
-#include "sim_driver/gridworld_problem.hpp"
-#include "sim_driver/random_task.hpp"
+#include "sim_driver/gridworld/problem_file.hpp"
+#include "sim_driver/file/random_task.hpp"
 
 namespace hbirl::cli {
 
@@ -138,7 +138,8 @@ Command add_generate(CLI::App& app) {
       "A random task from its seed, as `hbirl experiment random-tasks` draws it: a grid or sparse graph MDP\n"
       "(9-100 states, 2-6 actions, goals and traps), a step cost and other features, a true reward whose optimal\n"
       "policy is not trivial, a random sensor (4-24 symbols, 0-7 confounding elements, occlusion), demonstrations\n"
-      "watched through it, and the subject prior from a controlled run (sim_driver/random_task.hpp). Learn it with\n"
+      "watched through it, and the subject prior from a controlled run (sim_driver/file/random_task.hpp). Learn it "
+      "with\n"
       "`hbirl learn --problem FILE` (or --from truth); set observation_model.learn to false for O fixed at the prior.");
   task->add_option("--seed", t->seed, "The task")->capture_default_str();
   task->add_option("--draw", t->draw, "Which of the task's data sets (the same task watched again)")

@@ -7,8 +7,8 @@
 #include "problem/domain_file.hpp"
 #include "services/keyed_bus.hpp"
 #include "services/process.hpp"
-#include "services/sim_driver.hpp"
-#include "sim_driver/recorded_run.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
+#include "sim_driver/file/recorded_run.hpp"
 
 namespace hbirl::cli {
 
@@ -48,9 +48,9 @@ int run_publish(const PublishArgs& args) {
   counters.service = "publish";
   std::unique_ptr<services::Bus> bus = services::with_key(services::open_bus(args.url), args.key_file, counters);
   services::Heartbeat heartbeat(*bus, counters, "publish", services::default_id("publish"));
-  services::SimDriverOptions options;
+  SimulatorOptions options;
   options.max_frames_per_second = args.rate;  // one frame per step
-  services::SimDriver driver(*bus, name, std::move(run), options, counters);
+  Simulator driver(*bus, name, std::move(run), options, counters);
   std::cerr << "hbirl publish: " << name << ": " << problem.demonstration.size() << " trajectories (" << controlled
             << " controlled), " << steps << " steps, to " << (args.url.empty() ? "LCM's default URL" : args.url)
             << "\n";

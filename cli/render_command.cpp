@@ -10,8 +10,8 @@
 #include "perception/labeller.hpp"
 #include "perception/overlay.hpp"
 #include "problem/json_format.hpp"
-#include "sim_driver/onion.hpp"
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/onion.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 namespace hbirl::cli {
 

@@ -1,7 +1,7 @@
 // hbirl validate: check a problem file or a domain file and summarise it.
 #include "commands.hpp"
 #include "full_commands.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 #include "problem/domain_file.hpp"
 #include "problem/json_format.hpp"
 

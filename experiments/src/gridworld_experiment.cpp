@@ -11,7 +11,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
 #include "learner/parallel.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 

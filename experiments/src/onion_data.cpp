@@ -1,7 +1,7 @@
 #include "experiments/onion_data.hpp"
 
 #include "learner/rng.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::onion {
 

@@ -14,7 +14,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
 #include "learner/parallel.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::onion {
 

@@ -14,7 +14,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/parallel.hpp"
-#include "sim_driver/random_task.hpp"
+#include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
 

@@ -361,9 +361,10 @@ void McmcEngine::accumulate(const SoftSolution& policy, const ObservationModel& 
 }
 
 EngineFactory mcmc_engine_factory(McmcOptions options) {
-  return [options](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> {
-    return std::make_unique<McmcEngine>(mdp, options);
-  };
+  return {[options](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> {
+            return std::make_unique<McmcEngine>(mdp, options);
+          },
+          false};
 }
 
 }  // namespace hbirl

@@ -12,7 +12,7 @@
 namespace hbirl {
 
 EngineFactory exact_engine_factory() {
-  return [](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<ExactPosteriorEngine>(mdp); };
+  return {[](const Mdp& mdp) -> std::unique_ptr<PosteriorEngine> { return std::make_unique<ExactEngine>(mdp); }, true};
 }
 
 ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTrajectory>& trajectories,
@@ -159,17 +159,16 @@ std::vector<EStepStatistics> ObservationEStep::block_statistics(const SoftSoluti
     std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
     EStepStatistics& out = partial[static_cast<size_t>(k)];
     out = EStepStatistics::zero(P, E, W, num_contexts());
-    ExactEngine* exact = table ? engine->exact() : nullptr;
-    if (exact) {
-      accumulate_by_kind(*exact, policy, model, trajectories_, b * kBlockSize, std::min(n, (b + 1) * kBlockSize),
-                         *kinds, *table, options_.watch, out);
+    const int begin = b * kBlockSize, end = std::min(n, (b + 1) * kBlockSize);
+    if (table &&
+        engine->accumulate_by_kind(policy, model, trajectories_, begin, end, *kinds, *table, options_.watch, out)) {
       return;
     }
-    for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
+    for (int i = begin; i < end; ++i) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
-      if (i == options_.watch && engine->exact()) {  // the same sums, and the posterior kept
+      if (i == options_.watch) {  // the same sums, and the posterior kept
         const ObservedTrajectory& t = trajectories_[static_cast<size_t>(i)];
-        engine->exact()->accumulate(policy, model, eta ? with_eta(t, *eta) : t, out, true);
+        engine->accumulate_watched(policy, model, eta ? with_eta(t, *eta) : t, rng, out);
         continue;
       }
       if (eta) {
@@ -304,9 +303,8 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     // Its observation kinds: each strength's emissions are a log per kind, not per observation.
     const ObservationKinds kinds = *observation_kinds(one, std::numeric_limits<int>::max());
     EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
-    if (engine->exact()) {  // by kinds, as the E-step's own pass: a log per kind, not per observation
-      accumulate_by_kind(exact, policy, model, one, 0, 1, kinds, kind_emissions(model, kinds), -1, own);
-    } else {
+    // By kinds when the engine can, as the E-step's own pass: a log per kind, not per observation.
+    if (!engine->accumulate_by_kind(policy, model, one, 0, 1, kinds, kind_emissions(model, kinds), -1, own)) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectory, rng, own);
     }

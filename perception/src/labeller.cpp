@@ -5,6 +5,17 @@
 
 namespace hbirl::perception {
 
+LabellerOptions labeller_options(const CameraView& camera, int width, bool uniform_eta) {
+  LabellerOptions o;
+  o.width = width;
+  o.height = camera.height(width);
+  const PixelBox g = camera.gripper_box(width);
+  o.gripper_area = static_cast<double>(g.width) * g.height;
+  o.onion_area = camera.onion_area(width);
+  o.uniform_eta = uniform_eta;
+  return o;
+}
+
 int gripper_region(double x, double y, int width, int height) {
   const int col = std::clamp(static_cast<int>(x * kRegionColumns / width), 0, kRegionColumns - 1);
   const int row = std::clamp(static_cast<int>(y * kRegionRows / height), 0, kRegionRows - 1);

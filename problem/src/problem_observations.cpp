@@ -20,7 +20,7 @@ ObservationPrior problem_prior(const Problem& problem) {
     controlled_truth.push_back(*item.truth);
   }
   ObservationPrior prior = *problem.observation_model;
-  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/domain.hpp).
+  // A controlled run replaces the stated subject prior, as in the service set (sim_driver/registry/domain.hpp).
   if (!controlled_observed.empty()) {
     prior.subject_alpha = controlled_run_prior(problem.mdp, controlled_truth, controlled_observed, prior.num_symbols);
   }

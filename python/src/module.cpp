@@ -28,8 +28,8 @@
 #include "problem/json_format.hpp"
 #include "problem/problem_file.hpp"
 #include "problem/problem_observations.hpp"
-#include "sim_driver/gridworld_problem.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/gridworld/problem_file.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::python {
 namespace {

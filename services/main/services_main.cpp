@@ -1,8 +1,8 @@
 // The service processes of the set (README.md "Services and channels"), one executable: it runs as the service it is
 // called by -- hbirl-sim-driver, hbirl-perception, hbirl-labeller, hbirl-sampler,
 // hbirl-optimiser are links to it -- or as `hbirl-services SERVICE ...`. Each process only
-// wires a library service (services/*_service.hpp, sim_driver.hpp, optimiser.hpp) to the
-// bus and to its command line.
+// wires a library service (services/*_service.hpp, sim_driver/simulator/simulator_service.hpp,
+// services/optimiser.hpp) to the bus and to its command line.
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
@@ -23,7 +23,7 @@
 #include "services/perception_service.hpp"
 #include "services/process.hpp"
 #include "services/sampler_worker.hpp"
-#include "services/sim_driver.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
 
 namespace hbirl::services {
 namespace {
@@ -82,7 +82,7 @@ int sim_driver(int argc, char** argv) {
       "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
   Common c;
   add_common(app, c);
-  SimDriverOptions o;
+  SimulatorOptions o;
   SimulationOptions& sim = o.simulation;
   app::DomainArgs d{"onion", {}};
   std::string config = "all";
@@ -158,7 +158,7 @@ int sim_driver(int argc, char** argv) {
   std::unique_ptr<Bus> bus = service_bus(c, counters);
   Heartbeat heartbeat(*bus, counters, "sim_driver", c.id.empty() ? default_id("sim_driver") : c.id);
   heartbeat.tick("starting", true);
-  SimDriver driver(*bus, *domain, o, counters);
+  Simulator driver(*bus, *domain, o, counters);
   const bool finished = driver.serve(
       stop_requested, delay, [&heartbeat](const std::string& state) { heartbeat.tick(state); },
       [](const std::string& s) { std::fprintf(stderr, "hbirl-sim-driver: %s\n", s.c_str()); });
@@ -188,13 +188,22 @@ int labeller(int argc, char** argv) {
   Common c;
   add_common(app, c);
   bool uniform = false;
+  app::DomainArgs d{"onion", {}};
+  app::add_domain_options(&app, d, "The domain whose camera's frames are labelled (its reference sizes)");
   app.add_flag("--uniform-eta", uniform, "Uniform eta instead of the paper's plausible rules");
   CLI11_PARSE(app, argc, argv);
+  const std::shared_ptr<const Domain> domain = app::open_domain_args(d, "hbirl-labeller");
+  if (!domain) throw InputError("--domain", "give the domain whose camera's frames are labelled (onion)");
+  if (!domain->camera()) {
+    throw InputError(
+        "--domain",
+        "'" + domain->name() + "' has no camera: its sensor publishes OBSERVATIONS itself, no labeller is needed");
+  }
   Counters counters;
   counters.service = "labeller";
   counters.restarts = c.restarts;
   std::unique_ptr<Bus> bus = service_bus(c, counters);
-  LabellerService service(*bus, counters, uniform);
+  LabellerService service(*bus, counters, *domain->camera(), uniform);
   Heartbeat heartbeat(*bus, counters, "labeller", c.id.empty() ? default_id("labeller") : c.id);
   return serve(*bus, heartbeat, counters);
 }

@@ -69,8 +69,7 @@ void BusBlockExecutor::prepare_blocks(const ObservationEStep& estep) {
     blocks_.digests.push_back(dataset_digest(block_of(estep.trajectories(), b)));
   blocks_.current = std::set<std::uint64_t>(blocks_.digests.begin(), blocks_.digests.end());
   blocks_.data_digest = dataset_digest(estep.trajectories());
-  blocks_.exact =
-      estep.options().engine(estep.mdp())->exact() != nullptr;  // asked once per data set: an engine may be large
+  blocks_.exact = estep.options().engine.exact;
   if (owners_.size() != blocks_.digests.size()) owners_.assign(blocks_.digests.size(), std::string());
   roster_.new_data_set();
 }

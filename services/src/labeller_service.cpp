@@ -3,12 +3,11 @@
 
 #include "learner/input_error.hpp"
 #include "perception/labeller.hpp"
-#include "sim_driver/onion_scene.hpp"
 
 namespace hbirl::services {
 
-LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
-    : bus_(bus), counters_(counters), uniform_eta_(uniform_eta) {
+LabellerService::LabellerService(Bus& bus, Counters& counters, const perception::CameraView& camera, bool uniform_eta)
+    : bus_(bus), counters_(counters), camera_(camera), uniform_eta_(uniform_eta) {
   subs_.add(bus_, subscribe(
                       bus_, channels::kDetections, counters_,
                       [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
@@ -16,11 +15,12 @@ LabellerService::LabellerService(Bus& bus, Counters& counters, bool uniform_eta)
 
 void LabellerService::on_detections(const hbirl::detections_t& m) {
   counters_.gaps += detections_.see(m.seq);
-  onion::SceneConfig config;
-  config.width = m.width;
-  config.validate();
-  if (m.height != config.height())
-    throw InputError("detections.height", "is not 3/4 of the width (the onion camera's shape)");
+  if (m.width < camera_.min_width || m.width > camera_.max_width) {
+    throw InputError("detections.width", "must be between " + std::to_string(camera_.min_width) + " and " +
+                                             std::to_string(camera_.max_width) + " pixels (the camera's)");
+  }
+  if (m.height != camera_.height(m.width))
+    throw InputError("detections.height", "is not the camera's height for this width (its aspect ratio)");
   std::vector<perception::Detection> found(static_cast<size_t>(m.n));
   for (int i = 0; i < m.n; ++i) {
     auto& d = found[static_cast<size_t>(i)];
@@ -41,7 +41,7 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
     d.dark_share = m.dark_share[k];
   }
   const std::vector<perception::Observation> obs =
-      perception::label(found, onion::labeller_options(config, uniform_eta_));
+      perception::label(found, perception::labeller_options(camera_, m.width, uniform_eta_));
   hbirl::observations_t o{};
   same_frame(m, o);
   o.seq = ++seq_;

@@ -7,7 +7,7 @@
 
 #include "learner/input_error.hpp"
 #include "learner/observation_support.hpp"
-#include "sim_driver/random_task.hpp"
+#include "sim_driver/file/random_task.hpp"
 
 namespace hbirl::app {
 namespace {

@@ -6,7 +6,7 @@
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/metrics.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::onion {
 namespace {

@@ -14,6 +14,7 @@
 #include "services/labeller_service.hpp"
 #include "services/memory_bus.hpp"
 #include "services/perception_service.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace hbirl::services;
@@ -38,7 +39,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   counters.service = "fuzz";
   counters.quiet = true;
   PerceptionService perception(bus, counters);
-  LabellerService labeller(bus, counters);
+  LabellerService labeller(bus, counters, *builtin_domain("onion")->camera());
   hbirl::dashboard::DashboardState dashboard;
   dashboard.subscribe(bus, counters);
   // The dashboard keeps frames of the onion domain (its marker makes the page's names).

@@ -7,7 +7,7 @@
 //                      expecting the simulated one's shape, as the optimiser does)
 //   PerceptionService  CAMERA (PNG and JPEG frames; fuzz_png_frame.cpp goes deeper)
 //   LabellerService    DETECTIONS
-//   SimDriver          FRAME_REQUEST (a small simulated gridworld run)
+//   Simulator          FRAME_REQUEST (a small simulated gridworld run)
 //   BusBlockExecutor   STATUS, ESTEP_RESULT (the optimiser's side of the E-step)
 //   DashboardState     everything the page shows
 //   KeyedBus           every message, checked against a run key: no input can carry a
@@ -31,8 +31,8 @@
 #include "services/memory_bus.hpp"
 #include "services/perception_service.hpp"
 #include "services/sampler_worker.hpp"
-#include "services/sim_driver.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace {
 
@@ -40,7 +40,7 @@ using namespace hbirl;
 using namespace hbirl::services;
 
 // The simulator's run, planned once (planning it takes half of an input's time): each
-// input's SimDriver gets its own copy of the plan, with the frames made by the original.
+// input's Simulator gets its own copy of the plan, with the frames made by the original.
 class SharedRun final : public Simulation {
  public:
   explicit SharedRun(const Simulation& run) : run_(run) {
@@ -62,7 +62,7 @@ class SharedRun final : public Simulation {
 // What every input shares, built once: the simulated domain and its run, and a run key.
 struct World {
   std::unique_ptr<Domain> domain;
-  SimDriverOptions sim;
+  SimulatorOptions sim;
   std::unique_ptr<Simulation> run;
   RunKey key = RunKey::generate();
 
@@ -106,8 +106,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   expecting.expect(w.domain->name(), 4, 2, mdp.num_states, mdp.num_actions);
   expecting.subscribe(bus, counters);
   PerceptionService perception(bus, counters);
-  LabellerService labeller(bus, counters);
-  SimDriver driver(bus, w.domain->name(), std::make_unique<SharedRun>(*w.run), w.sim, counters);
+  LabellerService labeller(bus, counters, *builtin_domain("onion")->camera());
+  Simulator driver(bus, w.domain->name(), std::make_unique<SharedRun>(*w.run), w.sim, counters);
   BusExecutorOptions executor_options;
   executor_options.timeout_ms = 0;
   BusBlockExecutor executor(bus, mdp, w.domain->name(), counters, executor_options);

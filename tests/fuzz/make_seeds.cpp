@@ -26,10 +26,10 @@
 #include "services/memory_bus.hpp"
 #include "services/perception_service.hpp"
 #include "services/sampler_worker.hpp"
-#include "services/sim_driver.hpp"
-#include "sim_driver/domain.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
+#include "sim_driver/registry/domain.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace {
 
@@ -96,14 +96,14 @@ std::vector<std::uint8_t> gridworld_run() {
   DomainOptions d;
   d.gridworld_size = 3;
   const auto domain = open_domain("gridworld", d);
-  SimDriverOptions o;
+  SimulatorOptions o;
   o.simulation.trajectories = 1;
   o.simulation.controlled_trajectories = 1;
   o.simulation.length = 2;
   o.simulation.per_step = 4;
   o.simulation.confounders = 1;
   o.max_frames_per_second = 0;
-  SimDriver driver(bus, *domain, o, c);
+  Simulator driver(bus, *domain, o, c);
   driver.publish_run(nullptr);
   return join(rec.take(), 40);
 }
@@ -176,7 +176,7 @@ std::vector<std::uint8_t> onion_chain(const std::vector<std::uint8_t>& png) {
   MemoryBus bus(hub);
   Counters c = quiet("chain");
   PerceptionService perception(bus, c);
-  LabellerService labeller(bus, c);
+  LabellerService labeller(bus, c, *builtin_domain("onion")->camera());
   const cv::Mat image = hbirl::perception::decode_image(png);
   hbirl::episode_marker_t marker{};
   marker.domain = "onion", marker.kind = hbirl::episode_marker_t::BEGIN_EPISODE, marker.num_steps = 1,

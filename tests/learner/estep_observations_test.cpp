@@ -8,7 +8,7 @@
 #include "learner/soft_value_iteration.hpp"
 #include "random_mdp.hpp"
 #include "tiny_observed_problem.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstring>
 
 #include "learner/estep_observations.hpp"
-#include "sim_driver/gridworld.hpp"
-#include "sim_driver/random_task.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
+#include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
 namespace {

@@ -9,7 +9,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "random_mdp.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "learner/metrics.hpp"
 #include "random_mdp.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 namespace {

@@ -8,7 +8,7 @@
 #include "services/memory_bus.hpp"
 #include "services/send_window.hpp"
 #include "services/worker_roster.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl::services {
 namespace {

@@ -3,7 +3,7 @@
 #include "services/perception_service.hpp"
 #include "expect_refused.hpp"
 #include "perception/labeller.hpp"
-#include "services/sim_driver.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
 
 #include <gtest/gtest.h>
 
@@ -27,8 +27,8 @@
 #include "services/memory_bus.hpp"
 #include "services/process.hpp"
 #include "service_threads.hpp"
-#include "sim_driver/onion.hpp"
-#include "sim_driver/recorded_run.hpp"
+#include "sim_driver/onion/onion.hpp"
+#include "sim_driver/file/recorded_run.hpp"
 
 namespace hbirl::services {
 namespace {
@@ -37,8 +37,11 @@ using testing::quiet;
 using testing::ServiceThread;
 using testing::WorkerThread;
 
-SimDriverOptions small_run() {
-  SimDriverOptions o;
+// The onion domain's camera, as hbirl-labeller takes it from the registry.
+perception::CameraView onion_camera() { return *builtin_domain("onion")->camera(); }
+
+SimulatorOptions small_run() {
+  SimulatorOptions o;
   o.simulation.scene.fps = 5;  // 10 frames per step: a short run
   o.simulation.controlled_sorts = 6;
   o.simulation.sorts = 4;
@@ -51,11 +54,11 @@ SimDriverOptions small_run() {
 // until the optimiser is done; returns what the optimiser learned (and how many frames
 // the simulator sent again).
 std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const Domain& domain,
-                                                    const SimDriverOptions& run, int resend_after_ms,
+                                                    const SimulatorOptions& run, int resend_after_ms,
                                                     std::int64_t* resent = nullptr) {
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
-  SimDriver driver(sim_bus, domain, run, sim_counters);
+  Simulator driver(sim_bus, domain, run, sim_counters);
   std::atomic<bool> done{false};
   std::promise<void> listening;
   std::thread sim([&] {
@@ -78,7 +81,7 @@ std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> h
 // camera frames (PNG) -> perception -> labeller -> optimiser with two sampler workers.
 // Everything the live run records also comes back from the log.
 TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
-  const SimDriverOptions run = small_run();
+  const SimulatorOptions run = small_run();
   const Mdp mdp = onion::make_onion_mdp();
   auto hub = std::make_shared<MemoryHub>();
   const std::filesystem::path log_path =
@@ -105,14 +108,14 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
       while (!stop_recorder) recorder_bus.handle(20);
     });
     ServiceThread<PerceptionService> perception(hub, "perception");
-    ServiceThread<LabellerService> labeller(hub, "labeller");
+    ServiceThread<LabellerService> labeller(hub, "labeller", onion_camera());
     WorkerThread w1(hub, "sampler-1"), w2(hub, "sampler-2");
     MemoryBus sim_bus(hub);
     Counters sim_counters = quiet("sim_driver");
     std::promise<void> listening;
     std::thread sim([&] {
       listening.get_future().wait();  // the optimiser must hear the run from its first message
-      run_sim_driver(sim_bus, *builtin_domain("onion"), run, sim_counters, nullptr);
+      run_simulator(sim_bus, *builtin_domain("onion"), run, sim_counters, nullptr);
     });
     MemoryBus opt_bus(hub);
     Counters opt_counters = quiet("optimiser");
@@ -183,14 +186,14 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
 // observations are not. The optimiser learns what the prior and the controlled run say,
 // and says what is missing, whether it was told the domain (as the service is) or not.
 TEST(Pipeline, ARunWithoutObservationsIsLearnedFromWhenAllowed) {
-  SimDriverOptions run = small_run();
+  SimulatorOptions run = small_run();
   run.simulation.controlled_sorts = 2;
   run.simulation.sorts = 2;
   for (const bool told : {true, false}) {
     auto hub = std::make_shared<MemoryHub>();
     MemoryBus sim_bus(hub);
     Counters sim_counters = quiet("sim_driver");
-    SimDriver driver(sim_bus, *builtin_domain("onion"), run, sim_counters);
+    Simulator driver(sim_bus, *builtin_domain("onion"), run, sim_counters);
     std::promise<void> listening;
     std::atomic<bool> done{false};
     std::thread sim([&] {
@@ -217,7 +220,7 @@ TEST(Pipeline, ARunWithoutObservationsIsLearnedFromWhenAllowed) {
 }
 
 TEST(Pipeline, LostFramesAreAskedForAgain) {
-  const SimDriverOptions run = small_run();
+  const SimulatorOptions run = small_run();
   const Mdp mdp = onion::make_onion_mdp();
   auto hub = std::make_shared<MemoryHub>();
   hub->set_loss([](const std::string& channel, const std::uint8_t* data, int size) {
@@ -226,7 +229,7 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
     return f.decode(data, 0, size) > 0 && f.seq % 6 == 0;
   });
   ServiceThread<PerceptionService> perception(hub, "perception");
-  ServiceThread<LabellerService> labeller(hub, "labeller");
+  ServiceThread<LabellerService> labeller(hub, "labeller", onion_camera());
   std::int64_t resent = 0;
   const auto live = run_serving_requests(hub, *builtin_domain("onion"), run, 200, &resent);
   ASSERT_TRUE(live.has_value());
@@ -253,8 +256,8 @@ TEST(Pipeline, LostFramesAreAskedForAgain) {
       << " left out) vs " << c.observed.size();
 }
 
-SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int controlled) {
-  SimDriverOptions run;
+SimulatorOptions gridworld_run(std::uint64_t seed, int trajectories, int controlled) {
+  SimulatorOptions run;
   run.simulation.seed = seed;
   run.max_frames_per_second = 0;
   run.simulation.trajectories = trajectories;
@@ -267,14 +270,14 @@ SimDriverOptions gridworld_run(std::uint64_t seed, int trajectories, int control
 // asked for (episodes, steps, observations per step, eta of the controlled run), against
 // learning on the same data in one process (same bits), and against the true goal.
 TEST(Pipeline, GridworldFromSimulatorToReward) {
-  SimDriverOptions run = gridworld_run(5, 20, 10);
+  SimulatorOptions run = gridworld_run(5, 20, 10);
   run.simulation.confounders = 3;
   const Mdp mdp = builtin_domain("gridworld")->mdp();
   auto hub = std::make_shared<MemoryHub>();
   WorkerThread w1(hub, "sampler-1"), w2(hub, "sampler-2");
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
-  SimDriver driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters);
+  Simulator driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters);
   EXPECT_EQ(driver.listeners(), std::vector<std::string>{"optimiser"});
   std::promise<void> listening;
   std::thread sim([&] {
@@ -327,7 +330,7 @@ TEST(Pipeline, GridworldOfSizeTenLearnsTheGoal) {
   DomainOptions ten;
   ten.gridworld_size = 10;
   const std::shared_ptr<const Domain> domain = open_domain("gridworld", ten);
-  SimDriverOptions run = gridworld_run(3, 30, 15);
+  SimulatorOptions run = gridworld_run(3, 30, 15);
   run.simulation.length = 25;  // corner to corner is 18 moves
   run.simulation.confounders = 1;
   auto hub = std::make_shared<MemoryHub>();
@@ -337,7 +340,7 @@ TEST(Pipeline, GridworldOfSizeTenLearnsTheGoal) {
   std::promise<void> listening;
   std::thread sim([&] {
     listening.get_future().wait();
-    run_sim_driver(sim_bus, *domain, run, sim_counters, nullptr);
+    run_simulator(sim_bus, *domain, run, sim_counters, nullptr);
   });
   MemoryBus opt_bus(hub);
   Counters opt_counters = quiet("optimiser");
@@ -400,11 +403,11 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   std::thread watch([&] {
     while (!done) watch_bus.handle(10);
   });
-  const SimDriverOptions run = gridworld_run(7, 8, 4);
+  const SimulatorOptions run = gridworld_run(7, 8, 4);
   std::promise<void> listening;
   std::thread sim([&] {
     listening.get_future().wait();
-    run_sim_driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
+    run_simulator(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
   });
   MemoryBus opt_bus(hub);
   Counters opt_counters = quiet("optimiser");
@@ -422,7 +425,7 @@ TEST(Pipeline, OptimiserStopsWhileLearningAndLeavesTheBusClean) {
   std::promise<void> again;
   std::thread sim2([&] {
     again.get_future().wait();
-    run_sim_driver(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
+    run_simulator(sim_bus, *builtin_domain("gridworld"), run, sim_counters, nullptr);
   });
   const auto learned = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { again.set_value(); });
   sim2.join();
@@ -1044,7 +1047,7 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
   MemoryBus perception_bus(hub), labeller_bus(hub), test_bus(hub);
   Counters pc = quiet("perception"), lc = quiet("labeller"), tc = quiet("test");
   PerceptionService perception(perception_bus, pc);
-  LabellerService labeller(labeller_bus, lc);
+  LabellerService labeller(labeller_bus, lc, onion_camera());
   int detections = 0;
   subscribe(test_bus, channels::kDetections, tc, [&](const hbirl::detections_t& d, const Message&) {
     detections += d.height == 240;  // perception's, not the bad one this test sends
@@ -1106,7 +1109,7 @@ TEST(Pipeline, ServicesSurviveBadMessages) {
 namespace hbirl::services {
 namespace {
 
-// examples/corridor.json as a live run: its demonstration published by a SimDriver
+// examples/corridor.json as a live run: its demonstration published by a Simulator
 // (hbirl publish's way) into an optimiser that knows the domain. `hostile` runs first on
 // an endpoint of its own (it has no key), once the optimiser listens. With `key`, the
 // simulator and the optimiser sign and check every message.
@@ -1124,9 +1127,9 @@ std::optional<OptimiserResult> corridor_run(const std::function<void(Bus&)>& hos
   std::unique_ptr<Bus> sim_endpoint = endpoint(sim_counters);
   Bus& sim_bus = *sim_endpoint;
   MemoryBus hostile_bus(hub);
-  SimDriverOptions o;
+  SimulatorOptions o;
   o.max_frames_per_second = 0;
-  SimDriver driver(sim_bus, domain->name(), recorded_run(read_problem_file(path)), o, sim_counters);
+  Simulator driver(sim_bus, domain->name(), recorded_run(read_problem_file(path)), o, sim_counters);
   std::promise<void> listening;
   std::thread sim([&] {
     listening.get_future().wait();
@@ -1264,14 +1267,14 @@ TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
     EXPECT_EQ(unkeyed->learned.theta[k], clean->learned.theta[k]);
 }
 
-// The simulator as a whole service (SimDriver::serve): it starts once the optimiser's
+// The simulator as a whole service (Simulator::serve): it starts once the optimiser's
 // heartbeat is heard, publishes the run, and returns once the optimiser's reward came.
 TEST(Pipeline, SimulatorWaitsForTheOptimiserAndStopsAtItsReward) {
   const std::shared_ptr<const Domain> domain = builtin_domain("gridworld");
   auto hub = std::make_shared<MemoryHub>();
   MemoryBus sim_bus(hub), opt_bus(hub);
   Counters sim_counters = quiet("sim_driver"), opt_counters = quiet("optimiser");
-  SimDriver driver(sim_bus, *domain, gridworld_run(4, 6, 4), sim_counters);
+  Simulator driver(sim_bus, *domain, gridworld_run(4, 6, 4), sim_counters);
   std::vector<std::string> said;
   std::atomic<bool> served{false};
   std::thread sim([&] {

@@ -23,8 +23,9 @@ inline Counters quiet(const std::string& name) {
 template <class Service>
 class ServiceThread {
  public:
-  ServiceThread(std::shared_ptr<MemoryHub> hub, const std::string& name)
-      : bus_(std::move(hub)), counters_(quiet(name)), service_(bus_, counters_), thread_([this] {
+  template <class... Args>
+  ServiceThread(std::shared_ptr<MemoryHub> hub, const std::string& name, const Args&... args)
+      : bus_(std::move(hub)), counters_(quiet(name)), service_(bus_, counters_, args...), thread_([this] {
           while (!stop_) bus_.handle(20);
         }) {}
   ~ServiceThread() { stop(); }

@@ -1,4 +1,5 @@
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
+#include "sim_driver/registry/simulation_options.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 #include <gtest/gtest.h>
 

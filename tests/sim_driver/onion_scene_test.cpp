@@ -1,11 +1,11 @@
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 #include <gtest/gtest.h>
 
 #include "learner/input_error.hpp"
 #include "perception/blobs.hpp"
 #include "perception/labeller.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::onion {
 namespace {

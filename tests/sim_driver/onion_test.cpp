@@ -1,4 +1,4 @@
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 #include <gtest/gtest.h>
 

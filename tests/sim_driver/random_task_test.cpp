@@ -1,4 +1,4 @@
-#include "sim_driver/random_task.hpp"
+#include "sim_driver/file/random_task.hpp"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "app/learn_settings.hpp"
-#include "sim_driver/domain_options.hpp"
+#include "sim_driver/registry/domain_options.hpp"
 
 namespace hbirl::app {
 
@@ -19,7 +19,7 @@ enum class Front { kCommandLine, kOptimiser, kPrior, kEngine };
 // `settings` when given. `settings` must outlive the parse.
 void add_learn_settings(CLI::App* cmd, LearnSettings& settings, Front front);
 
-// --domain onion|gridworld|FILE and --size N: a domain from the registry (sim_driver/domain.hpp).
+// --domain onion|gridworld|FILE and --size N: a domain from the registry (sim_driver/registry/domain.hpp).
 struct DomainArgs {
   std::string spec;
   DomainOptions options;

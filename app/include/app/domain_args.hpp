@@ -8,7 +8,7 @@
 
 #include "app/command_line.hpp"
 #include "learner/input_error.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::app {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::dashboard {
 

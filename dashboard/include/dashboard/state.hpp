@@ -29,7 +29,7 @@
 #include "hbirl/service_status_t.hpp"
 #include "services/bus.hpp"
 #include "services/typed.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::dashboard {
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "learner/estep_exact.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 

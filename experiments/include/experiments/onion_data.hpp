@@ -8,7 +8,7 @@
 
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 namespace hbirl::onion {
 

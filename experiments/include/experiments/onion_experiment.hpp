@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "learner/observations.hpp"
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 namespace hbirl::onion {
 

@@ -1,6 +1,6 @@
 #pragma once
 // hbirl on tasks nobody tuned it for (`hbirl experiment random-tasks`,
-// docs/results/random_tasks): random MDPs, rewards and sensors (sim_driver/random_task.hpp),
+// docs/results/random_tasks): random MDPs, rewards and sensors (sim_driver/file/random_task.hpp),
 // each learned by
 //   true_trajectories  MaxCausalEnt on the true (s, a): what the data could give at best
 //   fixed_prior        O fixed at the prior's mean (the controlled run; observation_model.learn false)

@@ -5,8 +5,9 @@
 // which the expected feature counts phi_hat = Phi^T N_hat follow -- and the data's
 // log-likelihood under that policy.
 //
-// Implementations: TruthEStep (known trajectories; the posterior is a point mass).
-// Observation-based engines (exact forward-backward, MCMC) implement the same interface.
+// Implementations: TruthEStep (known trajectories; the posterior is a point mass) and
+// ObservationEStep (estep_observations.hpp: observations with their eta, each
+// trajectory's posterior by a PosteriorEngine, exact or MCMC, estep_exact.hpp).
 #include <cstdint>
 #include <optional>
 #include <vector>

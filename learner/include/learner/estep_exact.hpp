@@ -14,9 +14,14 @@
 // (s, a) marginals:
 //   Pr(Z = 0 | data) = sum_r gamma_t(r) eta(0) O_r(w) / p(w | r)
 //   Pr(Z = e | data) = sum_r gamma_t(r) eta(e) O_e(w) / p(w | r).
+#include <functional>
+#include <memory>
+#include <vector>
+
 #include "learner/mcmc_diagnostics.hpp"
 #include "learner/mdp.hpp"
 #include "learner/observation_model.hpp"
+#include "learner/rng.hpp"
 #include "learner/soft_value_iteration.hpp"
 
 namespace hbirl {
@@ -68,6 +73,45 @@ void add_kind_alpha_dot(const ObservationModel& model, const ObservationKinds& k
                         const RowMatrix& kind_gamma, const std::vector<int>& touched, AlphaCounts& out,
                         RowMatrix& source_counts);
 
+// One trajectory's posterior and its E-step statistics, by whatever method: exactly by
+// forward-backward (ExactEngine below) or by the paper's MCMC (McmcEngine,
+// estep_mcmc.hpp). The E-step on observations (estep_observations.hpp) makes one engine per
+// block of trajectories (each has its own workspace) and asks it for their statistics.
+class PosteriorEngine {
+ public:
+  virtual ~PosteriorEngine() = default;
+  virtual TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
+                                        const ObservedTrajectory& trajectory, Rng& rng) = 0;
+  // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out`.
+  virtual void accumulate(const SoftSolution& policy, const ObservationModel& model,
+                          const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) = 0;
+  // The same, also keeping its posterior as out.watched (ObservationEStepOptions::watch)
+  // when the engine computes one exactly; a sampling engine adds as accumulate() does.
+  virtual void accumulate_watched(const SoftSolution& policy, const ObservationModel& model,
+                                  const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) {
+    accumulate(policy, model, trajectory, rng, out);
+  }
+  // The statistics of trajectories[begin, end), whose observations are grouped by kind
+  // (`kinds`, with the kinds' emissions `table` computed once per pass), added to `out`
+  // with trajectory `watch`'s posterior kept -- when the engine can share emissions across
+  // kinds. Returns false, having added nothing, when it cannot (then accumulate() is
+  // called for each trajectory).
+  virtual bool accumulate_by_kind(const SoftSolution&, const ObservationModel&, const std::vector<ObservedTrajectory>&,
+                                  int /*begin*/, int /*end*/, const ObservationKinds&, const KindEmissions&,
+                                  int /*watch*/, EStepStatistics&) {
+    return false;
+  }
+};
+
+// Makes a fresh engine for an MDP (which must outlive it), and says whether its engines are
+// exact: their statistics then do not depend on the random stream, and equal the kinds'
+// shared sums (services/ checks a sampler worker's answers against its own when exact).
+struct EngineFactory {
+  std::function<std::unique_ptr<PosteriorEngine>(const Mdp&)> make;
+  bool exact = true;
+  std::unique_ptr<PosteriorEngine> operator()(const Mdp& mdp) const { return make(mdp); }
+};
+
 class ExactEngine;
 // ExactEngine::accumulate by kinds for trajectories[k], k in [begin, end), whose kinds are
 // kinds.of[k], then add_kind_alpha_dot: their expected visits, log-likelihoods and alpha_dot
@@ -76,10 +120,31 @@ void accumulate_by_kind(ExactEngine& exact, const SoftSolution& policy, const Ob
                         const std::vector<ObservedTrajectory>& trajectories, int begin, int end,
                         const ObservationKinds& kinds, const KindEmissions& table, int watch, EStepStatistics& out);
 
-// Forward-backward workspace bound to one MDP (which must outlive it).
-class ExactEngine {
+// Forward-backward workspace bound to one MDP (which must outlive it): the exact engine.
+class ExactEngine final : public PosteriorEngine {
  public:
   explicit ExactEngine(const Mdp& mdp);
+
+  // The engine's interface; the random stream is not used.
+  TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
+                                const ObservedTrajectory& trajectory, Rng&) override {
+    return posterior(policy, model, trajectory);
+  }
+  void accumulate(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory, Rng&,
+                  EStepStatistics& out) override {
+    accumulate(policy, model, trajectory, out);
+  }
+  void accumulate_watched(const SoftSolution& policy, const ObservationModel& model,
+                          const ObservedTrajectory& trajectory, Rng&, EStepStatistics& out) override {
+    accumulate(policy, model, trajectory, out, true);
+  }
+  bool accumulate_by_kind(const SoftSolution& policy, const ObservationModel& model,
+                          const std::vector<ObservedTrajectory>& trajectories, int begin, int end,
+                          const ObservationKinds& kinds, const KindEmissions& table, int watch,
+                          EStepStatistics& out) override {
+    hbirl::accumulate_by_kind(*this, policy, model, trajectories, begin, end, kinds, table, watch, out);
+    return true;
+  }
 
   TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
                                 const ObservedTrajectory& trajectory);

@@ -22,37 +22,7 @@
 
 namespace hbirl {
 
-// One trajectory's posterior, by whatever method.
-class PosteriorEngine {
- public:
-  virtual ~PosteriorEngine() = default;
-  virtual TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
-                                        const ObservedTrajectory& trajectory, Rng& rng) = 0;
-  virtual void accumulate(const SoftSolution& policy, const ObservationModel& model,
-                          const ObservedTrajectory& trajectory, Rng& rng, EStepStatistics& out) = 0;
-  // The exact engine, when this is one (it can share emissions across observation kinds).
-  virtual ExactEngine* exact() { return nullptr; }
-};
-
-class ExactPosteriorEngine final : public PosteriorEngine {
- public:
-  explicit ExactPosteriorEngine(const Mdp& mdp) : engine_(mdp) {}
-  TrajectoryPosterior posterior(const SoftSolution& policy, const ObservationModel& model,
-                                const ObservedTrajectory& trajectory, Rng&) override {
-    return engine_.posterior(policy, model, trajectory);
-  }
-  void accumulate(const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& trajectory, Rng&,
-                  EStepStatistics& out) override {
-    engine_.accumulate(policy, model, trajectory, out);
-  }
-  ExactEngine* exact() override { return &engine_; }
-
- private:
-  ExactEngine engine_;
-};
-
-// Makes a fresh engine (each thread gets its own workspace).
-using EngineFactory = std::function<std::unique_ptr<PosteriorEngine>(const Mdp&)>;
+// The exact engine's factory (estep_exact.hpp), the E-step's default.
 EngineFactory exact_engine_factory();
 
 class ObservationEStep;

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "perception/blobs.hpp"
+#include "perception/camera_view.hpp"
 
 namespace hbirl::perception {
 
@@ -59,6 +60,10 @@ struct LabellerOptions {
   double dark_share = 0.08;       // Dark above this share of dark pixels
   bool uniform_eta = false;       // the Uniform-eta variant: eta = 1/4 everywhere
 };
+
+// The labeller's options for a camera's frames `width` pixels wide (its reference sizes
+// from the camera's view; the thresholds at their defaults).
+LabellerOptions labeller_options(const CameraView& camera, int width, bool uniform_eta = false);
 
 int gripper_region(double x, double y, int width, int height);
 

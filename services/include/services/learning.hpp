@@ -13,7 +13,7 @@
 #include "app/learn_settings.hpp"
 #include "learner/estep_observations.hpp"
 #include "services/dataset.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::services {
 

@@ -16,7 +16,7 @@
 #include "services/dataset.hpp"
 #include "services/estep_service.hpp"
 #include "services/learning.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::services {
 

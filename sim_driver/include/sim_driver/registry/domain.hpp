@@ -3,11 +3,10 @@
 // task"). The services, the dashboard, the CLI and the experiments look a domain up in
 // the registry below and never test its name.
 //
-// Three kinds: the onion sorter (paper §Experiments B, simulated by a camera), the
-// paper's Gridworld (§Experiments A, any size, simulated by its own sensor) and any
-// domain file (problem/domain_file.hpp, simulated by the sensor its "sensor" section
-// describes).
-#include <cstdint>
+// The registry knows the built-in kinds; this header knows none of them. They live
+// beside this folder: onion/ (paper §Experiments B, simulated by a camera), gridworld/
+// (§Experiments A, any size, simulated by its own sensor) and file/ (any domain file,
+// problem/domain_file.hpp, simulated by the sensor its "sensor" section describes).
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,9 +16,8 @@
 #include "learner/mdp.hpp"
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
-#include "sim_driver/domain_options.hpp"
-#include "sim_driver/gridworld_observations.hpp"
-#include "sim_driver/onion_scene.hpp"
+#include "perception/camera_view.hpp"
+#include "sim_driver/registry/domain_options.hpp"
 
 namespace cv {
 class Mat;
@@ -33,22 +31,9 @@ struct DomainNames {
   std::vector<std::string> contexts;  // of learned eta, when the domain's sensor gives them (its labeller's rules)
 };
 
-// How a simulator runs; each domain reads the options that concern it.
-struct SimulationOptions {
-  std::uint64_t seed = 1;
-  // onion: the demonstrations' scene, sorts in the controlled scene, then demonstrated
-  onion::SceneConfig scene;
-  int controlled_sorts = 20;
-  int sorts = 6;
-  // gridworld: the paper's sensor
-  int confounders = 3;               // |E|
-  int per_step = 40;                 // observations per step, drawn equally from the subject and each element
-  int trajectories = 20;             // demonstrations
-  int controlled_trajectories = 20;  // controlled run: the subject alone, true states known
-  int length = 10;                   // steps per trajectory
-  EtaKind eta = EtaKind::kPlausible;
-  double step_seconds = 1.0;  // sim time per step
-};
+// How a simulator runs (sim_driver/registry/simulation_options.hpp): each domain's
+// simulator reads the options that concern it.
+struct SimulationOptions;
 
 // A simulated run, planned up front so any frame can be produced again, identical: the
 // controlled run's episodes first (true steps known, the subject alone), then the
@@ -94,8 +79,10 @@ class Domain {
   // The observation model the domain states (a domain file's "observation_model": its
   // priors and how they are learned), if any; learning starts from it.
   virtual std::optional<ObservationPrior> stated_prior() const { return std::nullopt; }
-  // Its simulator is a camera (frames for perception and the labeller), not a sensor.
-  virtual bool has_camera() const { return false; }
+  // What its camera shows (the labeller's reference sizes), when its simulator is a
+  // camera (frames for perception and the labeller), not a sensor.
+  virtual std::optional<perception::CameraView> camera() const { return std::nullopt; }
+  bool has_camera() const { return camera().has_value(); }
   // The subject's Dirichlet prior (paper §Experiments): from a controlled run's observations and true steps.
   // Throws InputError when there is none and the domain states no prior of its own, or for
   // steps or symbols outside the domain.

@@ -23,7 +23,7 @@
 //            elements, O_e ~ Dirichlet(1); each observation comes from the subject with
 //            probability 0.25-0.75 (1 without elements), else from an element chosen evenly.
 //   watching 4-20 observations per step, 0-30% of steps occluded, plausible or uniform eta
-//            (sim_driver/gridworld_observations.hpp), 5-40 demonstrations of at most 8-25
+//            (sim_driver/gridworld/observations.hpp), 5-40 demonstrations of at most 8-25
 //            steps by the soft expert (ending early in a terminal state).
 //   prior    the subject's Dirichlet prior from a controlled run (the subject alone, true
 //            steps known) of 5-30 trajectories: its symbol counts per (s, a) plus 1.
@@ -35,7 +35,7 @@
 #include "learner/mdp.hpp"
 #include "learner/observations.hpp"
 #include "learner/trajectory.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 

@@ -2,10 +2,11 @@
 // simulated by the scene's camera.
 #include <opencv2/core.hpp>
 
-#include "domains.hpp"
+#include "registry/builtin_domains.hpp"
+#include "sim_driver/registry/simulation_options.hpp"
 #include "learner/input_error.hpp"
 #include "perception/labeller.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl {
 
@@ -63,7 +64,7 @@ class OnionDomain final : public Domain {
   const Mdp& mdp() const override { return mdp_; }
   int num_symbols() const override { return perception::kNumSymbols; }
   std::optional<Eigen::VectorXd> true_weights() const override { return onion::expert_weights(); }
-  bool has_camera() const override { return true; }
+  std::optional<perception::CameraView> camera() const override { return onion::camera_view(); }
 
   // Symbols: "R2C3" is the gripper seen in the field of view's region row 2, column 3
   // (of 4 x 5); then "bright onion", "dark onion" (perception/labeller.hpp).

@@ -5,7 +5,7 @@
 #include <cstdint>
 
 #include "problem/problem_file.hpp"
-#include "sim_driver/gridworld_observations.hpp"
+#include "sim_driver/gridworld/observations.hpp"
 
 namespace hbirl {
 

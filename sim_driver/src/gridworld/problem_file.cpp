@@ -1,10 +1,10 @@
-// The Gridworld as a problem (gridworld_problem.hpp).
-#include "sim_driver/gridworld_problem.hpp"
+// The Gridworld as a problem file (problem_file.hpp).
+#include "sim_driver/gridworld/problem_file.hpp"
 
 #include <string>
 
 #include "learner/input_error.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 

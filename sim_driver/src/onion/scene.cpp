@@ -1,4 +1,4 @@
-#include "sim_driver/onion_scene.hpp"
+#include "sim_driver/onion/scene.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "learner/input_error.hpp"
 #include "learner/rng.hpp"
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 namespace hbirl::onion {
 
@@ -100,25 +100,35 @@ std::string SceneConfig::elements() const {
   return out.empty() ? "controlled" : out;
 }
 
+int SceneConfig::height() const { return camera_view().height(width); }
+
 int SceneConfig::frames_per_step() const { return std::max(1, static_cast<int>(std::lround(fps * step_seconds))); }
 
 void SceneConfig::validate() const {
-  if (width < 160 || width > 4096) throw InputError("width", "must be between 160 and 4096 pixels");
+  const perception::CameraView view = camera_view();
+  if (width < view.min_width || width > view.max_width) {
+    throw InputError("width", "must be between " + std::to_string(view.min_width) + " and " +
+                                  std::to_string(view.max_width) + " pixels");
+  }
   if (fps < 1 || fps > 240) throw InputError("fps", "must be between 1 and 240");
   if (!(step_seconds > 0.0 && step_seconds <= 60.0)) throw InputError("step_seconds", "must be in (0, 60]");
   if (!(foreground_share >= 0.0 && foreground_share <= 0.95))
     throw InputError("foreground_share", "must be in [0, 0.95]");
 }
 
-GripperSize gripper_size(const SceneConfig& config) {
-  return {static_cast<int>(std::lround(kGripperW * config.width)),
-          static_cast<int>(std::lround(kGripperH * config.height()))};
+perception::CameraView camera_view() {
+  perception::CameraView v;  // the frame is 4:3 (SceneConfig::height)
+  v.min_width = 160;
+  v.max_width = 4096;  // as SceneConfig::validate
+  v.gripper_width = kGripperW;
+  v.gripper_height = kGripperH;
+  v.onion_radius = kOnionRadius;
+  return v;
 }
 
-double onion_area(const SceneConfig& config) {
-  const double r = kOnionRadius * config.width;
-  return kPi * r * r;
-}
+GripperSize gripper_size(const SceneConfig& config) { return camera_view().gripper_box(config.width); }
+
+double onion_area(const SceneConfig& config) { return camera_view().onion_area(config.width); }
 
 Episode make_episode(const Trajectory& steps, bool blemished, double start_time, std::uint64_t seed) {
   Rng rng(seed);
@@ -349,14 +359,7 @@ void OnionScene::render(const Episode& episode, int t, int frame, cv::Mat& out) 
 }
 
 perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta) {
-  perception::LabellerOptions o;
-  o.width = config.width;
-  o.height = config.height();
-  const GripperSize g = gripper_size(config);
-  o.gripper_area = static_cast<double>(g.width) * g.height;
-  o.onion_area = onion_area(config);
-  o.uniform_eta = uniform_eta;
-  return o;
+  return perception::labeller_options(camera_view(), config.width, uniform_eta);
 }
 
 std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,

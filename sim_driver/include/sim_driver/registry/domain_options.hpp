@@ -1,5 +1,5 @@
 #pragma once
-// How a built-in domain is made (sim_driver/domain.hpp's open_domain), in a header of its own
+// How a built-in domain is made (sim_driver/registry/domain.hpp's open_domain), in a header of its own
 // so that a command line can take the options without the domains' dependencies.
 namespace hbirl {
 

@@ -1,4 +1,4 @@
-// The simulator service (sim_driver.hpp): the domain plans the run up front -- its
+// The simulator service (simulator_service.hpp): the domain plans the run up front -- its
 // episodes, the expert's steps and what any frame of it shows -- so a frame can be
 // published again, identical, whenever it is asked for.
 #include <chrono>
@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "learner/input_error.hpp"
-#include "services/sim_driver.hpp"
+#include "sim_driver/simulator/simulator_service.hpp"
 #include "perception/image_codec.hpp"
 
 #include "services/lcm_arrays.hpp"
@@ -15,7 +15,17 @@
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
 
-namespace hbirl::services {
+namespace hbirl {
+
+namespace channels = services::channels;
+using services::Bus;
+using services::Counters;
+using services::lcm_rows;
+using services::lcm_vector;
+using services::Message;
+using services::publish;
+using services::subscribe;
+using services::Subscriptions;
 
 namespace {
 
@@ -46,10 +56,10 @@ hbirl::observations_t step_observations(const ObservedTrajectory& tr, int t, int
 
 }  // namespace
 
-SimDriver::SimDriver(Bus& bus, const Domain& domain, const SimDriverOptions& o, Counters& counters)
-    : SimDriver(bus, domain.name(), domain.simulate(o.simulation), o, counters) {}
+Simulator::Simulator(Bus& bus, const Domain& domain, const SimulatorOptions& o, Counters& counters)
+    : Simulator(bus, domain.name(), domain.simulate(o.simulation), o, counters) {}
 
-SimDriver::SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run, const SimDriverOptions& o,
+Simulator::Simulator(Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run, const SimulatorOptions& o,
                      Counters& counters)
     : bus_(bus), options_(o), counters_(counters), domain_(std::move(domain_name)), run_(std::move(run)) {
   if (o.encoding != "png" && o.encoding != "jpeg") throw InputError("encoding", "must be png or jpeg");
@@ -58,14 +68,14 @@ SimDriver::SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulati
                       [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
 }
 
-SimDriver::~SimDriver() = default;
+Simulator::~Simulator() = default;
 
-std::vector<std::string> SimDriver::listeners() const {
+std::vector<std::string> Simulator::listeners() const {
   if (run_->camera()) return {"perception", "labeller", "optimiser"};
   return {"optimiser"};
 }
 
-void SimDriver::publish_frame(int id, int t, int k) {
+void Simulator::publish_frame(int id, int t, int k) {
   const Simulation::Episode& e = run_->episodes[static_cast<size_t>(id)];
   if (!run_->camera()) {
     hbirl::observations_t m = step_observations(run_->observed(id), t, run_->num_symbols, run_->num_sources);
@@ -92,7 +102,7 @@ void SimDriver::publish_frame(int id, int t, int k) {
   publish(bus_, channels::kCamera, f, counters_);
 }
 
-hbirl::episode_marker_t SimDriver::marker(int episode, std::int8_t kind, double time) {
+hbirl::episode_marker_t Simulator::marker(int episode, std::int8_t kind, double time) {
   hbirl::episode_marker_t m{};
   m.utime = micros(time);
   m.seq = ++marker_seq_;
@@ -104,7 +114,7 @@ hbirl::episode_marker_t SimDriver::marker(int episode, std::int8_t kind, double 
   return m;
 }
 
-void SimDriver::on_request(const hbirl::frame_request_t& m) {
+void Simulator::on_request(const hbirl::frame_request_t& m) {
   const Simulation& p = *run_;
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
@@ -123,7 +133,7 @@ void SimDriver::on_request(const hbirl::frame_request_t& m) {
   }
 }
 
-void SimDriver::publish_truth(int id, int t) {
+void Simulator::publish_truth(int id, int t) {
   const Simulation& p = *run_;
   const Simulation::Episode& e = p.episodes[static_cast<size_t>(id)];
   if (!e.has_truth) return;
@@ -140,7 +150,7 @@ void SimDriver::publish_truth(int id, int t) {
   publish(bus_, channels::kGroundTruth, truth, counters_);
 }
 
-bool SimDriver::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
+bool Simulator::publish_run(const std::function<bool()>& stop, const std::function<void()>& idle) {
   const Simulation& p = *run_;
   const auto started = Clock::now();
   std::int64_t frames_sent = 0;
@@ -170,7 +180,7 @@ bool SimDriver::publish_run(const std::function<bool()>& stop, const std::functi
   return true;
 }
 
-hbirl::episode_marker_t SimDriver::end_marker(int id) {
+hbirl::episode_marker_t Simulator::end_marker(int id) {
   const Simulation::Episode& e = run_->episodes[static_cast<size_t>(id)];
   auto m = marker(id, hbirl::episode_marker_t::END_EPISODE,
                   e.start_time + static_cast<double>(e.steps.size()) * run_->step_seconds);
@@ -179,19 +189,19 @@ hbirl::episode_marker_t SimDriver::end_marker(int id) {
   return m;
 }
 
-void SimDriver::republish_end_markers() {
+void Simulator::republish_end_markers() {
   for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id)
     publish(bus_, channels::kEpisode, end_marker(id), counters_);
   publish(bus_, channels::kEpisode, end_of_run(), counters_);
 }
 
-hbirl::episode_marker_t SimDriver::end_of_run() {
+hbirl::episode_marker_t Simulator::end_of_run() {
   auto m = marker(0, hbirl::episode_marker_t::END_RUN, 0.0);
   m.num_steps = static_cast<std::int32_t>(run_->episodes.size());  // END_RUN states the run's episodes
   return m;
 }
 
-bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
+bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
                       const std::function<void(const std::string&)>& beat,
                       const std::function<void(const std::string&)>& log) {
   const auto say = [&log](const std::string& s) {
@@ -245,10 +255,10 @@ bool SimDriver::serve(const std::function<bool()>& stop, double start_delay_s,
   return finished;
 }
 
-bool run_sim_driver(Bus& bus, const Domain& domain, const SimDriverOptions& o, Counters& counters,
-                    const std::function<bool()>& stop, const std::function<void()>& idle) {
-  SimDriver driver(bus, domain, o, counters);
+bool run_simulator(Bus& bus, const Domain& domain, const SimulatorOptions& o, Counters& counters,
+                   const std::function<bool()>& stop, const std::function<void()>& idle) {
+  Simulator driver(bus, domain, o, counters);
   return driver.publish_run(stop, idle);
 }
 
-}  // namespace hbirl::services
+}  // namespace hbirl

@@ -1,6 +1,6 @@
 #pragma once
-// The simulator service (README.md "Services and channels"): a domain's simulated run on the bus, as a
-// camera or a sensor would publish it.
+// The simulator service, hbirl-sim-driver (README.md "Services and channels"): a domain's
+// simulated run on the bus of services/, as a camera or a sensor would publish it.
 #include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -15,30 +15,31 @@
 #include "services/bus.hpp"
 #include "services/channels.hpp"
 #include "services/typed.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
+#include "sim_driver/registry/simulation_options.hpp"
 
-namespace hbirl::services {
+namespace hbirl {
 
-struct SimDriverOptions {
-  SimulationOptions simulation;          // the run (sim_driver/domain.hpp)
+struct SimulatorOptions {
+  SimulationOptions simulation;          // the run (sim_driver/registry/domain.hpp)
   std::string encoding = "png";          // a camera's frames; lossless: replay and live see the same pixels
   double max_frames_per_second = 300.0;  // pacing, wall clock (0: as fast as it renders)
 };
-// The simulator of a domain (sim_driver/domain.hpp): publishes the whole run (EPISODE,
+// The simulator of a domain (sim_driver/registry/domain.hpp): publishes the whole run (EPISODE,
 // GROUND_TRUTH, and CAMERA frames for a domain with a camera, OBSERVATIONS with their
 // eta for one with a sensor), then END_RUN, and afterwards answers
 // FRAME_REQUEST by publishing the asked frames again, with their steps' ground truth (the
 // run is deterministic: the same pixels, the same observations) -- so frames and ground
 // truth lost on the way can be recovered.
-class SimDriver {
+class Simulator {
  public:
   // Throws InputError for a domain without a simulator or options it cannot run.
-  SimDriver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters);
-  // A run planned elsewhere (e.g. a recorded one, sim_driver/recorded_run.hpp), under the
+  Simulator(services::Bus& bus, const Domain& domain, const SimulatorOptions& options, services::Counters& counters);
+  // A run planned elsewhere (e.g. a recorded one, sim_driver/file/recorded_run.hpp), under the
   // domain name its markers carry.
-  SimDriver(Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run, const SimDriverOptions& options,
-            Counters& counters);
-  ~SimDriver();
+  Simulator(services::Bus& bus, std::string domain_name, std::unique_ptr<Simulation> run,
+            const SimulatorOptions& options, services::Counters& counters);
+  ~Simulator();
   // Returns false if asked to stop first. `idle` runs after every frame.
   bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
   std::int64_t frames_resent() const { return resent_; }
@@ -64,20 +65,21 @@ class SimDriver {
   void on_request(const hbirl::frame_request_t& m);
   void publish_truth(int episode, int step);
   void publish_frame(int episode, int step, int frame);
-  Bus& bus_;
-  SimDriverOptions options_;
-  Counters& counters_;
+  services::Bus& bus_;
+  SimulatorOptions options_;
+  services::Counters& counters_;
   std::string domain_;
   std::unique_ptr<Simulation> run_;
   std::int64_t marker_seq_ = 0, truth_seq_ = 0, frame_seq_ = 0;
   cv::Mat frame_;
   std::vector<unsigned char> bytes_;
   std::int64_t resent_ = 0;
-  Subscriptions subs_;  // last: ends first
+  services::Subscriptions subs_;  // last: ends first
 };
 
-// Publishes the run with a SimDriver (the in-process tests' way).
-bool run_sim_driver(Bus& bus, const Domain& domain, const SimDriverOptions& options, Counters& counters,
-                    const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
+// Publishes the run with a Simulator (the in-process tests' way).
+bool run_simulator(services::Bus& bus, const Domain& domain, const SimulatorOptions& options,
+                   services::Counters& counters, const std::function<bool()>& stop,
+                   const std::function<void()>& idle = nullptr);
 
-}  // namespace hbirl::services
+}  // namespace hbirl

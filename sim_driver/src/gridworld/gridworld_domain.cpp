@@ -1,8 +1,9 @@
 // The paper's Gridworld (paper §Experiments A) as a domain, any size: a goal corner
 // drawn from the seed, and a run simulated by the paper's sensor (no camera).
-#include "domains.hpp"
+#include "registry/builtin_domains.hpp"
+#include "sim_driver/registry/simulation_options.hpp"
 #include "learner/input_error.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 

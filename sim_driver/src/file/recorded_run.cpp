@@ -1,7 +1,7 @@
 // A problem file's demonstration as a run (recorded_run.hpp).
-#include "sim_driver/recorded_run.hpp"
+#include "sim_driver/file/recorded_run.hpp"
 
-#include "domains.hpp"
+#include "registry/builtin_domains.hpp"
 #include "learner/input_error.hpp"
 
 namespace hbirl {

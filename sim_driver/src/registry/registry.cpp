@@ -1,7 +1,7 @@
 // The domain registry (domain.hpp): built-in domains by name, domain files by path.
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
-#include "domains.hpp"
+#include "registry/builtin_domains.hpp"
 #include "learner/input_error.hpp"
 
 namespace hbirl {

@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "problem/problem_file.hpp"
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl {
 

@@ -1,4 +1,4 @@
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 #include <stdexcept>
 

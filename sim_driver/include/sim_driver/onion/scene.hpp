@@ -20,6 +20,7 @@
 
 #include "learner/mdp.hpp"
 #include "learner/trajectory.hpp"
+#include "perception/camera_view.hpp"
 #include "perception/labeller.hpp"
 
 namespace hbirl::onion {
@@ -43,7 +44,7 @@ struct SceneConfig {
   // InputError(field, ...) naming an unknown element.
   static SceneConfig parse(const std::string& elements, const std::string& field = "config");
   std::string elements() const;  // the inverse: "controlled", "all" or the list
-  int height() const { return width * 3 / 4; }
+  int height() const;            // 3/4 of the width (camera_view)
   int frames_per_step() const;
   // Throws InputError naming the first bad field.
   void validate() const;
@@ -59,11 +60,11 @@ struct Episode {
   double start_time = 0.0;
 };
 
+// What the scene's camera shows, as shares of the frame: the labeller's reference sizes
+// (the onion domain states it, Domain::camera).
+perception::CameraView camera_view();
 // The gripper's appearance at this resolution (the labeller's reference size).
-struct GripperSize {
-  int width = 0;
-  int height = 0;
-};
+using GripperSize = perception::PixelBox;
 GripperSize gripper_size(const SceneConfig& config);
 // An onion's area in pixels at this resolution.
 double onion_area(const SceneConfig& config);
@@ -130,7 +131,7 @@ struct DemonstrationOptions {
 std::vector<Episode> plan_sorts(const Mdp& mdp, const SceneConfig& config, const DemonstrationOptions& options,
                                 std::uint64_t seed);
 
-// The labeller's reference sizes for a scene (the gripper's box, an onion's area).
+// The labeller's options for this scene's frames (perception::labeller_options of its camera_view()).
 perception::LabellerOptions labeller_options(const SceneConfig& config, bool uniform_eta = false);
 
 }  // namespace hbirl::onion

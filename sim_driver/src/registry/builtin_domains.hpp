@@ -1,15 +1,16 @@
 #pragma once
-// The domains the registry (domain.cpp) makes; each lives in its own file.
+// The built-in domains the registry (registry.cpp) makes, each in its own folder, and
+// what the sensor-simulated ones share.
 #include <memory>
 
-#include "sim_driver/domain.hpp"
+#include "sim_driver/registry/domain.hpp"
 
 namespace hbirl {
 
-std::unique_ptr<Domain> make_onion_domain();              // onion_domain.cpp
-std::unique_ptr<Domain> make_gridworld_domain(int size);  // gridworld_domain.cpp
+std::unique_ptr<Domain> make_onion_domain();              // onion/onion_domain.cpp
+std::unique_ptr<Domain> make_gridworld_domain(int size);  // gridworld/gridworld_domain.cpp
 
-// A simulated sensor's run (domain.cpp): the observations of every episode, one frame per step.
+// A simulated sensor's run (registry.cpp): the observations of every episode, one frame per step.
 class SensorRun : public Simulation {
  public:
   bool camera() const override { return false; }

@@ -1,4 +1,4 @@
-#include "sim_driver/onion.hpp"
+#include "sim_driver/onion/onion.hpp"
 
 #include "learner/input_error.hpp"
 #include "learner/value_iteration.hpp"

@@ -1,6 +1,7 @@
 // A domain file (problem/domain_file.hpp) as a domain: its MDP and names, its stated
 // observation prior, and a run simulated by the sensor its "sensor" section describes.
-#include "domains.hpp"
+#include "registry/builtin_domains.hpp"
+#include "sim_driver/registry/simulation_options.hpp"
 #include "learner/input_error.hpp"
 #include "learner/soft_value_iteration.hpp"
 #include "problem/domain_file.hpp"

@@ -8,7 +8,7 @@
 #include "learner/observations.hpp"
 #include "learner/rng.hpp"
 #include "learner/trajectory.hpp"
-#include "sim_driver/gridworld.hpp"
+#include "sim_driver/gridworld/gridworld.hpp"
 
 namespace hbirl {
 
