@@ -6,7 +6,7 @@
 #include "commands.hpp"
 #include "full_commands.hpp"
 #include "problem/json_format.hpp"
-#include "services/optimiser.hpp"
+#include "app/recorded_problem.hpp"
 
 namespace hbirl::cli {
 
@@ -19,46 +19,22 @@ struct ExportArgs {
   app::LearnSettings settings;  // those that override the prior (app::Front::kPrior)
 };
 
-// The domain and the data set as the live optimiser had them; the observation model is
-// the prior it learned from (the controlled run's counts included), so learning the file
-// again starts where the optimiser started.
+// The run as a problem file (app/recorded_problem.hpp): learning it again starts where
+// the live optimiser started.
 int run_export(const ExportArgs& args) {
-  services::Counters counters;
-  counters.service = "hbirl export";
-  counters.quiet = true;
-  const services::OptimiserResult r =
-      services::collect_from_log({args.log, args.key_file, args.allow_incomplete}, counters);
-  const std::shared_ptr<const Domain> domain = services::domain_of(r.data, app::open_domain_args(args.domain, "hbirl"));
-  if (r.data.observed.empty()) throw InputError(args.log, "the log holds no demonstrations");
-  Problem problem;
-  problem.mdp = domain->mdp();
-  const DomainNames names = domain->names(r.data.num_sources);
-  problem.state_names = names.states;
-  problem.action_names = names.actions;
-  problem.feature_names = names.features;
-  problem.observation_model = services::observation_prior(*domain, r.data);
-  app::apply_to_prior(args.settings, *problem.observation_model);
-  for (size_t i = 0; i < r.data.observed.size(); ++i) {
-    DemonstratedTrajectory t;
-    t.steps = r.data.observed[i];
-    t.ends_in_terminal = r.data.observed[i].ends_in_terminal;
-    if (i < r.data.truth.size() && r.data.truth[i].size() == static_cast<size_t>(r.data.observed[i].length())) {
-      t.truth = r.data.truth[i];
-    }
-    problem.demonstration.push_back(std::move(t));
-  }
-  problem.true_weights = services::true_weights_of(*domain, r.data);
-  nlohmann::ordered_json doc = problem_to_json(problem);
+  const app::RecordedProblem r =
+      app::read_recorded_problem({args.log, args.key_file, args.allow_incomplete},
+                                 app::open_domain_args(args.domain, "hbirl"), args.settings, "hbirl export");
+  nlohmann::ordered_json doc = problem_to_json(r.problem);
   doc["comment"] =
-      "Exported by hbirl export from " + args.log + " (domain " + domain->name() +
-      "): " + std::to_string(problem.demonstration.size()) + " demonstrations; the " +
-      std::to_string(r.data.controlled_observed.size()) +
+      "Exported by hbirl export from " + args.log + " (domain " + r.domain +
+      "): " + std::to_string(r.problem.demonstration.size()) + " demonstrations; the " +
+      std::to_string(r.controlled_episodes) +
       " controlled-run episodes are in observation_model.subject_alpha (the prior the optimiser learned from)";
   emit(format_json(doc), args.out);
-  std::cerr << "hbirl export: " << problem.demonstration.size() << " demonstrations, "
-            << r.data.controlled_observed.size() << " controlled episodes (in the prior), " << r.missing_frames
-            << " frames missing, " << counters.bad_messages << " bad messages"
-            << (args.out.empty() ? "" : " -> " + args.out) << "\n";
+  std::cerr << "hbirl export: " << r.problem.demonstration.size() << " demonstrations, " << r.controlled_episodes
+            << " controlled episodes (in the prior), " << r.missing_frames << " frames missing, " << r.bad_messages
+            << " bad messages" << (args.out.empty() ? "" : " -> " + args.out) << "\n";
   return 0;
 }
 

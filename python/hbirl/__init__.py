@@ -21,9 +21,6 @@ argument (README.md "Python"). Every long call releases the GIL.
 import inspect
 import math
 import os
-import shutil
-import subprocess
-import tempfile
 
 import numpy as np
 
@@ -263,38 +260,19 @@ def onion():
     return _hbirl.onion()
 
 
-def _hbirl_command(command):
-    """The hbirl command: as given, else $HBIRL_CLI, else the build tree's (this package in
-    BUILD/python/hbirl, the command BUILD/hbirl), else hbirl on the PATH."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    for candidate in (command, os.environ.get("HBIRL_CLI"), os.path.join(here, "..", "..", "hbirl"), shutil.which("hbirl")):
-        if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
-            return candidate
-    raise ValueError("hbirl_command: the hbirl command was not found (give its path, set HBIRL_CLI or put it on the PATH)")
-
-
-def read_log(path, key=None, domain=None, allow_incomplete=False, eta=None, hbirl_command=None):
+def read_log(path, key=None, domain=None, allow_incomplete=False, eta=None):
     """A recorded run of the service set (lcm-logger, services/launch.sh --record) as a
     Problem: the domain's MDP and names, the demonstrations as the optimiser received them
-    and the observation prior it learned from -- the data set `hbirl learn --log` uses, by
-    `hbirl export` (so HierarchicalIRL().fit(p.mdp, p.observations(), p.observation_prior)
-    gives the live run's theta). key: the run's key file for a signed run; domain: the
-    domain file of a run on one; allow_incomplete: a run cut short, from its finished
-    episodes; eta: "stated" or "learned", as the run's hbirl-optimiser --eta when given.
-    A log that cannot be read raises ValueError with hbirl's one-line message."""
-    args = [_hbirl_command(hbirl_command), "export", "--log", str(path)]
-    for flag, value in (("--key", key), ("--domain", domain), ("--eta", eta)):
-        if value is not None:
-            args += [flag, str(value)]
-    if allow_incomplete:
-        args.append("--allow-incomplete")
-    with tempfile.TemporaryDirectory() as directory:
-        out = os.path.join(directory, "run.json")
-        run = subprocess.run(args + ["--out", out], capture_output=True, text=True)
-        if run.returncode != 0:
-            lines = [line for line in run.stderr.splitlines() if line.strip()]
-            raise ValueError(f"{path}: " + (lines[-1] if lines else f"hbirl export failed (exit {run.returncode})"))
-        return _hbirl.load_problem(out)
+    and the observation prior it learned from -- the data set `hbirl learn --log` uses and
+    `hbirl export` writes, read here in process (so HierarchicalIRL().fit(p.mdp,
+    p.observations(), p.observation_prior) gives the live run's theta). key: the run's key
+    file for a signed run; domain: the domain file of a run on one; allow_incomplete: a run
+    cut short, from its finished episodes; eta: "stated" or "learned", as the run's
+    hbirl-optimiser --eta when given. A log that cannot be read raises ValueError with
+    hbirl's one-line message."""
+    return _hbirl._read_log(os.fspath(path), None if key is None else os.fspath(key),
+                            None if domain is None else os.fspath(domain), bool(allow_incomplete),
+                            None if eta is None else str(eta))
 
 
 # Every learning setting, as `hbirl learn` has it (app/learn_settings.hpp): the estimators'

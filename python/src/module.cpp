@@ -16,6 +16,7 @@
 #include "arrays.hpp"
 #include "app/learn.hpp"
 #include "hierarchical.hpp"
+#include "recording.hpp"
 #include "learner/controlled_prior.hpp"
 #include "learner/estep.hpp"
 #include "learner/hidden_data_em.hpp"
@@ -838,4 +839,5 @@ PYBIND11_MODULE(_hbirl, m) {
         return log_likelihoods(mdp, fit, seen);
       },
       py::arg("mdp"), py::arg("fit"), py::arg("observations"));
+  bind_recording(m);
 }

@@ -109,9 +109,10 @@ PY
     "$build/hbirl" learn --log "$tmp/cut.lcmlog" --key "$tmp/gw/run.key" --allow-incomplete --out "$tmp/cut.json" 2>/dev/null
     grep -q '"incomplete": "the recording has no END_RUN' "$tmp/cut.json" || fail "--allow-incomplete did not say what is missing"
     echo "cut recording: $(cat "$tmp/cut.err")"
-    # In a notebook: hbirl.read_log and HierarchicalIRL give the live theta (when the Python package is built).
+    # In a notebook: hbirl.read_log (in process: no hbirl command needed) and HierarchicalIRL give the live
+    # theta (when the Python package is built).
     if [ -d "$build/python/hbirl" ]; then
-      PYTHONPATH="$build/python" HBIRL_CLI="$build/hbirl" /usr/bin/python3 - "$tmp/gw/run.lcmlog" "$tmp/gw/run.key" "$tmp/gw/result.json" <<'PY' ||
+      PYTHONPATH="$build/python" /usr/bin/python3 - "$tmp/gw/run.lcmlog" "$tmp/gw/run.key" "$tmp/gw/result.json" <<'PY' ||
 import json, sys, hbirl
 run = hbirl.read_log(sys.argv[1], key=sys.argv[2])
 model = hbirl.HierarchicalIRL().fit(run.mdp, run.observations(), run.observation_prior)

@@ -11,7 +11,6 @@ struct PixelBox {
   int width = 0, height = 0;
 };
 
-
 struct CameraView {
   // The frame's height is width * aspect_numerator / aspect_denominator (whole pixels,
   // rounded down), for widths in [min_width, max_width].

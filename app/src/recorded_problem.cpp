@@ -1,0 +1,55 @@
+// A recorded run as a problem (recorded_problem.hpp).
+#include "app/recorded_problem.hpp"
+
+#include "learner/input_error.hpp"
+#include "services/learning.hpp"
+
+namespace hbirl::app {
+
+namespace {
+
+// The demonstrations as the optimiser received them; an episode's true steps when the run
+// published them for every step.
+std::vector<DemonstratedTrajectory> demonstrations_of(const services::Dataset& data) {
+  std::vector<DemonstratedTrajectory> out;
+  for (size_t i = 0; i < data.observed.size(); ++i) {
+    DemonstratedTrajectory t;
+    t.steps = data.observed[i];
+    t.ends_in_terminal = data.observed[i].ends_in_terminal;
+    if (i < data.truth.size() && data.truth[i].size() == static_cast<size_t>(data.observed[i].length())) {
+      t.truth = data.truth[i];
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+}  // namespace
+
+RecordedProblem read_recorded_problem(const services::RecordedRun& run, std::shared_ptr<const Domain> given,
+                                      const LearnSettings& prior, const std::string& reader) {
+  services::Counters counters;
+  counters.service = reader;
+  counters.quiet = true;
+  const services::OptimiserResult r = services::collect_from_log(run, counters);
+  const std::shared_ptr<const Domain> domain = services::domain_of(r.data, std::move(given));
+  if (r.data.observed.empty()) throw InputError(run.path, "the log holds no demonstrations");
+  RecordedProblem out;
+  Problem& problem = out.problem;
+  problem.mdp = domain->mdp();
+  const DomainNames names = domain->names(r.data.num_sources);
+  problem.state_names = names.states;
+  problem.action_names = names.actions;
+  problem.feature_names = names.features;
+  problem.observation_model = services::observation_prior(*domain, r.data);
+  apply_to_prior(prior, *problem.observation_model);
+  problem.demonstration = demonstrations_of(r.data);
+  problem.true_weights = services::true_weights_of(*domain, r.data);
+  out.domain = domain->name();
+  out.controlled_episodes = static_cast<int>(r.data.controlled_observed.size());
+  out.missing_frames = r.missing_frames;
+  out.bad_messages = counters.bad_messages;
+  return out;
+}
+
+}  // namespace hbirl::app

@@ -1,0 +1,54 @@
+// Recorded runs of the service set in Python (hbirl.read_log): app/recorded_problem.hpp,
+// in process -- the same problem `hbirl export` writes.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/recorded_problem.hpp"
+#include "learner/input_error.hpp"
+#include "recording.hpp"
+
+namespace py = pybind11;
+
+namespace hbirl::python {
+
+namespace {
+
+Problem read_log(const std::string& path, const std::optional<std::string>& key_file,
+                 const std::optional<std::string>& domain_file, bool allow_incomplete,
+                 const std::optional<std::string>& eta) {
+  app::LearnSettings prior;
+  if (eta) app::set(prior, app::learn_setting("eta"), *eta);
+  std::vector<std::string> warnings;
+  app::RecordedProblem r;
+  {
+    py::gil_scoped_release released;  // a long recording takes seconds
+    std::shared_ptr<const Domain> domain;
+    if (domain_file) domain = open_domain(*domain_file, {}, &warnings);
+    try {
+      r = app::read_recorded_problem({path, key_file.value_or(""), allow_incomplete}, domain, prior,
+                                     "hbirl.read_log");
+    } catch (const InputError& e) {  // named by the recording first, as load_problem names its file
+      throw InputError(path + (e.field().empty() ? "" : ": " + e.field()), e.message());
+    }
+  }
+  if (!warnings.empty()) {
+    py::module_ w = py::module_::import("warnings");
+    for (const auto& line : warnings) w.attr("warn")(*domain_file + ": " + line);
+  }
+  return std::move(r.problem);
+}
+
+}  // namespace
+
+void bind_recording(py::module_& m) {
+  m.def("_read_log", &read_log, py::arg("path"), py::arg("key") = py::none(), py::arg("domain") = py::none(),
+        py::arg("allow_incomplete") = false, py::arg("eta") = py::none(),
+        "A recorded run of the service set as a Problem (app/recorded_problem.hpp); hbirl.read_log wraps it.");
+}
+
+}  // namespace hbirl::python
