@@ -495,12 +495,8 @@ int run_onion_regimes_command(OnionRegimesArgs& args) {
   return 0;
 }
 
-}  // namespace
-
-Command add_experiment(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand(kExperiment.name, kExperiment.description);
-  cmd->require_subcommand(1);
-  auto g = std::make_shared<GridworldExperimentArgs>();
+// experiment gridworld: the paper's Gridworld figure.
+CLI::App* add_gridworld_experiment(CLI::App* cmd, GridworldExperimentArgs& args) {
   CLI::App* grid =
       cmd->add_subcommand("gridworld",
                           "The paper's Gridworld figure: ILE of five methods (True Trajectories, True Observation\n"
@@ -508,41 +504,45 @@ Command add_experiment(CLI::App& app) {
                           "elements. Writes gridworld_runs.csv (one row per run), gridworld_summary.csv and .md\n"
                           "(mean and 95% CI) and gridworld.png/.svg (needs gnuplot) to --out, and prints the\n"
                           "summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(grid, g->out, g->options.runs, g->options.update, g->options.c, g->options.restarts,
-                     g->options.seed, g->options.threads);
-  grid->add_option("--confounders", g->confounders, "Numbers of confounding elements, comma-separated")
+  add_shared_options(grid, args.out, args.options.runs, args.options.update, args.options.c, args.options.restarts,
+                     args.options.seed, args.options.threads);
+  grid->add_option("--confounders", args.confounders, "Numbers of confounding elements, comma-separated")
       ->capture_default_str();
-  grid->add_option("--methods", g->methods,
+  grid->add_option("--methods", args.methods,
                    "Comma-separated: true_trajectories, true_observation_function, uniform_eta, plausible_eta, "
                    "ignore_ce; or all")
       ->capture_default_str();
-  grid->add_option("--trajectories", g->options.trajectories, "Trajectories per run")
+  grid->add_option("--trajectories", args.options.trajectories, "Trajectories per run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  grid->add_option("--length", g->options.length, "Steps per trajectory")
+  grid->add_option("--length", args.options.length, "Steps per trajectory")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  grid->add_option("--per-step", g->options.per_step, "Observations per step")
+  grid->add_option("--per-step", args.options.per_step, "Observations per step")
       ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
-  grid->add_option("--max-alpha-iterations", g->options.max_alpha_iterations,
+  grid->add_option("--max-alpha-iterations", args.options.max_alpha_iterations,
                    "Observation-model refinements per E-step")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  grid->add_option("--alpha-tolerance", g->options.alpha_tolerance,
+  grid->add_option("--alpha-tolerance", args.options.alpha_tolerance,
                    "The observation model has converged below this change")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  grid->add_option("--theta-tolerance", g->options.theta_tolerance,
+  grid->add_option("--theta-tolerance", args.options.theta_tolerance,
                    "EM stops when theta moves less than this (relative)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  grid->add_option("--likelihood-tolerance", g->options.likelihood_tolerance,
+  grid->add_option("--likelihood-tolerance", args.options.likelihood_tolerance,
                    "EM stops when the log-likelihood moves less than this (relative)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  grid->add_flag("!--plain-em", g->options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
-  auto n = std::make_shared<OnionExperimentArgs>();
+  grid->add_flag("!--plain-em", args.options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
+  return grid;
+}
+
+// experiment onion: the paper's onion-sorting figure.
+CLI::App* add_onion_experiment(CLI::App* cmd, OnionExperimentArgs& args) {
   CLI::App* onion_cmd =
       cmd->add_subcommand("onion",
                           "The paper's onion-sorting figure, from rendered frames: ILE of five methods (True\n"
@@ -550,32 +550,36 @@ Command add_experiment(CLI::App& app) {
                           "number of demonstrated sorts, in a scene with three confounding elements and a\n"
                           "mirror. Writes onion_runs.csv, onion_summary.csv and .md and onion.png/.svg to --out\n"
                           "and prints the summary. Runs in parallel; the numbers do not depend on --threads.");
-  add_shared_options(onion_cmd, n->out, n->options.runs, n->options.update, n->options.c, n->options.restarts,
-                     n->options.seed, n->options.threads);
-  onion_cmd->add_option("--trajectories", n->trajectories, "Numbers of trajectories (sorts), comma-separated")
+  add_shared_options(onion_cmd, args.out, args.options.runs, args.options.update, args.options.c, args.options.restarts,
+                     args.options.seed, args.options.threads);
+  onion_cmd->add_option("--trajectories", args.trajectories, "Numbers of trajectories (sorts), comma-separated")
       ->capture_default_str();
   onion_cmd
       ->add_option(
-          "--methods", n->methods,
+          "--methods", args.methods,
           "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
       ->capture_default_str();
   onion_cmd
-      ->add_option("--controlled-sorts", n->options.controlled_sorts,
+      ->add_option("--controlled-sorts", args.options.controlled_sorts,
                    "Sorts in the controlled run that gives the subject prior")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   onion_cmd
-      ->add_option("--config,-c", n->scene,
+      ->add_option("--config,-c", args.scene,
                    "Demonstrations' scene: all (three confounding elements and the mirror), controlled, or a "
                    "comma-separated list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
-  onion_cmd->add_option("--width", n->options.scene.width, "Frame width in pixels")
+  onion_cmd->add_option("--width", args.options.scene.width, "Frame width in pixels")
       ->check(CLI::Range(160, 4096))
       ->capture_default_str();
-  onion_cmd->add_option("--fps", n->options.scene.fps, "Frames per simulated second")
+  onion_cmd->add_option("--fps", args.options.scene.fps, "Frames per simulated second")
       ->check(CLI::Range(1, 240))
       ->capture_default_str();
-  auto t = std::make_shared<RandomTasksArgs>();
+  return onion_cmd;
+}
+
+// experiment random-tasks: hbirl on random tasks.
+CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
   CLI::App* tasks_cmd = cmd->add_subcommand(
       "random-tasks",
       "hbirl on random tasks nobody tuned it for (hbirl generate random-task): each task learned from its\n"
@@ -584,25 +588,29 @@ Command add_experiment(CLI::App& app) {
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
       "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");
-  tasks_cmd->add_option("--out,-o", t->out, "Output folder")->capture_default_str();
-  tasks_cmd->add_option("--tasks", t->options.tasks, "Number of tasks")
+  tasks_cmd->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  tasks_cmd->add_option("--tasks", args.options.tasks, "Number of tasks")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  tasks_cmd->add_option("--draws", t->options.draws, "Data sets per task")
+  tasks_cmd->add_option("--draws", args.options.draws, "Data sets per task")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  tasks_cmd->add_option("--first-seed", t->options.first_seed, "Seed of the first task")->capture_default_str();
+  tasks_cmd->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
   tasks_cmd
-      ->add_option("--methods", t->methods,
+      ->add_option("--methods", args.methods,
                    "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
                    "posterior_c0.5, posterior_c0.02, posterior_r4; or all")
       ->capture_default_str();
-  tasks_cmd->add_option("--threads", t->options.threads, "Threads (0 = one per core)")
+  tasks_cmd->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();
-  tasks_cmd->add_option("--summarise", t->runs_csv,
+  tasks_cmd->add_option("--summarise", args.runs_csv,
                         "Do not run: summarise and draw the runs of this random_tasks_runs.csv into --out");
-  auto es = std::make_shared<EtaSensitivityArgs>();
+  return tasks_cmd;
+}
+
+// experiment eta-sensitivity: learned vs stated eta under imperfect labellers.
+CLI::App* add_eta_sensitivity_experiment(CLI::App* cmd, EtaSensitivityArgs& args) {
   CLI::App* eta_cmd = cmd->add_subcommand(
       "eta-sensitivity",
       "Beyond the paper: the Gridworld watched by a labeller that gives its pick --masses of eta and picks the true\n"
@@ -610,26 +618,30 @@ Command add_experiment(CLI::App& app) {
       "pick), against a perfect labeller. Writes eta_sensitivity_runs.csv, eta_sensitivity_summary.md (heat-map\n"
       "tables, paired comparisons, how much of the gap to the perfect labeller learned eta closes, learned vs true\n"
       "calibration) and eta_sensitivity.png/.svg to --out. The numbers do not depend on --threads.");
-  eta_cmd->add_option("--out,-o", es->out, "Output folder")->capture_default_str();
-  eta_cmd->add_option("--runs", es->options.runs, "Runs per cell")
+  eta_cmd->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  eta_cmd->add_option("--runs", args.options.runs, "Runs per cell")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  eta_cmd->add_option("--confounders", es->confounders, "Numbers of confounding elements, comma-separated")
+  eta_cmd->add_option("--confounders", args.confounders, "Numbers of confounding elements, comma-separated")
       ->capture_default_str();
-  eta_cmd->add_option("--masses", es->masses, "The labeller's share of eta for its pick, comma-separated")
+  eta_cmd->add_option("--masses", args.masses, "The labeller's share of eta for its pick, comma-separated")
       ->capture_default_str();
-  eta_cmd->add_option("--accuracies", es->accuracies, "How often its pick is the true source, comma-separated")
+  eta_cmd->add_option("--accuracies", args.accuracies, "How often its pick is the true source, comma-separated")
       ->capture_default_str();
   eta_cmd
-      ->add_option("--eta-prior-strength", es->options.eta_prior_strength,
+      ->add_option("--eta-prior-strength", args.options.eta_prior_strength,
                    "kappa of learned eta (observation_model.eta_prior_strength)")
       ->check(CLI::Range(1e-6, 1e12))
       ->capture_default_str();
-  add_scenario_options(eta_cmd, es->options.scenario);
-  eta_cmd->add_option("--threads", es->options.threads, "Threads (0 = one per core)")
+  add_scenario_options(eta_cmd, args.options.scenario);
+  eta_cmd->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();
-  auto un = std::make_shared<UnlistedArgs>();
+  return eta_cmd;
+}
+
+// experiment unlisted: confounding elements the learner is not told of.
+CLI::App* add_unlisted_experiment(CLI::App* cmd, UnlistedArgs& args) {
   CLI::App* unlisted_cmd = cmd->add_subcommand(
       "unlisted",
       "Beyond the paper: the Gridworld with --confounders true elements of which the learner is told --told (0: eta "
@@ -637,25 +649,29 @@ Command add_experiment(CLI::App& app) {
       "the subject alone). Methods: as told, with the catch-all unlisted source (eta fixed, eta learned), and the\n"
       "oracle told every element. Writes unlisted_runs.csv, unlisted_summary.md (ILE and subject-or-not label\n"
       "accuracy per |E|) and unlisted.png/.svg to --out. The numbers do not depend on --threads.");
-  unlisted_cmd->add_option("--out,-o", un->out, "Output folder")->capture_default_str();
-  unlisted_cmd->add_option("--runs", un->options.runs, "Runs per point")
+  unlisted_cmd->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  unlisted_cmd->add_option("--runs", args.options.runs, "Runs per point")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  unlisted_cmd->add_option("--confounders", un->confounders, "True numbers of elements, comma-separated")
+  unlisted_cmd->add_option("--confounders", args.confounders, "True numbers of elements, comma-separated")
       ->capture_default_str();
-  unlisted_cmd->add_option("--told", un->told, "How many of them the learner is told, comma-separated")
+  unlisted_cmd->add_option("--told", args.told, "How many of them the learner is told, comma-separated")
       ->capture_default_str();
   unlisted_cmd
-      ->add_option("--unlisted-eta", un->options.unlisted_eta,
+      ->add_option("--unlisted-eta", args.options.unlisted_eta,
                    "The catch-all's share of every eta (observation_model.unlisted_source.eta)")
       ->check(CLI::Range(1e-6, 1.0 - 1e-6))
       ->capture_default_str();
-  add_scenario_options(unlisted_cmd, un->options.scenario);
-  unlisted_cmd->add_option("--threads", un->options.threads, "Threads (0 = one per core)")
+  add_scenario_options(unlisted_cmd, args.options.scenario);
+  unlisted_cmd->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();
-  auto rg = std::make_shared<OnionRegimesArgs>();
-  rg->options.base.runs = 20;
+  return unlisted_cmd;
+}
+
+// experiment onion-regimes: where each onion baseline breaks.
+CLI::App* add_onion_regimes_experiment(CLI::App* cmd, OnionRegimesArgs& args) {
+  args.options.base.runs = 20;
   CLI::App* regimes_cmd = cmd->add_subcommand(
       "onion-regimes",
       "Beyond the paper: where each onion baseline breaks. ILE of the five methods at --trajectories sorts as the\n"
@@ -663,35 +679,61 @@ Command add_experiment(CLI::App& app) {
       "without the mirror, and with the labeller's eta as stated or overconfident (--eta-powers: eta raised to the\n"
       "power and renormalised). Writes onion_regimes_runs.csv, onion_regimes_summary.md and onion_regimes.png/.svg\n"
       "to --out. The numbers do not depend on --threads.");
-  add_shared_options(regimes_cmd, rg->out, rg->options.base.runs, rg->options.base.update, rg->options.base.c,
-                     rg->options.base.restarts, rg->options.base.seed, rg->options.base.threads);
+  add_shared_options(regimes_cmd, args.out, args.options.base.runs, args.options.base.update, args.options.base.c,
+                     args.options.base.restarts, args.options.base.seed, args.options.base.threads);
   regimes_cmd
-      ->add_option("--shares", rg->shares,
+      ->add_option("--shares", args.shares,
                    "Foreground person's shares of the time in front, comma-separated, in [0, 0.95]")
       ->capture_default_str();
   regimes_cmd
-      ->add_option("--eta-powers", rg->eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
+      ->add_option("--eta-powers", args.eta_powers, "The labeller's eta raised to each of these powers (1: as stated)")
       ->capture_default_str();
-  regimes_cmd->add_option("--trajectories", rg->trajectories, "Sorts learned from")
+  regimes_cmd->add_option("--trajectories", args.trajectories, "Sorts learned from")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   regimes_cmd
-      ->add_option("--controlled-sorts", rg->options.base.controlled_sorts,
+      ->add_option("--controlled-sorts", args.options.base.controlled_sorts,
                    "Sorts in the controlled run that gives the subject prior")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   regimes_cmd
       ->add_option(
-          "--methods", rg->methods,
+          "--methods", args.methods,
           "Comma-separated: true_trajectories, ml_trajectories, ml_observations, plausible_eta, uniform_eta; or all")
       ->capture_default_str();
-  return [g, grid, n, onion_cmd, t, tasks_cmd, es, eta_cmd, un, unlisted_cmd, rg, regimes_cmd] {
-    if (regimes_cmd->parsed()) return run_onion_regimes_command(*rg);
-    if (eta_cmd->parsed()) return run_eta_sensitivity_command(*es);
-    if (unlisted_cmd->parsed()) return run_unlisted_command(*un);
-    if (grid->parsed()) return run_gridworld_experiment_command(*g);
-    if (onion_cmd->parsed()) return run_onion_experiment_command(*n);
-    if (tasks_cmd->parsed()) return run_random_tasks_command(*t);
+  return regimes_cmd;
+}
+
+// A subcommand declared by `declare` on `cmd` (in the order of the calls: --help's), and
+// the command `run` is with its arguments.
+struct Subcommand {
+  CLI::App* app;
+  Command run;
+};
+
+template <typename Args>
+Subcommand subcommand(CLI::App* cmd, CLI::App* (*declare)(CLI::App*, Args&), int (*run)(Args&)) {
+  auto args = std::make_shared<Args>();
+  CLI::App* app = declare(cmd, *args);
+  return {app, [args, run] { return run(*args); }};
+}
+
+}  // namespace
+
+Command add_experiment(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand(kExperiment.name, kExperiment.description);
+  cmd->require_subcommand(1);  // exactly one: the one parsed is run
+  const std::vector<Subcommand> experiments = {
+      subcommand(cmd, add_gridworld_experiment, run_gridworld_experiment_command),
+      subcommand(cmd, add_onion_experiment, run_onion_experiment_command),
+      subcommand(cmd, add_random_tasks_experiment, run_random_tasks_command),
+      subcommand(cmd, add_eta_sensitivity_experiment, run_eta_sensitivity_command),
+      subcommand(cmd, add_unlisted_experiment, run_unlisted_command),
+      subcommand(cmd, add_onion_regimes_experiment, run_onion_regimes_command)};
+  return [experiments] {
+    for (const Subcommand& e : experiments) {
+      if (e.app->parsed()) return e.run();
+    }
     return 2;
   };
 }

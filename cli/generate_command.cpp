@@ -78,61 +78,60 @@ int run_random_task(const RandomTaskArgs& args) {
   return 0;
 }
 
-}  // namespace
-
-Command add_generate(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand(
-      "generate", "Write a problem file for a built-in domain (a starting point for your own files).");
-  cmd->require_subcommand(1);
-  auto g = std::make_shared<GridworldArgs>();
+// generate gridworld: the paper's Gridworld.
+CLI::App* add_gridworld_generator(CLI::App* cmd, GridworldArgs& args) {
   CLI::App* grid = cmd->add_subcommand(
       "gridworld",
       "The paper's Gridworld (paper §Experiments A): n x n cells, 4 moves that succeed with probability\n"
       "--intended and otherwise slip to one of the other three moves' cells, features =\n"
       "being in each corner, a goal corner with weight 1, and --trajectories demonstrations\n"
       "of --length steps by the soft expert (true state-action pairs only).");
-  grid->add_option("--size", g->problem.size, "Cells per side")->check(CLI::Range(2, 1000))->capture_default_str();
-  grid->add_option("--trajectories", g->problem.trajectories, "Number of trajectories")
+  grid->add_option("--size", args.problem.size, "Cells per side")->check(CLI::Range(2, 1000))->capture_default_str();
+  grid->add_option("--trajectories", args.problem.trajectories, "Number of trajectories")
       ->check(CLI::Range(1, 10000000))
       ->capture_default_str();
-  grid->add_option("--length", g->problem.length, "Steps per trajectory")
+  grid->add_option("--length", args.problem.length, "Steps per trajectory")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  grid->add_option("--goal", g->problem.goal,
+  grid->add_option("--goal", args.problem.goal,
                    "Goal corner: 0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right (default: drawn from the seed)")
       ->check(CLI::Range(0, 3));
-  grid->add_option("--goal-weight", g->problem.goal_weight,
+  grid->add_option("--goal-weight", args.problem.goal_weight,
                    "Reward weight of the goal corner; larger = a more decisive soft expert")
       ->check(CLI::Range(-1000.0, 1000.0))
       ->capture_default_str();
-  grid->add_option("--intended", g->problem.intended, "Probability that a move goes where intended")
+  grid->add_option("--intended", args.problem.intended, "Probability that a move goes where intended")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--discount", g->problem.discount, "Discount gamma in [0, 1)")
+  grid->add_option("--discount", args.problem.discount, "Discount gamma in [0, 1)")
       ->check(CLI::Range(0.0, 0.999999))
       ->capture_default_str();
-  grid->add_option("--seed", g->problem.seed, "Seed of the goal and the demonstrations")->capture_default_str();
+  grid->add_option("--seed", args.problem.seed, "Seed of the goal and the demonstrations")->capture_default_str();
   grid->add_option(
-          "--confounders", g->problem.confounders,
+          "--confounders", args.problem.confounders,
           "Watch the demonstrations through the paper's sensor with this many confounding elements (default: true "
           "steps only): observations, a labeller's eta with its pick as context, and a controlled run for the prior")
       ->check(CLI::Range(0, 64));
-  grid->add_option("--per-step", g->problem.per_step, "With --confounders: observations per step")
+  grid->add_option("--per-step", args.problem.per_step, "With --confounders: observations per step")
       ->check(CLI::Range(1, 10000))
       ->capture_default_str();
-  grid->add_option("--labeller-mass", g->problem.labeller.mass,
+  grid->add_option("--labeller-mass", args.problem.labeller.mass,
                    "With --confounders: the share of eta the labeller gives its pick (what it claims)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--labeller-accuracy", g->problem.labeller.accuracy,
+  grid->add_option("--labeller-accuracy", args.problem.labeller.accuracy,
                    "With --confounders: the probability that its pick is the true source (what it knows)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  grid->add_option("--controlled", g->problem.controlled, "With --confounders: trajectories of the controlled run")
+  grid->add_option("--controlled", args.problem.controlled, "With --confounders: trajectories of the controlled run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  grid->add_option("--out,-o", g->out, "Write the problem file here instead of stdout");
-  auto t = std::make_shared<RandomTaskArgs>();
+  grid->add_option("--out,-o", args.out, "Write the problem file here instead of stdout");
+  return grid;
+}
+
+// generate random-task: a task of the random-tasks experiment.
+CLI::App* add_random_task_generator(CLI::App* cmd, RandomTaskArgs& args) {
   CLI::App* task = cmd->add_subcommand(
       "random-task",
       "A random task from its seed, as `hbirl experiment random-tasks` draws it: a grid or sparse graph MDP\n"
@@ -141,22 +140,35 @@ Command add_generate(CLI::App& app) {
       "watched through it, and the subject prior from a controlled run (sim_driver/file/random_task.hpp). Learn it "
       "with\n"
       "`hbirl learn --problem FILE` (or --from truth); set observation_model.learn to false for O fixed at the prior.");
-  task->add_option("--seed", t->seed, "The task")->capture_default_str();
-  task->add_option("--draw", t->draw, "Which of the task's data sets (the same task watched again)")
+  task->add_option("--seed", args.seed, "The task")->capture_default_str();
+  task->add_option("--draw", args.draw, "Which of the task's data sets (the same task watched again)")
       ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
-  task->add_option("--informativeness", t->overrides.informativeness,
+  task->add_option("--informativeness", args.overrides.informativeness,
                    "Fix the subject sensor's informativeness (0: symbols say nothing of the state, 1: the most)")
       ->check(CLI::Range(0.0, 1.0));
-  task->add_option("--confounders", t->overrides.confounders, "Fix the number of confounding elements")
+  task->add_option("--confounders", args.overrides.confounders, "Fix the number of confounding elements")
       ->check(CLI::Range(0, 64));
-  task->add_option("--occlusion", t->overrides.occlusion, "Fix the share of occluded steps")
+  task->add_option("--occlusion", args.overrides.occlusion, "Fix the share of occluded steps")
       ->check(CLI::Range(0.0, 1.0));
-  task->add_option("--demonstrations", t->overrides.demonstrations, "Fix the number of demonstrations")
+  task->add_option("--demonstrations", args.overrides.demonstrations, "Fix the number of demonstrations")
       ->check(CLI::Range(1, 100000));
-  task->add_option("--eta", t->overrides.eta, "Fix eta: plausible or uniform")
+  task->add_option("--eta", args.overrides.eta, "Fix eta: plausible or uniform")
       ->check(CLI::IsMember({"plausible", "uniform"}));
-  task->add_option("--out,-o", t->out, "Write the problem file here instead of stdout");
+  task->add_option("--out,-o", args.out, "Write the problem file here instead of stdout");
+  return task;
+}
+
+}  // namespace
+
+Command add_generate(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand(
+      "generate", "Write a problem file for a built-in domain (a starting point for your own files).");
+  cmd->require_subcommand(1);
+  auto g = std::make_shared<GridworldArgs>();
+  CLI::App* grid = add_gridworld_generator(cmd, *g);
+  auto t = std::make_shared<RandomTaskArgs>();
+  CLI::App* task = add_random_task_generator(cmd, *t);
   return [g, grid, t, task] {
     if (grid->parsed()) return run_gridworld(*g);
     if (task->parsed()) return run_random_task(*t);

@@ -84,6 +84,76 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
   return {{"subject", subject}, {"confounders", confounders}};
 }
 
+// With true weights in the file: the ILE, its relative size and the policy agreement of theta.
+void add_true_weight_metrics(nlohmann::ordered_json& out, const Problem& problem, const Eigen::VectorXd& theta,
+                             const LearnArgs& args) {
+  const Mdp& mdp = problem.mdp;
+  const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, theta);
+  const InverseLearningError& ile = metrics.ile;
+  if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
+    throw in_file(args.problem, InputError("true_weights",
+                                           "give an ILE that is not a finite number: the true rewards are too large"));
+  }
+  out["ile"] = ile.ile;
+  out["ile_relative"] = ile.relative();
+  out["policy_agreement"] = metrics.agreement;
+  out["true_weights"] = to_vector(*problem.true_weights);
+}
+
+// "observation_model": the learned model, how it was learned and, when learned, eta.
+nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app::Learned& learned_all,
+                                                      const RestartResult& best) {
+  nlohmann::ordered_json om = model_json(mdp, learned_all.model);
+  const ObservationPrior& used = learned_all.refined;
+  om["update"] = used.learn ? alpha_update_name(used.update) : "fixed";
+  // The catch-all for unlisted confounders is the last of "confounders" and of every eta.
+  if (used.unlisted_added) om["unlisted_source"] = {{"eta", used.unlisted_eta}, {"index", used.num_confounders - 1}};
+  if (used.learn && used.update == AlphaUpdate::kPosterior) {
+    om["prior_strength"] = used.strength;
+    om["prior_strength_chosen"] = used.automatic_strength;
+    if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
+  }
+  if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta);
+  return om;
+}
+
+// "restarts": each restart's start, result and how its EM and M-step ended.
+nlohmann::ordered_json restarts_json(const LearnResult& learned) {
+  nlohmann::ordered_json restarts = nlohmann::ordered_json::array();
+  for (const RestartResult& r : learned.restarts) {
+    nlohmann::ordered_json item;
+    item["initial_weights"] = to_vector(r.initial_theta);
+    item["weights"] = to_vector(r.theta);
+    item["log_likelihood"] = r.log_likelihood;
+    item["em_objective"] = r.objective;  // log-likelihood plus the prior's terms (docs/MODEL.md)
+    if (r.held_out_log_likelihood) item["held_out_log_likelihood"] = *r.held_out_log_likelihood;
+    if (r.alpha && r.alpha->learn && r.alpha->update == AlphaUpdate::kPosterior)
+      item["prior_strength"] = r.alpha->strength;
+    item["score"] = r.score;
+    item["em_iterations"] = r.em_iterations;
+    item["em_evaluations"] = r.em_evaluations;
+    item["optimizer_iterations"] = r.optimizer_iterations;
+    item["converged"] = r.converged;
+    item["status"] = r.optimizer_status;
+    restarts.push_back(item);
+  }
+  return restarts;
+}
+
+// One line on stderr when a restart stopped before converging: the first such, and why.
+void warn_unconverged_restart(const LearnResult& learned, const LearnArgs& args, const EStep& estep) {
+  for (const RestartResult& r : learned.restarts) {
+    if (!r.converged) {
+      std::cerr << "hbirl: warning: a restart stopped before converging ("
+                << (r.em_evaluations >= args.settings.em.max_em_iterations && estep.depends_on_policy()
+                        ? "EM iteration limit " + std::to_string(args.settings.em.max_em_iterations)
+                        : "M-step: " + r.optimizer_status)
+                << "); see \"restarts\" in the output\n";
+      break;
+    }
+  }
+}
+
 int run_learn(const LearnArgs& args) {
   if (!args.log.empty()) return run_learn_from_log(args);
   if (args.problem.empty()) throw InputError("--problem", "give a problem file (or --log with a recorded run)");
@@ -112,63 +182,11 @@ int run_learn(const LearnArgs& args) {
   out["em_iterations"] = best.em_iterations;
   out["em_evaluations"] = best.em_evaluations;
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
-  if (problem.true_weights) {
-    const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, learned.theta);
-    const InverseLearningError& ile = metrics.ile;
-    if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
-      throw in_file(
-          args.problem,
-          InputError("true_weights", "give an ILE that is not a finite number: the true rewards are too large"));
-    }
-    out["ile"] = ile.ile;
-    out["ile_relative"] = ile.relative();
-    out["policy_agreement"] = metrics.agreement;
-    out["true_weights"] = to_vector(*problem.true_weights);
-  }
-  if (observed != nullptr) {
-    nlohmann::ordered_json om = model_json(mdp, learned_all.model);
-    const ObservationPrior& used = learned_all.refined;
-    om["update"] = used.learn ? alpha_update_name(used.update) : "fixed";
-    // The catch-all for unlisted confounders is the last of "confounders" and of every eta.
-    if (used.unlisted_added) om["unlisted_source"] = {{"eta", used.unlisted_eta}, {"index", used.num_confounders - 1}};
-    if (used.learn && used.update == AlphaUpdate::kPosterior) {
-      om["prior_strength"] = used.strength;
-      om["prior_strength_chosen"] = used.automatic_strength;
-      if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
-    }
-    if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta);
-    out["observation_model"] = om;
-  }
+  if (problem.true_weights) add_true_weight_metrics(out, problem, learned.theta, args);
+  if (observed != nullptr) out["observation_model"] = learned_observation_model_json(mdp, learned_all, best);
   out["selected_restart"] = learned.selected_restart;
-  nlohmann::ordered_json restarts = nlohmann::ordered_json::array();
-  for (const RestartResult& r : learned.restarts) {
-    nlohmann::ordered_json item;
-    item["initial_weights"] = to_vector(r.initial_theta);
-    item["weights"] = to_vector(r.theta);
-    item["log_likelihood"] = r.log_likelihood;
-    item["em_objective"] = r.objective;  // log-likelihood plus the prior's terms (docs/MODEL.md)
-    if (r.held_out_log_likelihood) item["held_out_log_likelihood"] = *r.held_out_log_likelihood;
-    if (r.alpha && r.alpha->learn && r.alpha->update == AlphaUpdate::kPosterior)
-      item["prior_strength"] = r.alpha->strength;
-    item["score"] = r.score;
-    item["em_iterations"] = r.em_iterations;
-    item["em_evaluations"] = r.em_evaluations;
-    item["optimizer_iterations"] = r.optimizer_iterations;
-    item["converged"] = r.converged;
-    item["status"] = r.optimizer_status;
-    restarts.push_back(item);
-  }
-  out["restarts"] = restarts;
-  for (const RestartResult& r : learned.restarts) {
-    if (!r.converged) {
-      std::cerr << "hbirl: warning: a restart stopped before converging ("
-                << (r.em_evaluations >= args.settings.em.max_em_iterations && estep->depends_on_policy()
-                        ? "EM iteration limit " + std::to_string(args.settings.em.max_em_iterations)
-                        : "M-step: " + r.optimizer_status)
-                << "); see \"restarts\" in the output\n";
-      break;
-    }
-  }
+  out["restarts"] = restarts_json(learned);
+  warn_unconverged_restart(learned, args, *estep);
   if (mcmc) warn_if_not_converged(*mcmc);
   emit(format_json(out), args.out);
   return 0;

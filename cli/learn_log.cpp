@@ -29,21 +29,7 @@ int run_learn_from_log(const LearnArgs& args) {
     std::cerr << "hbirl learn: warning: learned from an incomplete run: " << r.incomplete << "\n";
   nlohmann::ordered_json out;
   out["log"] = args.log;
-  out["domain"] = r.data.domain;
-  out["feature_names"] = services::domain_of(r.data, domain)->names(1).features;
-  out["theta"] = std::vector<double>(r.learned.theta.data(), r.learned.theta.data() + r.learned.theta.size());
-  if (r.data.true_weights) {
-    out["true_weights"] =
-        std::vector<double>(r.data.true_weights->data(), r.data.true_weights->data() + r.data.true_weights->size());
-  }
-  if (r.learned.ile) out["ile"] = *r.learned.ile;
-  out["log_likelihood"] = r.learned.log_likelihood;
-  out["em_iterations"] = r.learned.em_iterations;
-  if (r.learned.eta) out["learned_eta"] = learned_eta_json(*r.learned.eta);
-  out["demonstrations"] = r.learned.trajectories;
-  out["controlled_episodes"] = r.data.controlled_observed.size();
-  out["dataset_digest"] = r.learned.digest;
-  out["missing_frames"] = r.missing_frames;
+  services::add_learned_run(out, r, domain);
   out["bad_messages"] = counters.bad_messages;
   out["authenticated"] = counters.authenticated;
   if (!r.incomplete.empty()) out["incomplete"] = r.incomplete;

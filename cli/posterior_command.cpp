@@ -41,6 +41,73 @@ Eigen::VectorXd parse_weights(const std::string& text, int k) {
   return w;
 }
 
+// Every trajectory's observations (the posterior needs them all); path names the file in errors.
+std::vector<ObservedTrajectory> demonstrated_observations(const Problem& problem, const std::string& path) {
+  std::vector<ObservedTrajectory> observed;
+  for (size_t i = 0; i < problem.demonstration.size(); ++i) {
+    if (!problem.demonstration[i].steps) {
+      throw in_file(path, InputError("demonstration[" + std::to_string(i) + "].steps",
+                                     "missing; the posterior needs observations"));
+    }
+    observed.push_back(*problem.demonstration[i].steps);
+  }
+  return observed;
+}
+
+// Steps whose most probable (s, a) is the true one, of the steps with a truth.
+struct MapAccuracy {
+  long long correct = 0;
+  long long steps = 0;
+};
+
+// Step t of a trajectory: its marginals [s, a, p] with p > 0, each observation's posterior
+// over its source and, with the truth, the true pair's probability.
+nlohmann::ordered_json posterior_step_json(const Mdp& mdp, const DemonstratedTrajectory& item,
+                                           const TrajectoryPosterior& post, int t, MapAccuracy& map) {
+  nlohmann::ordered_json marginals = nlohmann::ordered_json::array();
+  Eigen::Index best = 0;
+  post.marginals.row(t).maxCoeff(&best);
+  for (int r = 0; r < mdp.num_pairs(); ++r) {
+    if (post.marginals(t, r) > 0.0)
+      marginals.push_back({r / mdp.num_actions, r % mdp.num_actions, post.marginals(t, r)});
+  }
+  nlohmann::ordered_json sources = nlohmann::ordered_json::array();
+  for (int n = item.steps->step_begin[static_cast<size_t>(t)]; n < item.steps->step_begin[static_cast<size_t>(t) + 1];
+       ++n) {
+    sources.push_back(
+        std::vector<double>(post.sources.row(n).data(), post.sources.row(n).data() + post.sources.cols()));
+  }
+  nlohmann::ordered_json step;
+  step["marginals"] = marginals;
+  step["sources"] = sources;
+  if (item.truth) {
+    const StateAction truth = (*item.truth)[static_cast<size_t>(t)];
+    step["truth_probability"] = post.marginals(t, mdp.pair(truth.state, truth.action));
+    map.correct += best == mdp.pair(truth.state, truth.action);
+    ++map.steps;
+  }
+  return step;
+}
+
+// A trajectory's posterior: its log-likelihood (null, and "impossible", when its
+// observations cannot happen; `total` then becomes -infinity) and its steps.
+nlohmann::ordered_json posterior_trajectory_json(const Mdp& mdp, const DemonstratedTrajectory& item,
+                                                 const TrajectoryPosterior& post, double& total, MapAccuracy& map) {
+  nlohmann::ordered_json traj;
+  if (std::isfinite(post.log_likelihood)) {
+    traj["log_likelihood"] = post.log_likelihood;
+    total += post.log_likelihood;
+  } else {
+    traj["log_likelihood"] = nullptr;
+    traj["impossible"] = true;
+    total = -std::numeric_limits<double>::infinity();
+  }
+  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
+  for (int t = 0; t < item.steps->length(); ++t) steps.push_back(posterior_step_json(mdp, item, post, t, map));
+  traj["steps"] = steps;
+  return traj;
+}
+
 int run_posterior(const PosteriorArgs& args) {
   const Problem problem = load_problem(args.problem);
   const Mdp& mdp = problem.mdp;
@@ -51,14 +118,7 @@ int run_posterior(const PosteriorArgs& args) {
   const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(theta));
   // Every trajectory's observations, with the unlisted catch-all added when the file asks
   // for one (the same sources `hbirl learn` uses).
-  std::vector<ObservedTrajectory> observed;
-  for (size_t i = 0; i < problem.demonstration.size(); ++i) {
-    if (!problem.demonstration[i].steps) {
-      throw in_file(args.problem, InputError("demonstration[" + std::to_string(i) + "].steps",
-                                             "missing; the posterior needs observations"));
-    }
-    observed.push_back(*problem.demonstration[i].steps);
-  }
+  std::vector<ObservedTrajectory> observed = demonstrated_observations(problem, args.problem);
   ObservationPrior prior = *problem.observation_model;
   add_unlisted_source(prior, observed);
   const ObservationModel model = dirichlet_mean(prior);
@@ -66,51 +126,14 @@ int run_posterior(const PosteriorArgs& args) {
   const Rng root(args.seed);
   nlohmann::ordered_json trajectories = nlohmann::ordered_json::array();
   double total = 0.0;
-  long long map_correct = 0;
-  long long truth_steps = 0;
+  MapAccuracy map;
   McmcDiagnostics mcmc;  // worst over the trajectories (neutral for the exact engine)
   for (size_t i = 0; i < problem.demonstration.size(); ++i) {
     const DemonstratedTrajectory& item = problem.demonstration[i];
     Rng rng = root.split(i);
     const TrajectoryPosterior post = engine->posterior(policy, model, observed[i], rng);
     mcmc += post.mcmc;
-    nlohmann::ordered_json traj;
-    if (std::isfinite(post.log_likelihood)) {
-      traj["log_likelihood"] = post.log_likelihood;
-      total += post.log_likelihood;
-    } else {
-      traj["log_likelihood"] = nullptr;
-      traj["impossible"] = true;
-      total = -std::numeric_limits<double>::infinity();
-    }
-    nlohmann::ordered_json steps = nlohmann::ordered_json::array();
-    for (int t = 0; t < item.steps->length(); ++t) {
-      nlohmann::ordered_json marginals = nlohmann::ordered_json::array();
-      Eigen::Index best = 0;
-      post.marginals.row(t).maxCoeff(&best);
-      for (int r = 0; r < mdp.num_pairs(); ++r) {
-        if (post.marginals(t, r) > 0.0)
-          marginals.push_back({r / mdp.num_actions, r % mdp.num_actions, post.marginals(t, r)});
-      }
-      nlohmann::ordered_json sources = nlohmann::ordered_json::array();
-      for (int n = item.steps->step_begin[static_cast<size_t>(t)];
-           n < item.steps->step_begin[static_cast<size_t>(t) + 1]; ++n) {
-        sources.push_back(
-            std::vector<double>(post.sources.row(n).data(), post.sources.row(n).data() + post.sources.cols()));
-      }
-      nlohmann::ordered_json step;
-      step["marginals"] = marginals;
-      step["sources"] = sources;
-      if (item.truth) {
-        const StateAction truth = (*item.truth)[static_cast<size_t>(t)];
-        step["truth_probability"] = post.marginals(t, mdp.pair(truth.state, truth.action));
-        map_correct += best == mdp.pair(truth.state, truth.action);
-        ++truth_steps;
-      }
-      steps.push_back(step);
-    }
-    traj["steps"] = steps;
-    trajectories.push_back(traj);
+    trajectories.push_back(posterior_trajectory_json(mdp, item, post, total, map));
   }
   nlohmann::ordered_json out;
   out["engine"] = args.engine.engine;
@@ -120,7 +143,7 @@ int run_posterior(const PosteriorArgs& args) {
   } else {
     out["log_likelihood"] = nullptr;
   }
-  if (truth_steps > 0) out["map_accuracy"] = static_cast<double>(map_correct) / static_cast<double>(truth_steps);
+  if (map.steps > 0) out["map_accuracy"] = static_cast<double>(map.correct) / static_cast<double>(map.steps);
   const bool sampled = args.engine.engine == "mcmc";
   if (sampled) out["mcmc_diagnostics"] = mcmc_diagnostics_json(mcmc);
   out["trajectories"] = trajectories;

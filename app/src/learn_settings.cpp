@@ -86,10 +86,9 @@ Setting engine_setting(Setting s) {
   return s;
 }
 
-std::vector<Setting> make_schema() {
-  std::vector<Setting> schema;
+// The posterior engine (engine_setting).
+void add_engine_settings(std::vector<Setting>& schema) {
   const auto add = [&schema](Setting s) { schema.push_back(std::move(s)); };
-
   Setting engine = choice("engine", "--engine",
                           "Posterior engine: 'exact' (forward-backward, the source of each observation summed out) or "
                           "'mcmc' (the paper's Metropolis-within-Gibbs sampler)",
@@ -105,7 +104,11 @@ std::vector<Setting> make_schema() {
                                   [](LearnSettings& l) -> int& { return l.mcmc.burn_in; })));
   add(engine_setting(integer<int>("mcmc_chains", "--mcmc-chains", "MCMC: independent chains (R-hat compares them)", 1,
                                   1000, [](LearnSettings& l) -> int& { return l.mcmc.chains; })));
+}
 
+// The M-step's optimiser, its restarts, seed and threads.
+void add_optimiser_settings(std::vector<Setting>& schema) {
+  const auto add = [&schema](Setting s) { schema.push_back(std::move(s)); };
   Setting optimizer = choice("optimizer", "--optimizer",
                              "M-step optimiser: 'lbfgs' (L-BFGS) or 'eg' (the paper's adaptive exponentiated gradient)",
                              {"lbfgs", "eg"});
@@ -139,6 +142,11 @@ std::vector<Setting> make_schema() {
              [](LearnSettings& l) -> double& { return l.em.optimizer.eg_radius; }));
   add(number("eg_rate", "--eg-rate", "EG only: learning rate eta (<= 0.25 for its regret bound)", 0, true,
              [](LearnSettings& l) -> double& { return l.em.optimizer.eg_learning_rate; }));
+}
+
+// When HiddenDataEM and the observation model's refinement stop (observations only).
+void add_em_settings(std::vector<Setting>& schema) {
+  const auto add = [&schema](Setting s) { schema.push_back(std::move(s)); };
   add(observations_only(
       integer<int>("max_em_iterations", "--max-em-iterations",
                    "HiddenDataEM's budget of E-step + M-step evaluations (SQUAREM's rejected extrapolations count; "
@@ -158,7 +166,11 @@ std::vector<Setting> make_schema() {
   add(observations_only(integer<int>("max_alpha_iterations", "--max-alpha-iterations",
                                      "Observation-model refinements per E-step (EM continues until O has converged)", 1,
                                      1e6, [](LearnSettings& l) -> int& { return l.max_alpha_iterations; })));
+}
 
+// How the observation model and eta are learned; unset, as the prior says (unset_means).
+void add_prior_settings(std::vector<Setting>& schema) {
+  const auto add = [&schema](Setting s) { schema.push_back(std::move(s)); };
   Setting learn_o;
   learn_o.name = "learn_observation_model";
   learn_o.flag = "--learn-observation-model";
@@ -214,6 +226,15 @@ std::vector<Setting> make_schema() {
   add(unset_means(std::move(eta),
                   "the prior's (a problem file's or domain file's observation_model.learn_eta), "
                   "else learned with the posterior update"));
+}
+
+// One entry per setting, by group, in the order `hbirl learn --help` lists them.
+std::vector<Setting> make_schema() {
+  std::vector<Setting> schema;
+  add_engine_settings(schema);
+  add_optimiser_settings(schema);
+  add_em_settings(schema);
+  add_prior_settings(schema);
   return schema;
 }
 

@@ -245,22 +245,19 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
   (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
 }
 
-}  // namespace
-
-Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain,
-                    const std::string& key_file) {
-  services::Counters counters;
-  counters.service = "hbirl report";
-  counters.quiet = true;
-  // throws InputError("--log", ...) / ("--key", ...)
+// The recording, read through the run's key when it is signed; throws InputError("--log",
+// ...) / ("--key", ...).
+std::unique_ptr<services::Bus> open_recording(const std::string& log_path, const std::string& key_file,
+                                              services::Counters& counters) {
   services::check_recording_key(log_path, key_file);
-  std::unique_ptr<services::Bus> signed_or_not =
-      services::with_key(std::make_unique<services::LogBus>(log_path), key_file, counters, services::KeyUse::kReader);
-  services::Bus& bus = *signed_or_not;
-  DashboardState state(std::move(domain));
-  state.subscribe(bus, counters);
-  while (bus.handle(0) >= 0) {
-  }
+  return services::with_key(std::make_unique<services::LogBus>(log_path), key_file, counters,
+                            services::KeyUse::kReader);
+}
+
+// A recording read in full must have given messages of one run: signed ones need the key,
+// and a key shared by many runs needs the run's own key file.
+void check_recording_read(const services::Counters& counters, const std::string& log_path,
+                          const std::string& key_file) {
   if (counters.signed_unread > 0) {
     throw InputError("--key", "'" + log_path + "' holds " + std::to_string(counters.signed_unread) +
                                   " messages signed with a run key: give it (launch.sh wrote OUT/run.key)");
@@ -276,6 +273,102 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
                                   " not of the first; a replay recorded with it?): give the key file of the run to "
                                   "read (OUT/run.key names its run)");
   }
+}
+
+// The page's head and the run in a table: domain, episodes, frames, EM iterations, the
+// final log-likelihood and ILE, the learned theta.
+void page_summary(std::ostream& page, const json& s, const Report& report, const std::string& log_path) {
+  page << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hbirl report</title>\n"
+       << "<style>body{font-family:system-ui,sans-serif;max-width:1250px;margin:1em auto;padding:0 1em;color:#222}"
+       << "img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}td,th{padding:.2em .7em;"
+       << "border-bottom:1px solid #eee;text-align:left}figure{margin:1.2em "
+          "0}figcaption{color:#555}</style></head><body>\n"
+       << "<h1>hbirl report</h1>\n<p>From <code>" << html(log_path) << "</code>: " << report.messages << " messages ("
+       << report.bad_messages
+       << " that did not decode or validate). The data of every figure: <a href=\"state.json\">state.json</a>.</p>\n";
+  const json& run = s["run"];
+  page << "<table><tr><th>domain</th><td>" << html(s["domain"].get<std::string>()) << "</td></tr>"
+       << "<tr><th>episodes</th><td>" << run["episodes_ended"] << "</td></tr><tr><th>camera frames</th><td>"
+       << run["frames"] << "</td></tr><tr><th>EM iterations</th><td>" << s["em"].size() << "</td></tr>";
+  if (!s["reward"].is_null()) {
+    page << "<tr><th>final log-likelihood</th><td>" << number(s["reward"]["log_likelihood"], 10) << "</td></tr>"
+         << "<tr><th>ILE</th><td>" << number(s["reward"]["ile"]) << "</td></tr>";
+  }
+  if (!s["theta"].is_null()) {
+    page << "<tr><th>learned θ</th><td>";
+    const auto names = names_or_numbers(s["names"]["features"], s["theta"]["learned"].size(), "feature ");
+    for (size_t k = 0; k < names.size(); ++k)
+      page << (k ? ", " : "") << html(names[k]) << " " << number(s["theta"]["learned"][k]);
+    page << "</td></tr>";
+  }
+  page << "</table>\n";
+}
+
+// The last camera frame, with the legend of the sources' colours.
+void page_camera(std::ostream& page, const json& s) {
+  const json& c = s["camera"];
+  page << "<figure><img src=\"camera.png\" alt=\"the last camera frame\"><figcaption>The last camera frame (episode "
+       << c["episode"] << ", step " << c["step"] << ", frame " << c["frame"]
+       << "), each detection boxed in the colour of its most likely source by the labeller's η:";
+  const json& sources = s["names"]["sources"];
+  for (size_t z = 0; z < sources.size(); ++z) {
+    page << " <span style=\"color:" << s["source_colours"][z % s["source_colours"].size()].get<std::string>()
+         << "\">■</span> " << html(sources[z].get<std::string>());
+  }
+  page << ".</figcaption></figure>\n";
+}
+
+// Each figure drawn, with its caption and its files.
+void page_figures(std::ostream& page, const Report& report, const std::filesystem::path& dir) {
+  const std::vector<std::pair<std::string, std::string>> captions = {
+      {"em", "Log-likelihood of the observations (and the ILE under the true reward, when known) per EM iteration."},
+      {"theta", "Learned reward weights against the expert's true weights."},
+      {"posterior",
+       "The expert's posterior state at each step of the newest demonstration (sources summed out), "
+       "with the ground truth."},
+      {"observation_model",
+       "The learned observation model: the subject's per (state, action), and each confounding element's."},
+      {"eta",
+       "Learned η: per context (the labeller's rule, else each distinct stated η), the subject's share as stated and "
+       "as "
+       "learned from the data, for the contexts that cover the most observations (their number in brackets)."}};
+  for (const auto& [stem, caption] : captions) {
+    const std::string path = (dir / stem).string();
+    if (std::find(report.figures.begin(), report.figures.end(), path) == report.figures.end()) continue;
+    page << "<figure><a href=\"" << stem << ".png\"><img src=\"" << stem << ".svg\" alt=\"" << html(caption)
+         << "\"></a><figcaption>" << html(caption) << " (<a href=\"" << stem << ".png\">PNG</a>, <a href=\"" << stem
+         << ".svg\">SVG</a>, <a href=\"" << stem << ".gp\">gnuplot script</a>)</figcaption></figure>\n";
+  }
+}
+
+// The services' last status, and the figures that could not be drawn.
+void page_services(std::ostream& page, const json& s, const Report& report) {
+  page << "<h2>Services</h2>\n<table><tr><th>service</th><th>id</th><th>last state</th><th>messages in</th><th>out</th>"
+       << "<th>bad messages</th><th>gaps</th><th>note</th></tr>\n";
+  for (const auto& x : s["services"]) {
+    page << "<tr><td>" << html(x["service"].get<std::string>()) << "</td><td>" << html(x["id"].get<std::string>())
+         << "</td><td>" << html(x["state"].get<std::string>()) << "</td><td>" << x["messages_in"] << "</td><td>"
+         << x["messages_out"] << "</td><td>" << x["bad_messages"] << "</td><td>" << x["gaps"] << "</td><td>"
+         << html(x["detail"].get<std::string>()) << "</td></tr>\n";
+  }
+  page << "</table>\n";
+  for (const auto& p : report.problems) page << "<p>Not drawn: " << html(p) << "</p>\n";
+}
+
+}  // namespace
+
+Report write_report(const std::string& log_path, const std::string& out_dir, std::shared_ptr<const Domain> domain,
+                    const std::string& key_file) {
+  services::Counters counters;
+  counters.service = "hbirl report";
+  counters.quiet = true;
+  const std::unique_ptr<services::Bus> signed_or_not = open_recording(log_path, key_file, counters);
+  services::Bus& bus = *signed_or_not;
+  DashboardState state(std::move(domain));
+  state.subscribe(bus, counters);
+  while (bus.handle(0) >= 0) {
+  }
+  check_recording_read(counters, log_path, key_file);
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
   if (error) throw InputError("--out", "cannot create '" + out_dir + "': " + error.message());
@@ -302,71 +395,10 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   eta_figure(s, (dir / "eta").string(), report);
 
   std::ostringstream page;
-  page << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hbirl report</title>\n"
-       << "<style>body{font-family:system-ui,sans-serif;max-width:1250px;margin:1em auto;padding:0 1em;color:#222}"
-       << "img{max-width:100%;border:1px solid #ddd}table{border-collapse:collapse}td,th{padding:.2em .7em;"
-       << "border-bottom:1px solid #eee;text-align:left}figure{margin:1.2em "
-          "0}figcaption{color:#555}</style></head><body>\n"
-       << "<h1>hbirl report</h1>\n<p>From <code>" << html(log_path) << "</code>: " << report.messages << " messages ("
-       << report.bad_messages
-       << " that did not decode or validate). The data of every figure: <a href=\"state.json\">state.json</a>.</p>\n";
-  const json& run = s["run"];
-  page << "<table><tr><th>domain</th><td>" << html(s["domain"].get<std::string>()) << "</td></tr>"
-       << "<tr><th>episodes</th><td>" << run["episodes_ended"] << "</td></tr><tr><th>camera frames</th><td>"
-       << run["frames"] << "</td></tr><tr><th>EM iterations</th><td>" << s["em"].size() << "</td></tr>";
-  if (!s["reward"].is_null()) {
-    page << "<tr><th>final log-likelihood</th><td>" << number(s["reward"]["log_likelihood"], 10) << "</td></tr>"
-         << "<tr><th>ILE</th><td>" << number(s["reward"]["ile"]) << "</td></tr>";
-  }
-  if (!s["theta"].is_null()) {
-    page << "<tr><th>learned θ</th><td>";
-    const auto names = names_or_numbers(s["names"]["features"], s["theta"]["learned"].size(), "feature ");
-    for (size_t k = 0; k < names.size(); ++k)
-      page << (k ? ", " : "") << html(names[k]) << " " << number(s["theta"]["learned"][k]);
-    page << "</td></tr>";
-  }
-  page << "</table>\n";
-  if (!frame.empty()) {
-    const json& c = s["camera"];
-    page << "<figure><img src=\"camera.png\" alt=\"the last camera frame\"><figcaption>The last camera frame (episode "
-         << c["episode"] << ", step " << c["step"] << ", frame " << c["frame"]
-         << "), each detection boxed in the colour of its most likely source by the labeller's η:";
-    const json& sources = s["names"]["sources"];
-    for (size_t z = 0; z < sources.size(); ++z) {
-      page << " <span style=\"color:" << s["source_colours"][z % s["source_colours"].size()].get<std::string>()
-           << "\">■</span> " << html(sources[z].get<std::string>());
-    }
-    page << ".</figcaption></figure>\n";
-  }
-  const std::vector<std::pair<std::string, std::string>> captions = {
-      {"em", "Log-likelihood of the observations (and the ILE under the true reward, when known) per EM iteration."},
-      {"theta", "Learned reward weights against the expert's true weights."},
-      {"posterior",
-       "The expert's posterior state at each step of the newest demonstration (sources summed out), "
-       "with the ground truth."},
-      {"observation_model",
-       "The learned observation model: the subject's per (state, action), and each confounding element's."},
-      {"eta",
-       "Learned η: per context (the labeller's rule, else each distinct stated η), the subject's share as stated and "
-       "as "
-       "learned from the data, for the contexts that cover the most observations (their number in brackets)."}};
-  for (const auto& [stem, caption] : captions) {
-    const std::string path = (dir / stem).string();
-    if (std::find(report.figures.begin(), report.figures.end(), path) == report.figures.end()) continue;
-    page << "<figure><a href=\"" << stem << ".png\"><img src=\"" << stem << ".svg\" alt=\"" << html(caption)
-         << "\"></a><figcaption>" << html(caption) << " (<a href=\"" << stem << ".png\">PNG</a>, <a href=\"" << stem
-         << ".svg\">SVG</a>, <a href=\"" << stem << ".gp\">gnuplot script</a>)</figcaption></figure>\n";
-  }
-  page << "<h2>Services</h2>\n<table><tr><th>service</th><th>id</th><th>last state</th><th>messages in</th><th>out</th>"
-       << "<th>bad messages</th><th>gaps</th><th>note</th></tr>\n";
-  for (const auto& x : s["services"]) {
-    page << "<tr><td>" << html(x["service"].get<std::string>()) << "</td><td>" << html(x["id"].get<std::string>())
-         << "</td><td>" << html(x["state"].get<std::string>()) << "</td><td>" << x["messages_in"] << "</td><td>"
-         << x["messages_out"] << "</td><td>" << x["bad_messages"] << "</td><td>" << x["gaps"] << "</td><td>"
-         << html(x["detail"].get<std::string>()) << "</td></tr>\n";
-  }
-  page << "</table>\n";
-  for (const auto& p : report.problems) page << "<p>Not drawn: " << html(p) << "</p>\n";
+  page_summary(page, s, report, log_path);
+  if (!frame.empty()) page_camera(page, s);
+  page_figures(page, report, dir);
+  page_services(page, s, report);
   page << "</body></html>\n";
   report.page = (dir / "index.html").string();
   std::ofstream out(report.page);

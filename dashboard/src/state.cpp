@@ -82,6 +82,144 @@ nlohmann::json eta_panel_json(const hbirl::observation_model_t& m) {
   return {{"iteration", m.iteration}, {"contexts", contexts}, {"with_observations", order.size()}};
 }
 
+// source_colours() as the page's "#rrggbb".
+std::vector<std::string> source_colours_hex() {
+  std::vector<std::string> colours;
+  for (const auto& c : source_colours()) {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<int>(c[2]), static_cast<int>(c[1]),
+                  static_cast<int>(c[0]));
+    colours.emplace_back(hex);
+  }
+  return colours;
+}
+
+// The camera's detections, each with its observation: symbol, eta and most likely source.
+nlohmann::json detections_json(const hbirl::detections_t& d, const hbirl::observations_t& o, const DomainNames& names) {
+  nlohmann::json detections = nlohmann::json::array();
+  for (int i = 0; i < d.n && i < o.n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const int source = most_likely(o.eta[k]);
+    const int symbol = o.symbol[k];
+    detections.push_back(
+        {{"class", d.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? "gripper" : "onion"},
+         {"box", {d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]}},
+         {"symbol", symbol},
+         {"symbol_name",
+          symbol < static_cast<int>(names.symbols.size()) ? names.symbols[static_cast<size_t>(symbol)] : ""},
+         {"eta", o.eta[k]},
+         {"source", source}});
+  }
+  return detections;
+}
+
+// The newest observations (any domain): how many by most likely source, by symbol.
+nlohmann::json observation_counts_json(const hbirl::observations_t& o) {
+  std::vector<std::vector<int>> counts(static_cast<size_t>(o.num_sources),
+                                       std::vector<int>(static_cast<size_t>(o.num_symbols)));
+  for (int i = 0; i < o.n; ++i) {
+    counts[static_cast<size_t>(most_likely(o.eta[static_cast<size_t>(i)]))]
+          [static_cast<size_t>(o.symbol[static_cast<size_t>(i)])]++;
+  }
+  return {{"episode", o.episode}, {"step", o.step}, {"frame", o.frame}, {"n", o.n}, {"by_source_symbol", counts}};
+}
+
+// One entry per EM iteration.
+nlohmann::json em_json(const std::vector<hbirl::em_progress_t>& progress) {
+  nlohmann::json em = nlohmann::json::array();
+  for (const auto& p : progress) {
+    em.push_back({{"iteration", p.iteration},
+                  {"log_likelihood", finite_or_null(p.log_likelihood)},
+                  {"prior_strength", p.prior_strength},
+                  {"ile", p.ile >= 0.0 ? finite_or_null(p.ile) : nlohmann::json(nullptr)},
+                  {"seconds", p.seconds},
+                  {"retries", p.retries},
+                  {"local_blocks", p.local_blocks}});
+  }
+  return em;
+}
+
+// The learned theta (the final reward's, else the newest iteration's) and the true one, or null.
+nlohmann::json theta_json(const std::optional<hbirl::reward_t>& reward,
+                          const std::vector<hbirl::em_progress_t>& progress,
+                          const std::optional<std::vector<double>>& true_weights) {
+  nlohmann::json theta = nullptr;
+  if (reward) {
+    theta = {{"learned", reward->theta}, {"final", reward->final != 0}};
+  } else if (!progress.empty()) {
+    theta = {{"learned", progress.back().theta}, {"final", false}};
+  }
+  if (!theta.is_null()) {
+    if (true_weights) {
+      theta["true"] = *true_weights;
+    } else if (reward && reward->num_true > 0) {
+      theta["true"] = reward->true_theta;
+    } else {
+      theta["true"] = nullptr;
+    }
+  }
+  return theta;
+}
+
+// The posterior of an episode: per step the state and action marginals, the most likely
+// pair and, when every step's ground truth has come, the true pair.
+nlohmann::json posterior_json(const hbirl::posterior_t& p,
+                              const std::map<int, std::map<int, std::pair<int, int>>>& truth) {
+  nlohmann::json marginals = nlohmann::json::array(), action_marginals = nlohmann::json::array();
+  nlohmann::json best = nlohmann::json::array();
+  for (const auto& row : p.marginals) {
+    std::vector<double> states(static_cast<size_t>(p.num_states), 0.0),
+        actions(static_cast<size_t>(p.num_actions), 0.0);
+    for (int r = 0; r < p.num_pairs; ++r) {
+      states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
+      actions[static_cast<size_t>(r % p.num_actions)] += row[static_cast<size_t>(r)];
+    }
+    marginals.push_back(states);
+    action_marginals.push_back(actions);
+    const int r = static_cast<int>(std::max_element(row.begin(), row.end()) - row.begin());
+    best.push_back(
+        {{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
+  }
+  nlohmann::json true_steps = nullptr;
+  const auto it = truth.find(p.episode);
+  if (it != truth.end() && static_cast<int>(it->second.size()) >= p.num_steps) {
+    true_steps = nlohmann::json::array();
+    for (int t = 0; t < p.num_steps; ++t) {
+      const auto step = it->second.find(t);
+      if (step == it->second.end()) {
+        true_steps = nullptr;
+        break;
+      }
+      true_steps.push_back({{"state", step->second.first}, {"action", step->second.second}});
+    }
+  }
+  return {{"episode", p.episode},
+          {"iteration", p.iteration},
+          {"steps", p.num_steps},
+          {"state_marginals", marginals},
+          {"action_marginals", action_marginals},
+          {"most_likely", best},
+          {"truth", true_steps},
+          {"log_likelihood", finite_or_null(p.log_likelihood)}};
+}
+
+// A service's last status and how long ago it was heard (now_utime, heard_utime: wall clock).
+nlohmann::json service_json(const std::string& id, const hbirl::service_status_t& m, std::int64_t heard_utime,
+                            std::int64_t now_utime) {
+  return {{"id", id},
+          {"service", m.service},
+          {"state", m.state},
+          {"seconds_since_heartbeat", std::max<double>(0.0, static_cast<double>(now_utime - heard_utime) * 1e-6)},
+          {"messages_in", m.messages_in},
+          {"messages_out", m.messages_out},
+          {"bad_messages", m.bad_messages},
+          {"gaps", m.gaps},
+          {"trajectories", m.trajectories},
+          {"restarts", m.restarts},
+          {"authenticated", m.authenticated != 0},
+          {"detail", m.detail}};
+}
+
 }  // namespace
 
 void DashboardState::subscribe(services::Bus& bus, services::Counters& counters) {
@@ -355,14 +493,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   if (domain_object_) names = domain_object_->names(num_sources_);
   j["names"] = {{"states", names.states},   {"actions", names.actions}, {"features", names.features},
                 {"symbols", names.symbols}, {"sources", names.sources}, {"contexts", names.contexts}};
-  std::vector<std::string> colours;
-  for (const auto& c : source_colours()) {
-    char hex[8];
-    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<int>(c[2]), static_cast<int>(c[1]),
-                  static_cast<int>(c[0]));
-    colours.emplace_back(hex);
-  }
-  j["source_colours"] = colours;
+  j["source_colours"] = source_colours_hex();
   j["run"] = {{"episode", episode_},
               {"step", step_},
               {"controlled", controlled_},
@@ -373,22 +504,8 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
 
   // The camera: the latest annotated frame's detections.
   if (frame_) {
-    nlohmann::json detections = nlohmann::json::array();
+    const nlohmann::json detections = detections_json(frame_->detections, frame_->observations, names);
     const auto& d = frame_->detections;
-    const auto& o = frame_->observations;
-    for (int i = 0; i < d.n && i < o.n; ++i) {
-      const auto k = static_cast<size_t>(i);
-      const int source = most_likely(o.eta[k]);
-      const int symbol = o.symbol[k];
-      detections.push_back(
-          {{"class", d.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? "gripper" : "onion"},
-           {"box", {d.box_x[k], d.box_y[k], d.box_w[k], d.box_h[k]}},
-           {"symbol", symbol},
-           {"symbol_name",
-            symbol < static_cast<int>(names.symbols.size()) ? names.symbols[static_cast<size_t>(symbol)] : ""},
-           {"eta", o.eta[k]},
-           {"source", source}});
-    }
     j["camera"] = {{"episode", std::get<0>(frame_->key)},
                    {"step", std::get<1>(frame_->key)},
                    {"frame", std::get<2>(frame_->key)},
@@ -399,49 +516,15 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   } else {
     j["camera"] = nullptr;
   }
-  // The newest observations (any domain): how many by most likely source, by symbol.
   if (last_observations_) {
-    const auto& o = *last_observations_;
-    std::vector<std::vector<int>> counts(static_cast<size_t>(o.num_sources),
-                                         std::vector<int>(static_cast<size_t>(o.num_symbols)));
-    for (int i = 0; i < o.n; ++i) {
-      counts[static_cast<size_t>(most_likely(o.eta[static_cast<size_t>(i)]))]
-            [static_cast<size_t>(o.symbol[static_cast<size_t>(i)])]++;
-    }
-    j["observations"] = {
-        {"episode", o.episode}, {"step", o.step}, {"frame", o.frame}, {"n", o.n}, {"by_source_symbol", counts}};
+    j["observations"] = observation_counts_json(*last_observations_);
   } else {
     j["observations"] = nullptr;
   }
 
   // Learning: EM iterations, theta, the posterior and the observation model.
-  nlohmann::json em = nlohmann::json::array();
-  for (const auto& p : progress_) {
-    em.push_back({{"iteration", p.iteration},
-                  {"log_likelihood", finite_or_null(p.log_likelihood)},
-                  {"prior_strength", p.prior_strength},
-                  {"ile", p.ile >= 0.0 ? finite_or_null(p.ile) : nlohmann::json(nullptr)},
-                  {"seconds", p.seconds},
-                  {"retries", p.retries},
-                  {"local_blocks", p.local_blocks}});
-  }
-  j["em"] = em;
-  nlohmann::json theta = nullptr;
-  if (reward_) {
-    theta = {{"learned", reward_->theta}, {"final", reward_->final != 0}};
-  } else if (!progress_.empty()) {
-    theta = {{"learned", progress_.back().theta}, {"final", false}};
-  }
-  if (!theta.is_null()) {
-    if (true_weights_) {
-      theta["true"] = *true_weights_;
-    } else if (reward_ && reward_->num_true > 0) {
-      theta["true"] = reward_->true_theta;
-    } else {
-      theta["true"] = nullptr;
-    }
-  }
-  j["theta"] = theta;
+  j["em"] = em_json(progress_);
+  j["theta"] = theta_json(reward_, progress_, true_weights_);
   j["reward"] =
       reward_ ? nlohmann::json{{"final", reward_->final != 0},
                                {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},
@@ -449,43 +532,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
               : nlohmann::json(nullptr);
 
   if (posterior_) {
-    const auto& p = *posterior_;
-    nlohmann::json marginals = nlohmann::json::array(), action_marginals = nlohmann::json::array();
-    nlohmann::json best = nlohmann::json::array();
-    for (const auto& row : p.marginals) {
-      std::vector<double> states(static_cast<size_t>(p.num_states), 0.0),
-          actions(static_cast<size_t>(p.num_actions), 0.0);
-      for (int r = 0; r < p.num_pairs; ++r) {
-        states[static_cast<size_t>(r / p.num_actions)] += row[static_cast<size_t>(r)];
-        actions[static_cast<size_t>(r % p.num_actions)] += row[static_cast<size_t>(r)];
-      }
-      marginals.push_back(states);
-      action_marginals.push_back(actions);
-      const int r = static_cast<int>(std::max_element(row.begin(), row.end()) - row.begin());
-      best.push_back(
-          {{"state", r / p.num_actions}, {"action", r % p.num_actions}, {"probability", row[static_cast<size_t>(r)]}});
-    }
-    nlohmann::json truth = nullptr;
-    const auto it = truth_.find(p.episode);
-    if (it != truth_.end() && static_cast<int>(it->second.size()) >= p.num_steps) {
-      truth = nlohmann::json::array();
-      for (int t = 0; t < p.num_steps; ++t) {
-        const auto step = it->second.find(t);
-        if (step == it->second.end()) {
-          truth = nullptr;
-          break;
-        }
-        truth.push_back({{"state", step->second.first}, {"action", step->second.second}});
-      }
-    }
-    j["posterior"] = {{"episode", p.episode},
-                      {"iteration", p.iteration},
-                      {"steps", p.num_steps},
-                      {"state_marginals", marginals},
-                      {"action_marginals", action_marginals},
-                      {"most_likely", best},
-                      {"truth", truth},
-                      {"log_likelihood", finite_or_null(p.log_likelihood)}};
+    j["posterior"] = posterior_json(*posterior_, truth_);
   } else {
     j["posterior"] = nullptr;
   }
@@ -500,20 +547,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   // Service health.
   nlohmann::json services = nlohmann::json::array();
   for (const auto& [id, s] : services_) {
-    const auto& m = s.status;
-    services.push_back(
-        {{"id", id},
-         {"service", m.service},
-         {"state", m.state},
-         {"seconds_since_heartbeat", std::max<double>(0.0, static_cast<double>(now_utime - s.heard_utime) * 1e-6)},
-         {"messages_in", m.messages_in},
-         {"messages_out", m.messages_out},
-         {"bad_messages", m.bad_messages},
-         {"gaps", m.gaps},
-         {"trajectories", m.trajectories},
-         {"restarts", m.restarts},
-         {"authenticated", m.authenticated != 0},
-         {"detail", m.detail}});
+    services.push_back(service_json(id, s.status, s.heard_utime, now_utime));
   }
   j["services"] = services;
   if (!progress_.empty()) {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "experiments/gridworld_scenario.hpp"
+#include "experiments/learning_run.hpp"
 #include "experiments/summary.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
@@ -32,12 +33,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   result.method = method;
   result.goal = s.task.goal;
   const Mdp& mdp = s.task.mdp;
-  LearnOptions learn;
-  learn.restarts = o.restarts;
-  learn.seed = o.seed ^ (static_cast<std::uint64_t>(run) << 20) ^ static_cast<std::uint64_t>(confounders);
-  learn.threads = 1;
-  learn.theta_tolerance = o.theta_tolerance;
-  learn.likelihood_tolerance = o.likelihood_tolerance;
+  LearnOptions learn = learning_run_options(o, run, confounders);
   learn.accelerate = o.accelerate;
   LearnResult learned;
   if (method == GridworldMethod::kTrueTrajectories) {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "experiments/learning_run.hpp"
 #include "experiments/onion_data.hpp"
 #include "experiments/summary.hpp"
 #include "learner/controlled_prior.hpp"
@@ -138,8 +139,19 @@ RowMatrix miscalibrated(const RowMatrix& eta, double power) {
   return out;
 }
 
-std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
-  const Mdp mdp = make_onion_mdp();
+namespace {
+
+// What every run learns with: the MDP, and the subject prior from a controlled run of
+// o.controlled_sorts sorts (its alpha, and its mean O for ML Trajectories).
+struct OnionSetup {
+  Mdp mdp = make_onion_mdp();
+  Eigen::MatrixXd subject_alpha;
+  Eigen::MatrixXd subject_o;
+};
+
+OnionSetup onion_setup(const OnionExperimentOptions& o) {
+  OnionSetup setup;
+  const Mdp& mdp = setup.mdp;
   const SceneConfig& scene = o.scene;
   SceneConfig controlled_scene = SceneConfig::controlled();
   controlled_scene.width = scene.width;
@@ -149,9 +161,58 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   controlled_options.sorts = o.controlled_sorts;
   const OnionDemonstration controlled =
       demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
-  const Eigen::MatrixXd subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed,
-                                                             perception::kNumSymbols, controlled_prior_options());
-  const Eigen::MatrixXd subject_o = dirichlet_mean(subject_alpha);
+  setup.subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols,
+                                             controlled_prior_options());
+  setup.subject_o = dirichlet_mean(setup.subject_alpha);
+  return setup;
+}
+
+// The reward `method` learns from the first n sorts of run `run`'s demonstration.
+LearnResult learn_onion_method(const OnionSetup& setup, OnionMethod method, const OnionDemonstration& demo, int n,
+                               int run, const OnionExperimentOptions& o) {
+  const Mdp& mdp = setup.mdp;
+  const Eigen::MatrixXd& subject_alpha = setup.subject_alpha;
+  const Eigen::MatrixXd& subject_o = setup.subject_o;
+  const LearnOptions learn = learning_run_options(o, run, n);
+  ObservationPrior prior;
+  prior.num_symbols = perception::kNumSymbols;
+  prior.subject_alpha = subject_alpha;
+  use_alpha_update(prior, o.update);
+  prior.c = o.c;
+  ObservationEStepOptions estep_options;
+  estep_options.max_alpha_iterations = o.max_alpha_iterations;
+  estep_options.alpha_tolerance = o.alpha_tolerance;
+  const std::vector<ObservedTrajectory> observed = first(demo.observed, n);
+  switch (method) {
+    case OnionMethod::kTrueTrajectories: {
+      const std::vector<Trajectory> truth(demo.truth.begin(), demo.truth.begin() + n);
+      return learn_reward(mdp, TruthEStep(mdp, truth), learn);
+    }
+    case OnionMethod::kMlTrajectories:
+      return learn_reward(mdp, TruthEStep(mdp, ml_trajectories(mdp, subject_o, observed)), learn);
+    case OnionMethod::kMlObservations:
+      prior.num_confounders = 0;
+      prior.confounder_alpha = Eigen::MatrixXd::Zero(0, prior.num_symbols);
+      return learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
+    case OnionMethod::kPlausibleEta:
+    case OnionMethod::kUniformEta:
+      prior.num_confounders = perception::kNumSources - 1;
+      prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
+      return learn_reward(
+          mdp,
+          ObservationEStep(mdp, method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed, prior,
+                           estep_options),
+          learn);
+  }
+  return {};  // not reached: every method is a case
+}
+
+}  // namespace
+
+std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
+  const OnionSetup setup = onion_setup(o);
+  const Mdp& mdp = setup.mdp;
+  const SceneConfig& scene = o.scene;
   const int most = *std::max_element(o.trajectories.begin(), o.trajectories.end());
   const size_t per_run = o.trajectories.size() * o.methods.size();
   std::vector<OnionRun> results(static_cast<size_t>(o.runs) * per_run);
@@ -175,48 +236,7 @@ std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
         r.method = o.methods[m];
         const auto start = std::chrono::steady_clock::now();
         try {
-          LearnOptions learn;
-          learn.restarts = o.restarts;
-          learn.seed = o.seed ^ (static_cast<std::uint64_t>(run) << 20) ^ static_cast<std::uint64_t>(n);
-          learn.threads = 1;
-          learn.theta_tolerance = o.theta_tolerance;
-          learn.likelihood_tolerance = o.likelihood_tolerance;
-          ObservationPrior prior;
-          prior.num_symbols = perception::kNumSymbols;
-          prior.subject_alpha = subject_alpha;
-          use_alpha_update(prior, o.update);
-          prior.c = o.c;
-          ObservationEStepOptions estep_options;
-          estep_options.max_alpha_iterations = o.max_alpha_iterations;
-          estep_options.alpha_tolerance = o.alpha_tolerance;
-          const std::vector<ObservedTrajectory> observed = first(demo.observed, n);
-          LearnResult learned;
-          switch (r.method) {
-            case OnionMethod::kTrueTrajectories: {
-              const std::vector<Trajectory> truth(demo.truth.begin(), demo.truth.begin() + n);
-              learned = learn_reward(mdp, TruthEStep(mdp, truth), learn);
-              break;
-            }
-            case OnionMethod::kMlTrajectories:
-              learned = learn_reward(mdp, TruthEStep(mdp, ml_trajectories(mdp, subject_o, observed)), learn);
-              break;
-            case OnionMethod::kMlObservations:
-              prior.num_confounders = 0;
-              prior.confounder_alpha = Eigen::MatrixXd::Zero(0, prior.num_symbols);
-              learned =
-                  learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
-              break;
-            case OnionMethod::kPlausibleEta:
-            case OnionMethod::kUniformEta:
-              prior.num_confounders = perception::kNumSources - 1;
-              prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
-              learned = learn_reward(
-                  mdp,
-                  ObservationEStep(mdp, r.method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed,
-                                   prior, estep_options),
-                  learn);
-              break;
-          }
+          const LearnResult learned = learn_onion_method(setup, r.method, demo, n, run, o);
           const PolicyMetrics metrics = policy_metrics(mdp, expert_weights(), learned.theta);
           r.ile = metrics.ile.ile;
           r.ile_relative = metrics.ile.relative();

@@ -349,9 +349,11 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
   return runs;
 }
 
-std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const std::string& footer) {
-  const std::vector<std::string> methods = methods_in(runs);
-  std::ostringstream out;
+namespace {
+
+// Per method and group of tasks: the share of runs with an optimal learned policy, and the relative ILE.
+void write_optimal_share_table(std::ostream& out, const std::vector<RandomTaskRun>& runs,
+                               const std::vector<std::string>& methods) {
   out << "# Random tasks: share of runs whose learned policy is optimal\n\n";
   out << "Per method and group of tasks: the share of runs whose learned reward's optimal policy is optimal under the "
          "true reward (ILE 0), with its 95% Wilson interval, and the mean ILE relative to ||V*||_1 "
@@ -379,6 +381,11 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
     }
     out << "\n";
   }
+}
+
+// Per method: the share of runs within 5% of the optimal value.
+void write_near_optimal_shares(std::ostream& out, const std::vector<RandomTaskRun>& runs,
+                               const std::vector<std::string>& methods) {
   out << "\nWithin 5% of the optimal value (ILE <= 0.05 ||V*||_1), all runs:";
   for (const auto& m : methods) {
     const Cell c = cell(runs, m, breakdown().front());
@@ -389,7 +396,10 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
     out << buf;
   }
   out << "\n";
-  // Paired comparisons on the same data.
+}
+
+// Paired comparisons on the same data: which of two methods found an optimal policy.
+void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun>& runs) {
   auto compare = [&](const std::string& a, const std::string& b) {
     int both = 0, only_a = 0, only_b = 0, neither = 0;
     paired(runs, a, b, [&](const RandomTaskRun& x, const RandomTaskRun& y) {
@@ -413,7 +423,10 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
   compare("posterior", "paper_c0.1");
   compare("posterior", "true_trajectories");
   compare("fixed_prior", "true_trajectories");
-  // Does the default depend on c?
+}
+
+// Does the default's answer depend on c?
+void write_c_dependence(std::ostream& out, const std::vector<RandomTaskRun>& runs) {
   out << "\n## Does the default's answer depend on c?\n\n";
   for (const std::string other : {"posterior_c0.5", "posterior_c0.02"}) {
     int n = 0, identical = 0, same_theta = 0, same = 0, unconverged = 0;
@@ -431,27 +444,33 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
         << " (relative to max(1, |theta|)) in " << same_theta << " (" << percent(static_cast<double>(same_theta) / n)
         << "); " << unconverged << " pairs with a run that hit the EM iteration limit.\n";
   }
-  // Restarts.
-  {
-    int n = 0, changed = 0, better = 0, worse = 0, theta_changed = 0;
-    paired(runs, "posterior", "posterior_r4", [&](const RandomTaskRun& one, const RandomTaskRun& four) {
-      ++n;
-      theta_changed += theta_difference(one, four) > kSameThetaTolerance ? 1 : 0;
-      if (!same_answer(one, four)) {
-        ++changed;
-        if (four.ile_relative < one.ile_relative)
-          ++better;
-        else
-          ++worse;
-      }
-    });
-    if (n > 0) {
-      out << "\n## Do more restarts change the answer?\n\n- posterior with 4 restarts vs 1: theta moved by more than "
-          << kSameThetaTolerance << " in " << theta_changed << " of " << n
-          << " runs; the learned policy's value changed in " << changed << " ("
-          << percent(static_cast<double>(changed) / n) << "): better in " << better << ", worse in " << worse << ".\n";
+}
+
+// Do more restarts change the answer?
+void write_restart_effect(std::ostream& out, const std::vector<RandomTaskRun>& runs) {
+  int n = 0, changed = 0, better = 0, worse = 0, theta_changed = 0;
+  paired(runs, "posterior", "posterior_r4", [&](const RandomTaskRun& one, const RandomTaskRun& four) {
+    ++n;
+    theta_changed += theta_difference(one, four) > kSameThetaTolerance ? 1 : 0;
+    if (!same_answer(one, four)) {
+      ++changed;
+      if (four.ile_relative < one.ile_relative)
+        ++better;
+      else
+        ++worse;
     }
+  });
+  if (n > 0) {
+    out << "\n## Do more restarts change the answer?\n\n- posterior with 4 restarts vs 1: theta moved by more than "
+        << kSameThetaTolerance << " in " << theta_changed << " of " << n
+        << " runs; the learned policy's value changed in " << changed << " ("
+        << percent(static_cast<double>(changed) / n) << "): better in " << better << ", worse in " << worse << ".\n";
   }
+}
+
+// Per method: how often EM converged, its median evaluations and seconds; and the failed runs.
+void write_em_table(std::ostream& out, const std::vector<RandomTaskRun>& runs,
+                    const std::vector<std::string>& methods) {
   out << "\n## EM\n\n| method | runs | converged | median EM evaluations | median seconds |\n|---|---|---|---|---|\n";
   for (const auto& m : methods) {
     std::vector<double> iterations;
@@ -477,6 +496,19 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
   int failed = 0;
   for (const auto& r : runs) failed += r.error.empty() ? 0 : 1;
   if (failed > 0) out << "\n" << failed << " runs failed (see the error column of the runs CSV).\n";
+}
+
+}  // namespace
+
+std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const std::string& footer) {
+  const std::vector<std::string> methods = methods_in(runs);
+  std::ostringstream out;
+  write_optimal_share_table(out, runs, methods);
+  write_near_optimal_shares(out, runs, methods);
+  write_paired_comparisons(out, runs);
+  write_c_dependence(out, runs);
+  write_restart_effect(out, runs);
+  write_em_table(out, runs, methods);
   out << "\n" << footer << "\n";
   return out.str();
 }

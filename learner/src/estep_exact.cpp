@@ -7,6 +7,9 @@ namespace hbirl {
 
 namespace {
 
+// What the scaled passes return when they cannot be exact (the log-space passes decide).
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 // v <- exp(v) elementwise, vectorised. Eigen's vectorised exp clamps its argument and maps
 // -inf to the smallest normal double rather than 0: results below 1e-300 are set to
 // exactly 0. Every caller has shifted v so that what matters is at least ~1e-16 (a
@@ -195,7 +198,16 @@ double ExactEngine::passes(const SoftSolution& policy, const ObservedTrajectory&
 
 double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory,
                                   bool with_backward) {
-  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const double forward = scaled_forward(policy, trajectory);
+  if (!std::isfinite(forward)) return forward;  // impossible (-inf), or for the log-space passes (NaN)
+  const double end = scaled_end(trajectory);
+  if (std::isnan(end)) return end;
+  const double ll = forward + end;
+  if (!with_backward) return ll;
+  return scaled_backward(policy, trajectory.length()) ? ll : kNaN;
+}
+
+double ExactEngine::scaled_forward(const SoftSolution& policy, const ObservedTrajectory& trajectory) {
   const int T = trajectory.length();
   const int S = mdp_.num_states;
   const int A = mdp_.num_actions;
@@ -271,6 +283,13 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
     lost_[t] = log_lost;
     ll += m + std::log(c);
   }
+  return ll;
+}
+
+double ExactEngine::scaled_end(const ObservedTrajectory& trajectory) {
+  const int T = trajectory.length();
+  const int S = mdp_.num_states;
+  const int P = mdp_.num_pairs();
   // The last step's backward message: 1, or Pr(next state is terminal | r) when the
   // trajectory is known to have ended by entering a terminal state.
   beta_hat_.resize(T, P);
@@ -284,8 +303,13 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
   if (normaliser_ == 0.0) return kNaN;  // impossible, or underflowed: the log-space passes tell
   // The lost mass against the kept at the last step (beta_hat <= 1 there).
   if (!(normaliser_ >= kUnderflowFloor) || !(lost_[T - 1] - std::log(normaliser_) <= kLogNegligible)) return kNaN;
-  ll += std::log(normaliser_);
-  if (!with_backward) return ll;
+  return std::log(normaliser_);
+}
+
+bool ExactEngine::scaled_backward(const SoftSolution& policy, int T) {
+  const int S = mdp_.num_states;
+  const int A = mdp_.num_actions;
+  const Eigen::VectorXd& pi = policy.policy;
   // A small normaliser (an unlikely end in a terminal state) would take the backward
   // products below the smallest double: a product whose share of a marginal is over
   // 1e-30 is at least 1e-30 c_{t+1} Z >= 1e-280 Z. Below kSmallNormaliser the last
@@ -308,11 +332,11 @@ double ExactEngine::scaled_passes(const SoftSolution& policy, const ObservedTraj
     const double largest = row_.maxCoeff();
     if (!(largest <= kMaxScaledBackward) ||
         !(lost_[t] + std::log(std::max(largest, 1.0)) - std::log(backward_total_) <= kLogNegligible)) {
-      return kNaN;
+      return false;
     }
     beta_hat_.row(t) = row_.transpose();
   }
-  return ll;
+  return true;
 }
 
 double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward) {

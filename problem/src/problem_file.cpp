@@ -149,8 +149,13 @@ std::vector<std::string> read_names(const JsonNode& node, long long expected, co
   return names;
 }
 
-Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
-  node.check_keys(mdp_shape().keys(), warnings);
+namespace {
+
+// "num_states", "num_actions" and "num_features", checked against what the file holds
+// before anything is allocated for them: every state is terminal or has transitions, and
+// every action of a non-terminal state has transitions or is impossible -- so a few bytes
+// cannot declare a billion states.
+Sizes read_mdp_sizes(const JsonNode& node) {
   Sizes n;
   n.states = static_cast<int>(node.at("num_states").as_int(1, std::numeric_limits<int>::max()));
   n.actions = static_cast<int>(node.at("num_actions").as_int(1, std::numeric_limits<int>::max()));
@@ -160,9 +165,6 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   if (pairs * std::max(n.features, 1) > kMaxFeatureCells) {
     node.at("num_features").fail("num_states * num_actions * num_features is too large");
   }
-  // The sizes against what the file holds, before anything is allocated for them: every
-  // state is terminal or has transitions, and every action of a non-terminal state has
-  // transitions or is impossible -- so a few bytes cannot declare a billion states.
   const auto listed = [&node](const char* key) -> long long {
     const auto list = node.find(key);
     return list ? static_cast<long long>(list->size()) : 0;
@@ -180,7 +182,11 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
         .fail("num_states * num_actions is " + std::to_string(pairs) +
               " pairs, more than the file's transitions, impossible actions and terminal states cover");
   }
+  return n;
+}
 
+// "discount"; 0.95 when absent.
+double read_discount(const JsonNode& node) {
   double discount = 0.95;
   if (auto d = node.find("discount")) {
     discount = d->as_number();
@@ -189,9 +195,12 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
               exact(discount));
     }
   }
+  return discount;
+}
 
+// "terminal": the terminal states, each flagged in is_terminal too.
+std::vector<int> read_terminal_states(const JsonNode& node, const Sizes& n, std::vector<char>& is_terminal) {
   std::vector<int> terminal;
-  std::vector<char> is_terminal(static_cast<size_t>(n.states), 0);
   if (auto t = node.find("terminal")) {
     for (size_t i = 0; i < t->size(); ++i) {
       const int s = static_cast<int>((*t)[i].as_int(0, n.states - 1));
@@ -199,7 +208,12 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       is_terminal[static_cast<size_t>(s)] = 1;
     }
   }
+  return terminal;
+}
 
+// "impossible_actions": a flag per (s, a).
+std::vector<char> read_impossible_actions(const JsonNode& node, const Sizes& n) {
+  const long long pairs = static_cast<long long>(n.states) * n.actions;
   std::vector<char> impossible(static_cast<size_t>(pairs), 0);
   if (auto list = node.find("impossible_actions")) {
     for (size_t i = 0; i < list->size(); ++i) {
@@ -210,8 +224,15 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       impossible[static_cast<size_t>(s) * n.actions + a] = 1;
     }
   }
+  return impossible;
+}
 
-  // Transitions [s, a, s', p].
+// "transitions" [s, a, s', p]: every action of a non-terminal state has them, summing to 1
+// (within kFileSumTolerance), or is impossible; each row is renormalised exactly.
+std::vector<TransitionEntry> read_transitions(const JsonNode& node, const Sizes& n,
+                                              const std::vector<char>& is_terminal,
+                                              const std::vector<char>& impossible) {
+  const long long pairs = static_cast<long long>(n.states) * n.actions;
   const JsonNode list = node.at("transitions");
   std::vector<TransitionEntry> transitions;
   std::vector<double> row_sum(static_cast<size_t>(pairs), 0.0);
@@ -255,8 +276,11 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     }
   }
   for (auto& t : transitions) t.probability /= row_sum[static_cast<size_t>(t.state) * n.actions + t.action];
+  return transitions;
+}
 
-  // Start distribution [s, p]; default uniform over non-terminal states.
+// "start" [s, p]; by default uniform over the non-terminal states.
+Eigen::VectorXd read_start(const JsonNode& node, const Sizes& n, const std::vector<char>& is_terminal) {
   Eigen::VectorXd start = Eigen::VectorXd::Zero(n.states);
   if (auto st = node.find("start")) {
     std::vector<std::pair<int, size_t>> seen;
@@ -286,8 +310,11 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
       if (!is_terminal[static_cast<size_t>(s)]) start[s] = 1.0 / static_cast<double>(live);
     }
   }
+  return start;
+}
 
-  // Features [s, a, k, value]; absent entries are 0.
+// "features" [s, a, k, value]; absent entries are 0.
+std::vector<FeatureEntry> read_features(const JsonNode& node, const Sizes& n) {
   std::vector<FeatureEntry> features;
   if (auto fl = node.find("features")) {
     std::vector<std::pair<std::pair<long long, int>, size_t>> seen;
@@ -304,7 +331,21 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
     }
     reject_duplicates(std::move(seen), *fl, kFeatureTuple.what);
   }
+  return features;
+}
 
+}  // namespace
+
+Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings) {
+  node.check_keys(mdp_shape().keys(), warnings);
+  const Sizes n = read_mdp_sizes(node);
+  const double discount = read_discount(node);
+  std::vector<char> is_terminal(static_cast<size_t>(n.states), 0);
+  const std::vector<int> terminal = read_terminal_states(node, n, is_terminal);
+  const std::vector<char> impossible = read_impossible_actions(node, n);
+  const std::vector<TransitionEntry> transitions = read_transitions(node, n, is_terminal, impossible);
+  const Eigen::VectorXd start = read_start(node, n, is_terminal);
+  const std::vector<FeatureEntry> features = read_features(node, n);
   if (auto names = node.find("state_names")) problem.state_names = read_names(*names, n.states, "state");
   if (auto names = node.find("action_names")) problem.action_names = read_names(*names, n.actions, "action");
   if (auto names = node.find("feature_names")) problem.feature_names = read_names(*names, n.features, "feature");
@@ -314,19 +355,11 @@ Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* w
   return mdp;
 }
 
-ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, std::vector<std::string>* warnings) {
-  node.check_keys(observation_model_shape().keys(), warnings);
-  ObservationPrior prior;
-  prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
-  prior.num_confounders = static_cast<int>(node.at("num_confounders").as_int(0, 1 << 16));
-  // O is (|S||A| + |E|) x |W| doubles, and the E-step holds a few of its size: bounded
-  // before it is allocated.
-  if ((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols > kMaxFeatureCells) {
-    node.at("num_symbols")
-        .fail("(num_states * num_actions + num_confounders) * num_symbols is " +
-              std::to_string((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols) +
-              " cells, more than the " + std::to_string(kMaxFeatureCells) + " (2 GiB) an observation model may take");
-  }
+namespace {
+
+// The Dirichlet parameters: subject_alpha_default and confounder_alpha_default (1 when
+// absent) and the entries subject_alpha and confounder_alpha list.
+void read_alphas(const JsonNode& node, const Mdp& mdp, ObservationPrior& prior) {
   double subject_default = 1.0;
   if (auto d = node.find("subject_alpha_default")) subject_default = d->as_number(0.0, 1e300);
   double confounder_default = 1.0;
@@ -354,7 +387,10 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, st
       prior.confounder_alpha(c, w) = e[2].as_number(0.0, 1e300);
     }
   }
-  // The Dirichlet mean needs a positive total per distribution.
+}
+
+// The Dirichlet mean needs a positive total per distribution.
+void check_alpha_totals(const JsonNode& node, const Mdp& mdp, const ObservationPrior& prior) {
   for (int s = 0; s < mdp.num_states; ++s) {
     for (int a = 0; a < mdp.num_actions; ++a) {
       if (mdp.is_terminal(s) || !mdp.available(s, a)) continue;
@@ -371,6 +407,11 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, st
                 " sums to 0; set a positive entry or confounder_alpha_default");
     }
   }
+}
+
+// How the prior is learned: learn, update, c, learn_eta, eta_prior_strength,
+// unlisted_source and prior_strength.
+void read_learning_options(const JsonNode& node, ObservationPrior& prior, std::vector<std::string>* warnings) {
   if (auto l = node.find("learn")) prior.learn = l->as_bool();
   if (auto u = node.find("update")) {
     AlphaUpdate update = AlphaUpdate::kPosterior;
@@ -405,6 +446,26 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, st
       prior.strength = s;
     }
   }
+}
+
+}  // namespace
+
+ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, std::vector<std::string>* warnings) {
+  node.check_keys(observation_model_shape().keys(), warnings);
+  ObservationPrior prior;
+  prior.num_symbols = static_cast<int>(node.at("num_symbols").as_int(1, 1 << 20));
+  prior.num_confounders = static_cast<int>(node.at("num_confounders").as_int(0, 1 << 16));
+  // O is (|S||A| + |E|) x |W| doubles, and the E-step holds a few of its size: bounded
+  // before it is allocated.
+  if ((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols > kMaxFeatureCells) {
+    node.at("num_symbols")
+        .fail("(num_states * num_actions + num_confounders) * num_symbols is " +
+              std::to_string((static_cast<long long>(mdp.num_pairs()) + prior.num_confounders) * prior.num_symbols) +
+              " cells, more than the " + std::to_string(kMaxFeatureCells) + " (2 GiB) an observation model may take");
+  }
+  read_alphas(node, mdp, prior);
+  check_alpha_totals(node, mdp, prior);
+  read_learning_options(node, prior, warnings);
   return prior;
 }
 
@@ -659,8 +720,13 @@ Problem read_problem_file(const std::string& path, std::vector<std::string>* war
   return parse_document(doc, warnings);
 }
 
-nlohmann::ordered_json problem_to_json(const Problem& problem) {
-  using J = nlohmann::ordered_json;
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;
+
+// "mdp" as the reader takes it (read_mdp).
+OrderedJson mdp_to_json(const Problem& problem) {
+  using J = OrderedJson;
   const Mdp& mdp = problem.mdp;
   J m;
   m["num_states"] = mdp.num_states;
@@ -702,69 +768,84 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
     }
   }
   m["features"] = features;
+  return m;
+}
 
-  J doc;
-  doc["mdp"] = m;
-  if (problem.observation_model) {
-    const ObservationPrior& p = *problem.observation_model;
-    J om;
-    om["num_symbols"] = p.num_symbols;
-    om["num_confounders"] = p.num_confounders;
-    J sa = J::array();
-    for (int r = 0; r < p.subject_alpha.rows(); ++r) {
-      for (int w = 0; w < p.num_symbols; ++w) {
-        sa.push_back({r / mdp.num_actions, r % mdp.num_actions, w, p.subject_alpha(r, w)});
-      }
+// "observation_model" as the reader takes it (read_observation_model).
+OrderedJson observation_model_to_json(const ObservationPrior& p, const Mdp& mdp) {
+  using J = OrderedJson;
+  J om;
+  om["num_symbols"] = p.num_symbols;
+  om["num_confounders"] = p.num_confounders;
+  J sa = J::array();
+  for (int r = 0; r < p.subject_alpha.rows(); ++r) {
+    for (int w = 0; w < p.num_symbols; ++w) {
+      sa.push_back({r / mdp.num_actions, r % mdp.num_actions, w, p.subject_alpha(r, w)});
     }
-    om["subject_alpha"] = sa;
-    J ca = J::array();
-    for (int c = 0; c < p.num_confounders; ++c) {
-      for (int w = 0; w < p.num_symbols; ++w) ca.push_back({c, w, p.confounder_alpha(c, w)});
-    }
-    om["confounder_alpha"] = ca;
-    om["subject_alpha_default"] = p.subject_alpha_base;
-    om["learn"] = p.learn;
-    om["update"] = alpha_update_name(p.update);
-    // Only when it differs from the update's default: said explicitly, it must have an eta to learn.
-    if (p.learn_eta != (p.update == AlphaUpdate::kPosterior)) om["learn_eta"] = p.learn_eta;
-    om["eta_prior_strength"] = p.eta_strength;
-    if (p.unlisted_eta > 0.0) om["unlisted_source"] = J{{"eta", p.unlisted_eta}};
-    om["c"] = p.c;
-    if (p.automatic_strength) {
-      om["prior_strength"] = "auto";
-    } else {
-      om["prior_strength"] = p.strength;
-    }
-    doc["observation_model"] = om;
   }
+  om["subject_alpha"] = sa;
+  J ca = J::array();
+  for (int c = 0; c < p.num_confounders; ++c) {
+    for (int w = 0; w < p.num_symbols; ++w) ca.push_back({c, w, p.confounder_alpha(c, w)});
+  }
+  om["confounder_alpha"] = ca;
+  om["subject_alpha_default"] = p.subject_alpha_base;
+  om["learn"] = p.learn;
+  om["update"] = alpha_update_name(p.update);
+  // Only when it differs from the update's default: said explicitly, it must have an eta to learn.
+  if (p.learn_eta != (p.update == AlphaUpdate::kPosterior)) om["learn_eta"] = p.learn_eta;
+  om["eta_prior_strength"] = p.eta_strength;
+  if (p.unlisted_eta > 0.0) om["unlisted_source"] = J{{"eta", p.unlisted_eta}};
+  om["c"] = p.c;
+  if (p.automatic_strength) {
+    om["prior_strength"] = "auto";
+  } else {
+    om["prior_strength"] = p.strength;
+  }
+  return om;
+}
+
+// One trajectory of "demonstration"; ends_in_terminal is written only when it is not the
+// default (has_terminal: the MDP has terminal states).
+OrderedJson trajectory_to_json(const DemonstratedTrajectory& trajectory, bool has_terminal) {
+  using J = OrderedJson;
+  J item;
+  if (has_terminal && !trajectory.ends_in_terminal) item["ends_in_terminal"] = false;
+  if (trajectory.controlled) item["controlled"] = true;
+  if (trajectory.steps) {
+    const ObservedTrajectory& o = *trajectory.steps;
+    J steps = J::array();
+    for (int t = 0; t < o.length(); ++t) {
+      J observations = J::array();
+      for (int i = o.step_begin[static_cast<size_t>(t)]; i < o.step_begin[static_cast<size_t>(t) + 1]; ++i) {
+        std::vector<double> eta(o.eta.row(i).data(), o.eta.row(i).data() + o.eta.cols());
+        J observation = J::array({o.symbols[static_cast<size_t>(i)], eta});
+        if (!o.contexts.empty()) observation.push_back(o.contexts[static_cast<size_t>(i)]);
+        observations.push_back(std::move(observation));
+      }
+      steps.push_back(J{{"observations", observations}});
+    }
+    item["steps"] = steps;
+  }
+  if (trajectory.truth) {
+    J truth = J::array();
+    for (const auto& step : *trajectory.truth) truth.push_back({step.state, step.action});
+    item["truth"] = truth;
+  }
+  return item;
+}
+
+}  // namespace
+
+nlohmann::ordered_json problem_to_json(const Problem& problem) {
+  using J = nlohmann::ordered_json;
+  const Mdp& mdp = problem.mdp;
+  J doc;
+  doc["mdp"] = mdp_to_json(problem);
+  if (problem.observation_model) doc["observation_model"] = observation_model_to_json(*problem.observation_model, mdp);
   J demo = J::array();
   const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
-  for (const auto& trajectory : problem.demonstration) {
-    J item;
-    if (has_terminal && !trajectory.ends_in_terminal) item["ends_in_terminal"] = false;
-    if (trajectory.controlled) item["controlled"] = true;
-    if (trajectory.steps) {
-      const ObservedTrajectory& o = *trajectory.steps;
-      J steps = J::array();
-      for (int t = 0; t < o.length(); ++t) {
-        J observations = J::array();
-        for (int i = o.step_begin[static_cast<size_t>(t)]; i < o.step_begin[static_cast<size_t>(t) + 1]; ++i) {
-          std::vector<double> eta(o.eta.row(i).data(), o.eta.row(i).data() + o.eta.cols());
-          J observation = J::array({o.symbols[static_cast<size_t>(i)], eta});
-          if (!o.contexts.empty()) observation.push_back(o.contexts[static_cast<size_t>(i)]);
-          observations.push_back(std::move(observation));
-        }
-        steps.push_back(J{{"observations", observations}});
-      }
-      item["steps"] = steps;
-    }
-    if (trajectory.truth) {
-      J truth = J::array();
-      for (const auto& step : *trajectory.truth) truth.push_back({step.state, step.action});
-      item["truth"] = truth;
-    }
-    demo.push_back(item);
-  }
+  for (const auto& trajectory : problem.demonstration) demo.push_back(trajectory_to_json(trajectory, has_terminal));
   doc["demonstration"] = demo;
   if (problem.true_weights) {
     doc["true_weights"] =

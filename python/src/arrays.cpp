@@ -38,10 +38,8 @@ long long checked_lengths(const IntArray& lengths) {
   return total;
 }
 
-}  // namespace
-
-std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
-                                                      const Mdp& mdp) {
+// The flat form's arrays have one entry (eta: one row of 1 + |E|) per observation.
+void check_flat_shapes(const FlatObservations& flat, const ObservationPrior& prior) {
   const int sources = 1 + prior.num_confounders;
   if (flat.symbols.ndim() != 1)
     throw InputError("observations.symbols", "must be a 1-D array, one symbol per observation");
@@ -56,11 +54,13 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
   if (flat.contexts && (flat.contexts->ndim() != 1 || flat.contexts->shape(0) != n)) {
     throw InputError("observations.contexts", "must be a 1-D array, one context per observation");
   }
-  const long long total_steps = checked_lengths(flat.lengths);
-  const auto lengths = flat.lengths.unchecked<1>();
-  // The forward-backward pass (and a posterior's marginals) hold T x (S * A) doubles per
-  // trajectory: bounded here, before anything is computed.
-  for (py::ssize_t i = 0; i < flat.lengths.shape(0); ++i) {
+}
+
+// The forward-backward pass (and a posterior's marginals) hold T x (S * A) doubles per
+// trajectory: bounded here, before anything is computed.
+void check_pass_sizes(const IntArray& lengths_array, const Mdp& mdp) {
+  const auto lengths = lengths_array.unchecked<1>();
+  for (py::ssize_t i = 0; i < lengths_array.shape(0); ++i) {
     if (lengths(i) * static_cast<long long>(mdp.num_pairs()) > (1LL << 28)) {
       throw InputError("observations.lengths", "trajectory " + std::to_string(i) + " has " +
                                                    std::to_string(lengths(i)) + " steps: with the MDP's " +
@@ -68,12 +68,14 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
                                                    " state-action pairs more than the 2^28 cells a pass may hold");
     }
   }
-  const auto trajectories = static_cast<int>(flat.lengths.shape(0));
+}
+
+// Whether the MDP has terminal states: as in a problem file, by default a trajectory ran
+// until it entered one when it has them. ends_in_terminal, when given, is checked against it.
+bool check_ends_in_terminal(const FlatObservations& flat, int trajectories, const Mdp& mdp) {
   if (flat.ends_in_terminal && flat.ends_in_terminal->size() != static_cast<size_t>(trajectories)) {
     throw InputError("observations.ends_in_terminal", "must have one entry per trajectory");
   }
-  // As in a problem file: by default a trajectory ran until it entered a terminal state
-  // when the MDP has them.
   const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
   if (flat.ends_in_terminal && !has_terminal) {
     for (size_t i = 0; i < flat.ends_in_terminal->size(); ++i) {
@@ -82,11 +84,66 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
                          "trajectory " + std::to_string(i) + ": true, but the MDP has no terminal states");
     }
   }
-  const auto symbols = flat.symbols.unchecked<1>();
-  const auto eta = flat.eta.unchecked<2>();
-  const auto steps = flat.step_index.unchecked<1>();
+  return has_terminal;
+}
+
+// The flat form's per-observation arrays, read without checks (their shapes are checked).
+struct FlatView {
+  py::detail::unchecked_reference<long long, 1> symbols;
+  py::detail::unchecked_reference<double, 2> eta;
+  py::detail::unchecked_reference<long long, 1> steps;
+  py::detail::unchecked_reference<long long, 1> contexts;
+  bool has_contexts;
+};
+
+// Observation m, the trajectory's observation m - begin, added to t: its symbol, its eta
+// (normalised) and its context, checked; `where` names it.
+void add_observation(ObservedTrajectory& t, const FlatView& in, py::ssize_t m, py::ssize_t begin,
+                     const std::string& where, const ObservationPrior& prior) {
+  const int sources = 1 + prior.num_confounders;
+  if (in.symbols(m) < 0 || in.symbols(m) >= prior.num_symbols) {
+    throw InputError(where, "symbol " + std::to_string(in.symbols(m)) + " is not in [0, " +
+                                std::to_string(prior.num_symbols - 1) + "]");
+  }
+  t.symbols.push_back(static_cast<int>(in.symbols(m)));
+  const Eigen::Index row = m - begin;
+  for (int j = 0; j < sources; ++j) {
+    const double v = in.eta(m, j);
+    if (!(v >= 0.0 && v <= 1.0))
+      throw InputError(where, "eta[" + std::to_string(j) + "] is " + std::to_string(v) + ", not in [0, 1]");
+    t.eta(row, j) = v;
+  }
+  const std::string wrong = normalise_eta(t.eta.row(row).data(), sources);
+  if (!wrong.empty()) throw InputError(where, "eta " + wrong);
+  if (in.has_contexts) {
+    // -1: none (a trajectory gives contexts to all its observations or none, as in a problem file).
+    const long long c = in.contexts(m);
+    if (c < -1 || c >= kMaxContexts)
+      throw InputError(where, "context " + std::to_string(c) + " is not in [0, " + std::to_string(kMaxContexts - 1) +
+                                  "] (or -1: none)");
+    if ((c == -1) != (m == begin ? c == -1 : t.contexts.empty())) {
+      throw InputError(where, "some observations of the trajectory have a context and others not (-1)");
+    }
+    if (c >= 0) t.contexts.push_back(static_cast<int>(c));
+  }
+}
+
+}  // namespace
+
+std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
+                                                      const Mdp& mdp) {
+  const int sources = 1 + prior.num_confounders;
+  check_flat_shapes(flat, prior);
+  const py::ssize_t n = flat.symbols.shape(0);
+  const long long total_steps = checked_lengths(flat.lengths);
+  const auto lengths = flat.lengths.unchecked<1>();
+  check_pass_sizes(flat.lengths, mdp);
+  const auto trajectories = static_cast<int>(flat.lengths.shape(0));
+  const bool has_terminal = check_ends_in_terminal(flat, trajectories, mdp);
   const IntArray no_contexts(0);
-  const auto contexts = (flat.contexts ? *flat.contexts : no_contexts).unchecked<1>();
+  const FlatView in{flat.symbols.unchecked<1>(), flat.eta.unchecked<2>(), flat.step_index.unchecked<1>(),
+                    (flat.contexts ? *flat.contexts : no_contexts).unchecked<1>(), flat.contexts.has_value()};
+  const auto& steps = in.steps;
   std::vector<ObservedTrajectory> out(static_cast<size_t>(trajectories));
   py::ssize_t k = 0;  // the next observation
   long long first_step = 0;
@@ -109,32 +166,7 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
                              ") is smaller than the one before it: observations go in step order");
       }
       for (; step < steps(m); ++step) t.step_begin.push_back(static_cast<int>(m - begin));
-      const std::string where = at(i, steps(m) - first_step);
-      if (symbols(m) < 0 || symbols(m) >= prior.num_symbols) {
-        throw InputError(where, "symbol " + std::to_string(symbols(m)) + " is not in [0, " +
-                                    std::to_string(prior.num_symbols - 1) + "]");
-      }
-      t.symbols.push_back(static_cast<int>(symbols(m)));
-      const Eigen::Index row = m - begin;
-      for (int j = 0; j < sources; ++j) {
-        const double v = eta(m, j);
-        if (!(v >= 0.0 && v <= 1.0))
-          throw InputError(where, "eta[" + std::to_string(j) + "] is " + std::to_string(v) + ", not in [0, 1]");
-        t.eta(row, j) = v;
-      }
-      const std::string wrong = normalise_eta(t.eta.row(row).data(), sources);
-      if (!wrong.empty()) throw InputError(where, "eta " + wrong);
-      if (flat.contexts) {
-        // -1: none (a trajectory gives contexts to all its observations or none, as in a problem file).
-        const long long c = contexts(m);
-        if (c < -1 || c >= kMaxContexts)
-          throw InputError(where, "context " + std::to_string(c) + " is not in [0, " +
-                                      std::to_string(kMaxContexts - 1) + "] (or -1: none)");
-        if ((c == -1) != (m == begin ? c == -1 : t.contexts.empty())) {
-          throw InputError(where, "some observations of the trajectory have a context and others not (-1)");
-        }
-        if (c >= 0) t.contexts.push_back(static_cast<int>(c));
-      }
+      add_observation(t, in, m, begin, at(i, steps(m) - first_step), prior);
     }
     for (; step < end_step; ++step) t.step_begin.push_back(static_cast<int>(k - begin));
     first_step = end_step;
@@ -184,6 +216,15 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
   }
   return py::make_tuple(symbols, eta, step_index, lengths, any_context ? py::object(contexts) : py::object(py::none()),
                         terminal);
+}
+
+FlatObservations flat_of(const py::tuple& t) {
+  if (t.size() != 6) throw InputError("observations", "internal: expected 6 parts");
+  FlatObservations f{t[0].cast<IntArray>(), t[1].cast<Array>(), t[2].cast<IntArray>(),
+                     t[3].cast<IntArray>(), std::nullopt,       std::nullopt};
+  if (!t[4].is_none()) f.contexts = t[4].cast<IntArray>();
+  if (!t[5].is_none()) f.ends_in_terminal = t[5].cast<std::vector<bool>>();
+  return f;
 }
 
 py::array_t<double> per_state_action(const Mdp& mdp, const Eigen::VectorXd& pairs) {

@@ -41,6 +41,8 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
                                                       const Mdp& mdp);
 // And back: (symbols, eta, step_index, lengths, contexts or None, ends_in_terminal).
 py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories);
+// The flat form from that tuple (the package passes observations so).
+FlatObservations flat_of(const py::tuple& t);
 
 // Per-pair vectors / matrices as (S, A) / (S, A, W) arrays (pair = s * A + a) and back.
 py::array_t<double> per_state_action(const Mdp& mdp, const Eigen::VectorXd& pairs);

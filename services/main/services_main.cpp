@@ -70,6 +70,57 @@ int serve(Bus& bus, Heartbeat& heartbeat, const Counters& counters) {
   return 0;
 }
 
+// hbirl-sim-driver's options for the onion scene's run (`config`: which confounding elements).
+void add_onion_run_options(CLI::App& app, SimulationOptions& sim, std::string& config) {
+  app.add_option("--config,-c", config,
+                 "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
+      ->capture_default_str();
+  app.add_option("--controlled-sorts", sim.controlled_sorts, "onion: sorts in the controlled run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--sorts", sim.sorts, "onion: demonstrated sorts")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")
+      ->check(CLI::Range(160, 4096))
+      ->capture_default_str();
+  app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")
+      ->check(CLI::Range(1, 240))
+      ->capture_default_str();
+}
+
+// ... and for a simulated sensor's run (the Gridworld's, a domain file's).
+void add_sensor_run_options(CLI::App& app, SimulationOptions& sim, std::string& eta) {
+  app.add_option("--confounders", sim.confounders, "gridworld: confounding elements |E|")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  app.add_option("--per-step", sim.per_step, "gridworld: observations per step")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  app.add_option("--trajectories", sim.trajectories, "gridworld: demonstrations")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--controlled-trajectories", sim.controlled_trajectories,
+                 "gridworld: trajectories of the controlled run")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--length", sim.length, "gridworld: steps per trajectory")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--eta", eta, "gridworld: the observations' eta, plausible, uniform or true")
+      ->check(CLI::IsMember({"plausible", "uniform", "true"}))
+      ->capture_default_str();
+}
+
+void apply_scene_and_eta(SimulationOptions& sim, const std::string& config, const std::string& eta) {
+  const onion::SceneConfig elements = onion::SceneConfig::parse(config, "--config");
+  sim.scene.blue_shirt_person = elements.blue_shirt_person;
+  sim.scene.other_onions = elements.other_onions;
+  sim.scene.foreground_person = elements.foreground_person;
+  sim.scene.mirror = elements.mirror;
+  sim.eta = eta == "uniform" ? EtaKind::kUniform : eta == "true" ? EtaKind::kTrue : EtaKind::kPlausible;
+}
+
 int sim_driver(int argc, char** argv) {
   CLI::App app(
       "hbirl-sim-driver: the simulator. Publishes a controlled run (no confounders, true states:\n"
@@ -105,47 +156,10 @@ int sim_driver(int argc, char** argv) {
                  "At most this many seconds to wait for the services downstream to be listening")
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
-  app.add_option("--config,-c", config,
-                 "onion: scene, all, controlled, or a list of blue-shirt, other-onions, foreground, mirror")
-      ->capture_default_str();
-  app.add_option("--controlled-sorts", sim.controlled_sorts, "onion: sorts in the controlled run")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--sorts", sim.sorts, "onion: demonstrated sorts")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")
-      ->check(CLI::Range(160, 4096))
-      ->capture_default_str();
-  app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")
-      ->check(CLI::Range(1, 240))
-      ->capture_default_str();
-  app.add_option("--confounders", sim.confounders, "gridworld: confounding elements |E|")
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  app.add_option("--per-step", sim.per_step, "gridworld: observations per step")
-      ->check(CLI::Range(0, 100000))
-      ->capture_default_str();
-  app.add_option("--trajectories", sim.trajectories, "gridworld: demonstrations")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--controlled-trajectories", sim.controlled_trajectories,
-                 "gridworld: trajectories of the controlled run")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--length", sim.length, "gridworld: steps per trajectory")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--eta", eta, "gridworld: the observations' eta, plausible, uniform or true")
-      ->check(CLI::IsMember({"plausible", "uniform", "true"}))
-      ->capture_default_str();
+  add_onion_run_options(app, sim, config);
+  add_sensor_run_options(app, sim, eta);
   CLI11_PARSE(app, argc, argv);
-  const onion::SceneConfig elements = onion::SceneConfig::parse(config, "--config");
-  sim.scene.blue_shirt_person = elements.blue_shirt_person;
-  sim.scene.other_onions = elements.other_onions;
-  sim.scene.foreground_person = elements.foreground_person;
-  sim.scene.mirror = elements.mirror;
-  sim.eta = eta == "uniform" ? EtaKind::kUniform : eta == "true" ? EtaKind::kTrue : EtaKind::kPlausible;
+  apply_scene_and_eta(sim, config, eta);
   const std::shared_ptr<const Domain> domain = app::open_domain_args(d, "hbirl");
   if (!domain) throw InputError("--domain", "give the domain to simulate: onion, gridworld or a domain file");
   if (print_listeners) {
@@ -254,19 +268,9 @@ int sampler(int argc, char** argv) {
   return 0;
 }
 
-int optimiser(int argc, char** argv) {
-  CLI::App app(
-      "hbirl-optimiser: collects the run (EPISODE, OBSERVATIONS, GROUND_TRUTH), learns the reward\n"
-      "with HiddenDataEM, the E-step on the sampler workers, and publishes EM_PROGRESS and REWARD.\n"
-      "Prints the result as JSON and exits.");
-  Common c;
-  add_common(app, c);
-  OptimiserOptions o;
-  std::string out;
-  app::DomainArgs d;
-  app::add_domain_options(&app, d,
-                          "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
-                          "the EPISODE markers name; a domain file must be given here)");
+// hbirl-optimiser's options for collecting the run and for its workers (the learning
+// settings come from app/learn_settings.hpp).
+void add_collection_options(CLI::App& app, OptimiserOptions& o, std::int64_t& max_dataset_mb, bool& no_spot_check) {
   app.add_option("--workers", o.workers, "Sampler workers to wait for before learning (0: compute here)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
@@ -294,16 +298,59 @@ int optimiser(int argc, char** argv) {
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
-  std::int64_t max_dataset_mb = o.max_dataset_bytes >> 20;
   app.add_option("--max-dataset-mb", max_dataset_mb,
                  "The most memory the run's observations may take, in MB; frames beyond it are refused (counted as\n"
                  "bad), whatever a sender publishes")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 20));
-  bool no_spot_check = false;
   app.add_flag("--no-spot-check", no_spot_check,
                "Do not recompute one worker-computed block per E-step pass here (by default a worker whose block\n"
                "differs from the optimiser's own is reported, gets no more work, and its blocks are computed here)");
+}
+
+// What hbirl-optimiser prints (README.md "Services and channels": the result JSON).
+nlohmann::json result_json(const OptimiserResult& r, const OptimiserOptions& o, const Counters& counters) {
+  nlohmann::json j;
+  add_learned_run(j, r, o.domain);
+  if (!r.incomplete.empty()) j["incomplete"] = r.incomplete;
+  j["frame_requests"] = r.frame_requests;
+  j["workers"] = r.workers;
+  j["estep"] = {{"requests", r.estep.requests},
+                {"remote_blocks", r.estep.remote_blocks},
+                {"local_blocks", r.estep.local_blocks},
+                {"retried_blocks", r.estep.retried_blocks},
+                {"stale", r.estep.stale},
+                {"duplicates", r.estep.duplicates},
+                {"unassigned_answers", r.estep.unassigned},
+                {"spot_checks", r.estep.spot_checks},
+                {"workers_caught_lying", r.estep.liars},
+                {"conflicting_answers", r.estep.conflicts},
+                {"workers_with_other_numerics", r.estep.other_numerics},
+                {"trial_passes", r.estep.trial_passes},
+                {"round_trip_seconds", r.estep.round_trip_s}};
+  j["bad_messages"] = counters.bad_messages;
+  j["other_run_messages"] = counters.other_run;
+  j["authenticated"] = counters.authenticated;
+  j["gaps"] = counters.gaps;
+  return j;
+}
+
+int optimiser(int argc, char** argv) {
+  CLI::App app(
+      "hbirl-optimiser: collects the run (EPISODE, OBSERVATIONS, GROUND_TRUTH), learns the reward\n"
+      "with HiddenDataEM, the E-step on the sampler workers, and publishes EM_PROGRESS and REWARD.\n"
+      "Prints the result as JSON and exits.");
+  Common c;
+  add_common(app, c);
+  OptimiserOptions o;
+  std::string out;
+  app::DomainArgs d;
+  app::add_domain_options(&app, d,
+                          "The domain learned on: onion, gridworld or a domain file (default: the built-in domain\n"
+                          "the EPISODE markers name; a domain file must be given here)");
+  std::int64_t max_dataset_mb = o.max_dataset_bytes >> 20;
+  bool no_spot_check = false;
+  add_collection_options(app, o, max_dataset_mb, no_spot_check);
   app::add_learn_settings(&app, o.learning, app::Front::kOptimiser);
   app.add_option("--out", out, "Also write the result JSON to this file");
   CLI11_PARSE(app, argc, argv);
@@ -335,41 +382,7 @@ int optimiser(int argc, char** argv) {
                  static_cast<long long>(counters.gaps));
     return 1;
   }
-  nlohmann::json j;
-  j["theta"] =
-      std::vector<double>(result->learned.theta.data(), result->learned.theta.data() + result->learned.theta.size());
-  j["domain"] = result->data.domain;
-  j["feature_names"] = domain_of(result->data, o.domain)->names(1).features;
-  if (const auto& w = result->data.true_weights)
-    j["true_weights"] = std::vector<double>(w->data(), w->data() + w->size());
-  if (result->learned.ile) j["ile"] = *result->learned.ile;
-  j["log_likelihood"] = result->learned.log_likelihood;
-  j["em_iterations"] = result->learned.em_iterations;
-  if (result->learned.eta) j["learned_eta"] = learned_eta_json(*result->learned.eta);
-  j["demonstrations"] = result->learned.trajectories;
-  j["controlled_episodes"] = result->data.controlled_observed.size();
-  j["dataset_digest"] = result->learned.digest;
-  j["missing_frames"] = result->missing_frames;
-  if (!result->incomplete.empty()) j["incomplete"] = result->incomplete;
-  j["frame_requests"] = result->frame_requests;
-  j["workers"] = result->workers;
-  j["estep"] = {{"requests", result->estep.requests},
-                {"remote_blocks", result->estep.remote_blocks},
-                {"local_blocks", result->estep.local_blocks},
-                {"retried_blocks", result->estep.retried_blocks},
-                {"stale", result->estep.stale},
-                {"duplicates", result->estep.duplicates},
-                {"unassigned_answers", result->estep.unassigned},
-                {"spot_checks", result->estep.spot_checks},
-                {"workers_caught_lying", result->estep.liars},
-                {"conflicting_answers", result->estep.conflicts},
-                {"workers_with_other_numerics", result->estep.other_numerics},
-                {"trial_passes", result->estep.trial_passes},
-                {"round_trip_seconds", result->estep.round_trip_s}};
-  j["bad_messages"] = counters.bad_messages;
-  j["other_run_messages"] = counters.other_run;
-  j["authenticated"] = counters.authenticated;
-  j["gaps"] = counters.gaps;
+  const nlohmann::json j = result_json(*result, o, counters);
   std::cout << j.dump(2) << std::endl;
   if (!out.empty()) {
     std::ofstream file(out);

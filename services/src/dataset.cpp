@@ -118,96 +118,104 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
   }
   switch (m.kind) {
     case hbirl::episode_marker_t::BEGIN_EPISODE:
-    case hbirl::episode_marker_t::BEGIN_STEP: {
-      Episode& e = episode(m.episode);
-      mark_controlled(e, m);
-      if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
-        throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
-      }
-      if (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) {
-        contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) +
-                     " frames a step, then " + std::to_string(m.frames_per_step));
-      }
-      if (e.frames_per_step != m.frames_per_step) {  // (a repeat changes nothing)
-        count(e, m.episode, -1);
-        e.frames_per_step = m.frames_per_step;
-        if (e.ended) recount(e);
-        count(e, m.episode, +1);
-      }
+    case hbirl::episode_marker_t::BEGIN_STEP:
+      on_begin_marker(m);
       break;
-    }
-    case hbirl::episode_marker_t::END_EPISODE: {
-      Episode& e = episode(m.episode);
-      if (m.num_steps < 1 || m.num_steps > kMaxSteps) {
-        throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
-      }
-      if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
-        throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
-      }
-      mark_controlled(e, m);
-      // The simulator repeats every end marker each second until the reward comes: a
-      // repeat leaves the counts as they are, without a walk over the episode's frames. An
-      // end marker that says otherwise than an earlier one contradicts the run.
-      if (e.ended &&
-          (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
-           e.ends_in_terminal != m.ends_in_terminal)) {
-        contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" +
-                     std::to_string(e.num_steps) + " then " + std::to_string(m.num_steps) + " steps)");
-      }
-      e.ends_in_terminal = m.ends_in_terminal;
-      if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) break;
-      count(e, m.episode, -1);
-      e.ended = true;
-      e.num_steps = m.num_steps;
-      e.frames_per_step = m.frames_per_step;
-      recount(e);
-      count(e, m.episode, +1);
+    case hbirl::episode_marker_t::END_EPISODE:
+      on_end_episode(m);
       break;
-    }
-    case hbirl::episode_marker_t::END_RUN: {
-      // A run ends after its episodes: an END_RUN before any ended is not this run's. Once
-      // one states the run's number of episodes (num_steps; 0: not stated), episodes 0 .. n-1
-      // are the run; a second END_RUN stating another number, or an episode at or past n
-      // (begun before or after), contradicts it (docs/RELIABILITY.md).
-      const bool any_ended =
-          watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
-      if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
-      if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
-      // Without a number, an END_RUN ends the run once the episodes begun have ended: on a bus
-      // anyone may publish to, a forger could end it in any pause of the sensor's (and repeat
-      // it to pass the confirmation). Believed only when every message is signed.
-      if (m.num_steps == 0 && counters_ && !counters_->authenticated) {
-        throw InputError("episode_marker.num_steps",
-                         "an END_RUN that states no number of episodes is believed only with a run key "
-                         "(anyone on an unauthenticated bus could end the run early with one)");
-      }
-      ++end_runs_heard_;
-      if (m.num_steps > 0) {
-        if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
-          const std::string why =
-              "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " + std::to_string(run_episodes_);
-          contradicted(why);
-          throw InputError("episode_marker.num_steps", why);
-        }
-        if (m.num_steps <= last_episode_) {
-          contradicted("END_RUN of " + std::to_string(m.num_steps) + " episodes after a message about episode " +
-                       std::to_string(last_episode_));
-        }
-        if (run_episodes_ == 0 && !watching_) {  // episodes from here on are out of the run: out of its counts too
-          for (const auto& [id, e] : episodes_) {
-            if (id < m.num_steps) continue;
-            count(e, id, -1);
-            ++outside_run_;
-          }
-        }
-        run_episodes_ = m.num_steps;
-      }
-      run_ended_ = true;
+    case hbirl::episode_marker_t::END_RUN:
+      on_end_run(m);
       break;
-    }
     default:
       throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
   }
+}
+
+void DatasetBuilder::on_begin_marker(const hbirl::episode_marker_t& m) {
+  Episode& e = episode(m.episode);
+  mark_controlled(e, m);
+  if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
+    throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+  }
+  if (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) {
+    contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) +
+                 " frames a step, then " + std::to_string(m.frames_per_step));
+  }
+  if (e.frames_per_step != m.frames_per_step) {  // (a repeat changes nothing)
+    count(e, m.episode, -1);
+    e.frames_per_step = m.frames_per_step;
+    if (e.ended) recount(e);
+    count(e, m.episode, +1);
+  }
+}
+
+void DatasetBuilder::on_end_episode(const hbirl::episode_marker_t& m) {
+  Episode& e = episode(m.episode);
+  if (m.num_steps < 1 || m.num_steps > kMaxSteps) {
+    throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
+  }
+  if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
+    throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+  }
+  mark_controlled(e, m);
+  // The simulator repeats every end marker each second until the reward comes: a
+  // repeat leaves the counts as they are, without a walk over the episode's frames. An
+  // end marker that says otherwise than an earlier one contradicts the run.
+  if (e.ended && (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
+                  e.ends_in_terminal != m.ends_in_terminal)) {
+    contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) +
+                 " then " + std::to_string(m.num_steps) + " steps)");
+  }
+  e.ends_in_terminal = m.ends_in_terminal;
+  if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) return;
+  count(e, m.episode, -1);
+  e.ended = true;
+  e.num_steps = m.num_steps;
+  e.frames_per_step = m.frames_per_step;
+  recount(e);
+  count(e, m.episode, +1);
+}
+
+void DatasetBuilder::on_end_run(const hbirl::episode_marker_t& m) {
+  // A run ends after its episodes: an END_RUN before any ended is not this run's. Once
+  // one states the run's number of episodes (num_steps; 0: not stated), episodes 0 .. n-1
+  // are the run; a second END_RUN stating another number, or an episode at or past n
+  // (begun before or after), contradicts it (docs/RELIABILITY.md).
+  const bool any_ended =
+      watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
+  if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
+  if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+  // Without a number, an END_RUN ends the run once the episodes begun have ended: on a bus
+  // anyone may publish to, a forger could end it in any pause of the sensor's (and repeat
+  // it to pass the confirmation). Believed only when every message is signed.
+  if (m.num_steps == 0 && counters_ && !counters_->authenticated) {
+    throw InputError("episode_marker.num_steps",
+                     "an END_RUN that states no number of episodes is believed only with a run key "
+                     "(anyone on an unauthenticated bus could end the run early with one)");
+  }
+  ++end_runs_heard_;
+  if (m.num_steps > 0) {
+    if (run_episodes_ > 0 && run_episodes_ != m.num_steps) {
+      const std::string why =
+          "END_RUN of " + std::to_string(m.num_steps) + " episodes after one of " + std::to_string(run_episodes_);
+      contradicted(why);
+      throw InputError("episode_marker.num_steps", why);
+    }
+    if (m.num_steps <= last_episode_) {
+      contradicted("END_RUN of " + std::to_string(m.num_steps) + " episodes after a message about episode " +
+                   std::to_string(last_episode_));
+    }
+    if (run_episodes_ == 0 && !watching_) {  // episodes from here on are out of the run: out of its counts too
+      for (const auto& [id, e] : episodes_) {
+        if (id < m.num_steps) continue;
+        count(e, id, -1);
+        ++outside_run_;
+      }
+    }
+    run_episodes_ = m.num_steps;
+  }
+  run_ended_ = true;
 }
 
 void DatasetBuilder::on_observations(const hbirl::observations_t& m) {

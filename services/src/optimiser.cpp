@@ -74,12 +74,150 @@ void size_unobserved(Dataset& data, const Domain& domain) {
   }
 }
 
-}  // namespace
+// Collects the run from the bus until it is complete. Collected until complete; then
+// confirmed: until END_RUN is heard again (or confirm_ms passes), what comes may still
+// contradict the run (an END_RUN forged early, then the sensor's next episode) or show it
+// was not complete after all (an END_RUN that stated no number of episodes, before the
+// sensor's next one began): then collected again.
+class RunCollector {
+ public:
+  RunCollector(Bus& bus, DatasetBuilder& builder, const OptimiserOptions& options, Counters& counters,
+               const std::function<bool()>& stop, const std::function<void(const std::string&)>& log)
+      : bus_(bus), builder_(builder), options_(options), counters_(counters), stop_(stop), log_(log) {}
 
-std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
-                                             const std::function<bool()>& stop,
-                                             const std::function<void(const std::string&)>& log,
-                                             const std::function<void()>& ready) {
+  // False when asked to stop.
+  bool collect() {
+    for (;;) {
+      if (!collect_until_complete()) return false;
+      if (stopped()) return false;
+      if (!incomplete_.empty() || ended_) break;  // learning from what came, as allowed (or all there is)
+      if (confirmed()) break;
+      say("the run went on after it seemed complete: collecting on");
+    }
+    return !stopped();
+  }
+
+  void check_contradiction() const {
+    if (!builder_.contradiction().empty()) {
+      throw RunFailed(
+          "the run contradicts itself: " + builder_.contradiction() +
+          " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
+    }
+  }
+
+  // What a run learned from as allowed lacks ("" when complete).
+  const std::string& incomplete() const { return incomplete_; }
+  // FRAME_REQUEST messages sent.
+  int frame_requests() const { return frame_requests_; }
+
+ private:
+  bool stopped() const { return stop_ && stop_(); }
+  void say(const std::string& s) const {
+    if (log_) log_(s);
+  }
+
+  // Until the builder is complete, the bus has ended or a quiet run is learned from as it
+  // is; false when asked to stop.
+  bool collect_until_complete() {
+    while (!builder_.complete()) {
+      if (stopped()) return false;
+      if (options_.beat) options_.beat("collecting");
+      if (bus_.handle(100) < 0) {
+        ended_ = true;
+        break;
+      }
+      check_contradiction();
+      if (builder_.frames() != frames_) {
+        frames_ = builder_.frames();
+        last_frame_ = Clock::now();
+      }
+      if (builder_.run_ended() && !announced_end_) {
+        say("end of the run announced; " + std::to_string(builder_.frames()) + " frames observed so far");
+        announced_end_ = true;
+      }
+      ask_for_lost_frames();
+      if (quiet_too_long()) break;
+    }
+    return true;
+  }
+
+  // Frames lost on the way: ask for them again (a few hundred per request), once a second.
+  void ask_for_lost_frames() {
+    if (builder_.run_ended() && Clock::now() - last_frame_ > std::chrono::milliseconds(options_.resend_after_ms) &&
+        Clock::now() - last_request_ > std::chrono::milliseconds(options_.resend_after_ms)) {
+      const auto missing = builder_.missing_frame_keys(500);
+      if (!missing.empty()) {
+        hbirl::frame_request_t r{};
+        r.utime = builder_.build_utime();
+        r.requester = "optimiser";
+        r.n = static_cast<std::int32_t>(missing.size());
+        for (const auto& [episode, step, frame] : missing) {
+          r.episode.push_back(episode);
+          r.step.push_back(step);
+          r.frame.push_back(frame);
+        }
+        publish(bus_, channels::kFrameRequest, r, counters_);
+        say("asked for " + std::to_string(missing.size()) + " lost frames again");
+        ++frame_requests_;
+      }
+      last_request_ = Clock::now();
+    }
+  }
+
+  // Nothing for too long after the end of the run: the run fails (RunFailed) or, with
+  // allow_incomplete, is learned from as it is (incomplete_ says what it lacks).
+  bool quiet_too_long() {
+    const auto quiet = Clock::now() - last_frame_;
+    if (!(builder_.run_ended() &&
+          quiet > std::chrono::milliseconds(options_.allow_incomplete ? options_.quiet_ms
+                                                                      : options_.incomplete_after_ms))) {
+      return false;
+    }
+    incomplete_ = std::to_string(builder_.missing_frames()) + " frame(s) and " +
+                  std::to_string(builder_.missing_truth()) + " ground-truth step(s) missing, " +
+                  std::to_string(builder_.unfinished_episodes()) + " episode(s) without their end";
+    const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
+    if (!options_.allow_incomplete) {
+      throw RunFailed(
+          "the run is incomplete: " + incomplete_ + ", and nothing came for " + waited +
+          " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
+    }
+    say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete_ +
+        "), as allowed");
+    return true;
+  }
+
+  // Whether the run stayed complete (or the bus ended) until END_RUN was heard again or
+  // confirm_ms passed.
+  bool confirmed() {
+    const std::int64_t heard = builder_.end_runs_heard();
+    const auto until = Clock::now() + std::chrono::milliseconds(options_.confirm_ms);
+    while (!ended_ && builder_.complete() && builder_.end_runs_heard() == heard && Clock::now() < until && !stopped()) {
+      if (options_.beat) options_.beat("collecting");
+      ended_ = bus_.handle(50) < 0;
+      check_contradiction();
+    }
+    return builder_.complete() || ended_;
+  }
+
+  Bus& bus_;
+  DatasetBuilder& builder_;
+  const OptimiserOptions& options_;
+  Counters& counters_;
+  const std::function<bool()>& stop_;
+  const std::function<void(const std::string&)>& log_;
+  std::int64_t frames_ = -1;
+  Clock::time_point last_frame_ = Clock::now();
+  Clock::time_point last_request_ = Clock::now();
+  int frame_requests_ = 0;
+  bool announced_end_ = false;
+  std::string incomplete_;
+  bool ended_ = false;  // the bus has (a log at its end)
+};
+
+// A builder of the run's data set, subscribed to the bus (expecting the domain's sizes when
+// the domain is given).
+std::unique_ptr<DatasetBuilder> subscribed_builder(Bus& bus, const OptimiserOptions& options, Counters& counters) {
   auto builder = std::make_unique<DatasetBuilder>();
   if (options.domain) {
     const std::optional<ObservationPrior> stated = options.domain->stated_prior();
@@ -89,105 +227,72 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   }
   builder->limit(options.max_dataset_bytes);
   builder->subscribe(bus, counters);
+  return builder;
+}
+
+// EM_PROGRESS after an EM iteration: its log-likelihood and theta, theta's ILE when the true
+// weights are known, the E-step's retried and local blocks, and the seconds since `start`.
+void publish_progress(Bus& bus, Counters& counters, const Mdp& mdp, std::int64_t utime, int iteration, double ll,
+                      const Eigen::VectorXd& theta, const ObservationPrior& alpha,
+                      const std::optional<Eigen::VectorXd>& truth, const BusBlockExecutor& executor,
+                      Clock::time_point start) {
+  hbirl::em_progress_t p{};
+  p.utime = utime;
+  p.restart = 0;
+  p.iteration = iteration;
+  p.log_likelihood = ll;
+  p.prior_strength = alpha.learn && alpha.update == AlphaUpdate::kPosterior ? alpha.strength : 0.0;
+  p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
+  p.num_features = static_cast<std::int32_t>(theta.size());
+  p.theta = lcm_vector(theta);
+  const auto s = executor.stats();
+  p.retries = static_cast<std::int32_t>(s.retried_blocks);
+  p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
+  p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  publish(bus, channels::kEmProgress, p, counters);
+}
+
+// REWARD: the learned theta, its soft policy and, when known, the true weights and the ILE.
+void publish_reward(Bus& bus, Counters& counters, const Mdp& mdp, const OptimiserResult& result, std::int64_t utime,
+                    const std::optional<Eigen::VectorXd>& truth) {
+  hbirl::reward_t r{};
+  r.utime = utime;
+  r.domain = result.data.domain;
+  r.final = true;
+  r.num_features = static_cast<std::int32_t>(result.learned.theta.size());
+  r.theta = lcm_vector(result.learned.theta);
+  r.num_true = truth ? static_cast<std::int32_t>(truth->size()) : 0;
+  if (truth) r.true_theta = lcm_vector(*truth);
+  const SoftSolution policy = soft_value_iteration(mdp, mdp.features * result.learned.theta);
+  r.num_states = mdp.num_states;
+  r.num_actions = mdp.num_actions;
+  r.policy = lcm_rows(RowMatrix::Map(policy.policy.data(), mdp.num_states, mdp.num_actions));  // pairs are s * A + a
+  r.log_likelihood = result.learned.log_likelihood;
+  r.ile = result.learned.ile.value_or(-1.0);
+  publish(bus, channels::kReward, r, counters);
+}
+
+}  // namespace
+
+std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& options, Counters& counters,
+                                             const std::function<bool()>& stop,
+                                             const std::function<void(const std::string&)>& log,
+                                             const std::function<void()>& ready) {
+  const std::unique_ptr<DatasetBuilder> builder = subscribed_builder(bus, options, counters);
   if (ready) ready();
   const auto say = [&log](const std::string& s) {
     if (log) log(s);
   };
-  std::int64_t frames = -1;
-  auto last_frame = Clock::now();
-  auto last_request = Clock::now();
-  int result_requests = 0;
-  bool announced_end = false;
-  std::string incomplete;
-  const auto check_contradiction = [&builder] {
-    if (!builder->contradiction().empty()) {
-      throw RunFailed(
-          "the run contradicts itself: " + builder->contradiction() +
-          " (a forged or stray message? without a run key anyone on the bus can send one; docs/RELIABILITY.md)");
-    }
-  };
-  // Collected until complete; then confirmed: until END_RUN is heard again (or confirm_ms
-  // passes), what comes may still contradict the run (an END_RUN forged early, then the
-  // sensor's next episode) or show it was not complete after all (an END_RUN that stated no
-  // number of episodes, before the sensor's next one began): then collected again.
-  bool ended = false;  // the bus has (a log at its end)
-  for (;;) {
-    while (!builder->complete()) {
-      if (stop && stop()) return std::nullopt;
-      if (options.beat) options.beat("collecting");
-      if (bus.handle(100) < 0) {
-        ended = true;
-        break;
-      }
-      check_contradiction();
-      if (builder->frames() != frames) {
-        frames = builder->frames();
-        last_frame = Clock::now();
-      }
-      if (builder->run_ended() && !announced_end) {
-        say("end of the run announced; " + std::to_string(builder->frames()) + " frames observed so far");
-        announced_end = true;
-      }
-      // Frames lost on the way: ask for them again (a few hundred per request), once a second.
-      if (builder->run_ended() && Clock::now() - last_frame > std::chrono::milliseconds(options.resend_after_ms) &&
-          Clock::now() - last_request > std::chrono::milliseconds(options.resend_after_ms)) {
-        const auto missing = builder->missing_frame_keys(500);
-        if (!missing.empty()) {
-          hbirl::frame_request_t r{};
-          r.utime = builder->build_utime();
-          r.requester = "optimiser";
-          r.n = static_cast<std::int32_t>(missing.size());
-          for (const auto& [episode, step, frame] : missing) {
-            r.episode.push_back(episode);
-            r.step.push_back(step);
-            r.frame.push_back(frame);
-          }
-          publish(bus, channels::kFrameRequest, r, counters);
-          say("asked for " + std::to_string(missing.size()) + " lost frames again");
-          ++result_requests;
-        }
-        last_request = Clock::now();
-      }
-      const auto quiet = Clock::now() - last_frame;
-      if (builder->run_ended() &&
-          quiet >
-              std::chrono::milliseconds(options.allow_incomplete ? options.quiet_ms : options.incomplete_after_ms)) {
-        incomplete = std::to_string(builder->missing_frames()) + " frame(s) and " +
-                     std::to_string(builder->missing_truth()) + " ground-truth step(s) missing, " +
-                     std::to_string(builder->unfinished_episodes()) + " episode(s) without their end";
-        const std::string waited = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(quiet).count());
-        if (!options.allow_incomplete) {
-          throw RunFailed(
-              "the run is incomplete: " + incomplete + ", and nothing came for " + waited +
-              " s though asked for again (a service that stopped or hung?); --allow-incomplete learns from what came");
-        }
-        say("no frames for " + waited + " s after the end of the run: learning from what came (" + incomplete +
-            "), as allowed");
-        break;
-      }
-    }
-    if (stop && stop()) return std::nullopt;
-    if (!incomplete.empty() || ended) break;  // learning from what came, as allowed (or all there is)
-    const std::int64_t heard = builder->end_runs_heard();
-    const auto until = Clock::now() + std::chrono::milliseconds(options.confirm_ms);
-    while (!ended && builder->complete() && builder->end_runs_heard() == heard && Clock::now() < until &&
-           !(stop && stop())) {
-      if (options.beat) options.beat("collecting");
-      ended = bus.handle(50) < 0;
-      check_contradiction();
-    }
-    if (builder->complete() || ended) break;
-    say("the run went on after it seemed complete: collecting on");
-  }
-  if (stop && stop()) return std::nullopt;
+  RunCollector collector(bus, *builder, options, counters, stop, log);
+  if (!collector.collect()) return std::nullopt;
   OptimiserResult result;
   result.missing_frames = builder->missing_frames();
-  result.incomplete = incomplete;
+  result.incomplete = collector.incomplete();
   const std::int64_t frames_observed = builder->frames();
   result.data = builder->take();
   // From here the builder keeps nothing: it watches what still comes for a contradiction
   // (checked before the reward is published); frames are not read while learning.
-  result.frame_requests = result_requests;
+  result.frame_requests = collector.frame_requests();
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
   size_unobserved(result.data, *domain);
   const Mdp& mdp = domain->mdp();
@@ -216,20 +321,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
           if (stop && stop()) throw Stopped();  // also when computing alone
           if (options.beat) options.beat("learning");
           publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep, eta);
-          hbirl::em_progress_t p{};
-          p.utime = utime;
-          p.restart = 0;
-          p.iteration = iteration;
-          p.log_likelihood = ll;
-          p.prior_strength = alpha.learn && alpha.update == AlphaUpdate::kPosterior ? alpha.strength : 0.0;
-          p.ile = truth ? inverse_learning_error(mdp, *truth, theta).ile : -1.0;
-          p.num_features = static_cast<std::int32_t>(theta.size());
-          p.theta = lcm_vector(theta);
-          const auto s = executor->stats();
-          p.retries = static_cast<std::int32_t>(s.retried_blocks);
-          p.local_blocks = static_cast<std::int32_t>(s.local_blocks);
-          p.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-          publish(bus, channels::kEmProgress, p, counters);
+          publish_progress(bus, counters, mdp, utime, iteration, ll, theta, alpha, truth, *executor, start);
         });
   } catch (const Stopped&) {
     say("stopped while learning");
@@ -239,22 +331,8 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   // What came while learning (and is waiting now) may contradict the run: then no reward.
   for (int k = 0; k < 1000000 && bus.handle(0) > 0; ++k) {
   }
-  check_contradiction();
-  hbirl::reward_t r{};
-  r.utime = utime;
-  r.domain = result.data.domain;
-  r.final = true;
-  r.num_features = static_cast<std::int32_t>(result.learned.theta.size());
-  r.theta = lcm_vector(result.learned.theta);
-  r.num_true = truth ? static_cast<std::int32_t>(truth->size()) : 0;
-  if (truth) r.true_theta = lcm_vector(*truth);
-  const SoftSolution policy = soft_value_iteration(mdp, mdp.features * result.learned.theta);
-  r.num_states = mdp.num_states;
-  r.num_actions = mdp.num_actions;
-  r.policy = lcm_rows(RowMatrix::Map(policy.policy.data(), mdp.num_states, mdp.num_actions));  // pairs are s * A + a
-  r.log_likelihood = result.learned.log_likelihood;
-  r.ile = result.learned.ile.value_or(-1.0);
-  publish(bus, channels::kReward, r, counters);
+  collector.check_contradiction();
+  publish_reward(bus, counters, mdp, result, utime, truth);
   return result;
 }
 

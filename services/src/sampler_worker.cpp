@@ -27,6 +27,126 @@ constexpr size_t kMaxIncomingBlocks = 4096;
 // this long (the rest may have been lost: the optimiser re-asks them elsewhere).
 constexpr auto kQuietBeforeServing = std::chrono::milliseconds(200);
 
+// The held blocks a request assigns this worker, in block order -- local block k is the
+// k-th of them, so every one but the last must be a whole block -- with the watched
+// trajectory's local index (-1: not here) and how many trajectories they hold.
+struct LocalBlocks {
+  std::vector<std::pair<int, std::uint64_t>> blocks;  // (block, digest)
+  int watch = -1;
+  size_t trajectories = 0;
+};
+
+LocalBlocks local_blocks(const hbirl::estep_request_t& m, const std::map<int, std::uint64_t>& assigned,
+                         const std::map<std::uint64_t, std::vector<ObservedTrajectory>>& held) {
+  LocalBlocks out;
+  for (const auto& [b, digest] : assigned) {
+    const auto it = held.find(digest);
+    if (it == held.end()) continue;
+    if (!out.blocks.empty() &&
+        static_cast<int>(held.at(out.blocks.back().second).size()) != ObservationEStep::kBlockSize) {
+      throw InputError("estep_request.block_digest", "puts a short block before others");
+    }
+    if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b &&
+        m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
+      out.watch = static_cast<int>(out.trajectories) + m.watch % ObservationEStep::kBlockSize;
+    }
+    out.blocks.emplace_back(b, digest);
+    out.trajectories += it->second.size();
+  }
+  return out;
+}
+
+// The local blocks' trajectories, checked against the request's W symbols and 1 + E sources.
+std::vector<ObservedTrajectory> local_block_data(const LocalBlocks& local,
+                                                 const std::map<std::uint64_t, std::vector<ObservedTrajectory>>& held,
+                                                 int W, int E) {
+  std::vector<ObservedTrajectory> data;
+  data.reserve(local.trajectories);
+  for (const auto& [b, digest] : local.blocks) {
+    for (const auto& t : held.at(digest)) {
+      for (int w : t.symbols) {
+        if (w >= W) throw InputError("estep_request.num_symbols", "is smaller than the blocks' alphabet");
+      }
+      if (t.num_observations() > 0 && t.eta.cols() != 1 + E)
+        throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
+      data.push_back(t);
+    }
+  }
+  return data;
+}
+
+// The worker never refines alpha or eta: only the prior's shape matters here. With
+// learned eta the trajectories carry the optimiser's contexts.
+ObservationPrior worker_prior(int P, int W, int E, bool learned_eta) {
+  ObservationPrior prior;
+  prior.learn_eta = learned_eta;
+  prior.num_symbols = W;
+  prior.num_confounders = E;
+  prior.subject_alpha = Eigen::MatrixXd::Ones(P, W);
+  prior.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
+  return prior;
+}
+
+// The request's observation model (W symbols), finite and >= 0.
+ObservationModel request_model(const hbirl::estep_request_t& m, int W) {
+  ObservationModel model;
+  model.subject = eigen_rows(m.subject_o, W);
+  model.confounders = eigen_rows(m.confounder_o, W);
+  if (!model.subject.allFinite() || !model.confounders.allFinite() || (model.subject.array() < 0).any() ||
+      (model.confounders.array() < 0).any()) {
+    throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
+  }
+  return model;
+}
+
+// The request's learned eta per context, for blocks with num_contexts contexts.
+RowMatrix request_context_eta(const hbirl::estep_request_t& m, int num_contexts) {
+  if (m.num_contexts < num_contexts) {
+    throw InputError("estep_request.num_contexts", std::to_string(m.num_contexts) + ", the blocks have " +
+                                                       std::to_string(num_contexts) + " contexts");
+  }
+  RowMatrix eta = eigen_rows<RowMatrix>(m.context_eta, m.num_sources);
+  if (!eta.allFinite() || (eta.array() < 0).any())
+    throw InputError("estep_request.context_eta", "must be finite and >= 0");
+  return eta;
+}
+
+// The answer for one block (its statistics s, computed since `start`) to request m.
+hbirl::estep_result_t block_result(const hbirl::estep_request_t& m, const EStepStatistics& s, int P, int block,
+                                   std::uint64_t digest, const std::string& worker, bool lying,
+                                   Clock::time_point start) {
+  const int W = m.num_symbols, E = m.num_confounders;
+  const bool learned_eta = m.num_contexts > 0;
+  hbirl::estep_result_t r{};
+  r.utime = m.utime;
+  r.request_id = m.request_id;
+  r.worker = worker;
+  r.block_digest = static_cast<std::int64_t>(digest);
+  r.block = block;
+  r.num_pairs = P;
+  r.counts = lcm_vector(s.counts);
+  if (lying && !r.counts.empty()) r.counts[0] += 1.0;
+  r.num_symbols = W;
+  r.num_confounders = E;
+  r.alpha_subject = lcm_rows(s.alpha_dot.subject);
+  r.alpha_confounder = lcm_rows(s.alpha_dot.confounders);
+  r.log_likelihood = s.log_likelihood;
+  r.impossible = s.impossible;
+  r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  r.num_watched_steps = static_cast<std::int32_t>(s.watched.rows());
+  r.watched = lcm_rows(s.watched);
+  r.watched_log_likelihood = s.watched_log_likelihood;
+  r.num_contexts = learned_eta ? m.num_contexts : 0;
+  r.num_sources = learned_eta ? m.num_sources : 0;
+  for (Eigen::Index c = 0; c < s.source_counts.rows(); ++c) {  // only the contexts the block has
+    if ((s.source_counts.row(c).array() == 0.0).all()) continue;
+    r.counted_context.push_back(static_cast<std::int32_t>(c));
+    r.source_counts.emplace_back(s.source_counts.row(c).begin(), s.source_counts.row(c).end());
+  }
+  r.num_counted = static_cast<std::int32_t>(r.counted_context.size());
+  return r;
+}
+
 }  // namespace
 
 SamplerWorker::SamplerWorker(Bus& bus, std::string id, Counters& counters, std::int64_t max_dataset_bytes)
@@ -277,114 +397,40 @@ void SamplerWorker::serve(bool all_here_only) {
   if (ready.empty() || (all_here_only && ready.size() < pending_.size())) return;
   const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
   const bool learned_eta = m.num_contexts > 0;
-  // The E-step over the held blocks it is assigned, in block order: local block k is the
-  // k-th of them, so every local block but the last must be a whole one.
-  std::vector<std::pair<int, std::uint64_t>> blocks;
-  int watch = -1;
-  size_t trajectories = 0;
-  for (const auto& [b, digest] : assigned_) {
-    const auto it = held_.find(digest);
-    if (it == held_.end()) continue;
-    if (!blocks.empty() && static_cast<int>(held_.at(blocks.back().second).size()) != ObservationEStep::kBlockSize) {
-      throw InputError("estep_request.block_digest", "puts a short block before others");
-    }
-    if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b &&
-        m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
-      watch = static_cast<int>(trajectories) + m.watch % ObservationEStep::kBlockSize;
-    }
-    blocks.emplace_back(b, digest);
-    trajectories += it->second.size();
-  }
-  const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), watch, learned_eta);
+  const LocalBlocks local = local_blocks(m, assigned_, held_);
+  const std::vector<std::pair<int, std::uint64_t>>& blocks = local.blocks;
+  const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), local.watch, learned_eta);
   if (!estep_ || blocks != estep_blocks_ || shape != estep_shape_) {
-    std::vector<ObservedTrajectory> data;
-    data.reserve(trajectories);
-    for (const auto& [b, digest] : blocks) {
-      for (const auto& t : held_.at(digest)) {
-        for (int w : t.symbols) {
-          if (w >= W) throw InputError("estep_request.num_symbols", "is smaller than the blocks' alphabet");
-        }
-        if (t.num_observations() > 0 && t.eta.cols() != 1 + E)
-          throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
-        data.push_back(t);
-      }
-    }
-    // The worker never refines alpha or eta: only the prior's shape matters here. With
-    // learned eta the trajectories carry the optimiser's contexts.
-    ObservationPrior prior;
-    prior.learn_eta = learned_eta;
-    prior.num_symbols = W;
-    prior.num_confounders = E;
-    prior.subject_alpha = Eigen::MatrixXd::Ones(P, W);
-    prior.confounder_alpha = Eigen::MatrixXd::Ones(E, W);
+    std::vector<ObservedTrajectory> data = local_block_data(local, held_, W, E);
     ObservationEStepOptions options;
     options.max_kinds = m.max_kinds;
     options.kind_table = static_cast<bool>(m.kind_table);
-    options.watch = watch;
+    options.watch = local.watch;
     estep_.reset();
     estep_blocks_.clear();
-    estep_.emplace(*mdp_, std::move(data), prior, options);
+    estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta), options);
     estep_blocks_ = blocks;
     estep_shape_ = shape;
   }
   SoftSolution policy;
   policy.log_policy = eigen_vector(m.log_policy);
   policy.policy = eigen_vector(m.policy);
-  ObservationModel model;
-  model.subject = eigen_rows(m.subject_o, W);
-  model.confounders = eigen_rows(m.confounder_o, W);
-  if (!model.subject.allFinite() || !model.confounders.allFinite() || (model.subject.array() < 0).any() ||
-      (model.confounders.array() < 0).any()) {
-    throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
-  }
+  const ObservationModel model = request_model(m, W);
   std::optional<RowMatrix> eta;
-  if (learned_eta) {
-    if (m.num_contexts < estep_->num_contexts()) {
-      throw InputError("estep_request.num_contexts", std::to_string(m.num_contexts) + ", the blocks have " +
-                                                         std::to_string(estep_->num_contexts()) + " contexts");
-    }
-    eta = eigen_rows<RowMatrix>(m.context_eta, m.num_sources);
-    if (!eta->allFinite() || (eta->array() < 0).any())
-      throw InputError("estep_request.context_eta", "must be finite and >= 0");
-  }
+  if (learned_eta) eta = request_context_eta(m, estep_->num_contexts());
   // One block at a time, each answer sent as soon as it is ready.
   for (const int block : ready) {
     pending_.erase(block);
-    const auto local = std::find_if(blocks.begin(), blocks.end(), [block](const auto& x) { return x.first == block; });
+    const auto local_block =
+        std::find_if(blocks.begin(), blocks.end(), [block](const auto& x) { return x.first == block; });
     const auto start = Clock::now();
     const EStepStatistics s =
         estep_
             ->block_statistics(policy, model, static_cast<std::uint64_t>(m.seed),
-                               {static_cast<int>(local - blocks.begin())}, 1, eta ? &*eta : nullptr)
+                               {static_cast<int>(local_block - blocks.begin())}, 1, eta ? &*eta : nullptr)
             .front();
-    hbirl::estep_result_t r{};
-    r.utime = m.utime;
-    r.request_id = m.request_id;
-    r.worker = id_;
-    r.block_digest = static_cast<std::int64_t>(local->second);
-    r.block = block;
-    r.num_pairs = P;
-    r.counts = lcm_vector(s.counts);
-    if (lying_ && !r.counts.empty()) r.counts[0] += 1.0;
-    r.num_symbols = W;
-    r.num_confounders = E;
-    r.alpha_subject = lcm_rows(s.alpha_dot.subject);
-    r.alpha_confounder = lcm_rows(s.alpha_dot.confounders);
-    r.log_likelihood = s.log_likelihood;
-    r.impossible = s.impossible;
-    r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    r.num_watched_steps = static_cast<std::int32_t>(s.watched.rows());
-    r.watched = lcm_rows(s.watched);
-    r.watched_log_likelihood = s.watched_log_likelihood;
-    r.num_contexts = learned_eta ? m.num_contexts : 0;
-    r.num_sources = learned_eta ? m.num_sources : 0;
-    for (Eigen::Index c = 0; c < s.source_counts.rows(); ++c) {  // only the contexts the block has
-      if ((s.source_counts.row(c).array() == 0.0).all()) continue;
-      r.counted_context.push_back(static_cast<std::int32_t>(c));
-      r.source_counts.emplace_back(s.source_counts.row(c).begin(), s.source_counts.row(c).end());
-    }
-    r.num_counted = static_cast<std::int32_t>(r.counted_context.size());
-    publish(bus_, channels::kEStepResult, r, counters_);
+    publish(bus_, channels::kEStepResult, block_result(m, s, P, block, local_block->second, id_, lying_, start),
+            counters_);
     ++blocks_computed_;
   }
 }

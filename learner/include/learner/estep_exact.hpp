@@ -192,6 +192,12 @@ class ExactEngine final : public PosteriorEngine {
   // observations"): alpha_hat_, beta_hat_, emission_, scale_, normaliser_. NaN when a
   // message would leave the range where that is exact (then log_passes decides).
   double scaled_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
+  // Its parts: the forward pass (the sum of the steps' log scales; -inf when no pair can
+  // emit a step's observations), the last step's backward message (the log normaliser), and
+  // the backward pass (false when it would leave the exact range). NaN: not exact here.
+  double scaled_forward(const SoftSolution& policy, const ObservedTrajectory& trajectory);
+  double scaled_end(const ObservedTrajectory& trajectory);
+  bool scaled_backward(const SoftSolution& policy, int T);
   // The same in log space (log_alpha_, log_beta_): exact for any spread of emissions.
   double log_passes(const SoftSolution& policy, const ObservedTrajectory& trajectory, bool with_backward);
   // The logs of the transitions and the start, made on the first need for log_passes

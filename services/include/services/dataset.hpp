@@ -117,6 +117,10 @@ class DatasetBuilder {
   void add_episode(Dataset& d, int id, const Episode& e) const;  // if it ended and belongs to the run
   static void finish_dataset(Dataset& d);
   void mark_controlled(Episode& e, const hbirl::episode_marker_t& m);
+  // on_marker by kind: BEGIN_EPISODE or BEGIN_STEP, END_EPISODE, END_RUN.
+  void on_begin_marker(const hbirl::episode_marker_t& m);
+  void on_end_episode(const hbirl::episode_marker_t& m);
+  void on_end_run(const hbirl::episode_marker_t& m);
   // Episode `id` belongs to the run: any, until END_RUN states how many it had.
   bool in_run(int id) const { return run_episodes_ == 0 || id < run_episodes_; }
 

@@ -16,6 +16,7 @@
 #include "services/dataset.hpp"
 #include "services/estep_service.hpp"
 #include "services/learning.hpp"
+#include "problem/json_format.hpp"
 #include "sim_driver/registry/domain.hpp"
 
 namespace hbirl::services {
@@ -93,8 +94,31 @@ OptimiserResult collect_from_log(const RecordedRun& run, Counters& counters);
 OptimiserResult learn_from_log(const RecordedRun& run, const app::LearnSettings& settings, Counters& counters,
                                std::shared_ptr<const Domain> domain = nullptr);
 
+// What a learned run reports, in hbirl-optimiser's result and hbirl learn --log's alike
+// (README.md "Services and channels"): the domain, theta and how it was learned, and the
+// data it came from. `domain` as domain_of's `given`. Json: nlohmann::json or ordered_json.
+template <class Json>
+void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Domain> domain);
+
 // The domain a data set was collected in: `given` when not null (the markers must name
 // it), else the built-in domain the markers name. Throws InputError("episode_marker.domain", ...).
 std::shared_ptr<const Domain> domain_of(const Dataset& data, std::shared_ptr<const Domain> given);
+
+template <class Json>
+void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Domain> domain) {
+  const auto vector = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+  j["domain"] = r.data.domain;
+  j["feature_names"] = domain_of(r.data, std::move(domain))->names(1).features;
+  j["theta"] = vector(r.learned.theta);
+  if (r.data.true_weights) j["true_weights"] = vector(*r.data.true_weights);
+  if (r.learned.ile) j["ile"] = *r.learned.ile;
+  j["log_likelihood"] = r.learned.log_likelihood;
+  j["em_iterations"] = r.learned.em_iterations;
+  if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta);
+  j["demonstrations"] = r.learned.trajectories;
+  j["controlled_episodes"] = r.data.controlled_observed.size();
+  j["dataset_digest"] = r.learned.digest;
+  j["missing_frames"] = r.missing_frames;
+}
 
 }  // namespace hbirl::services

@@ -1,4 +1,4 @@
-// Recorded runs of the service set in Python (hbirl.read_log): app/recorded_problem.hpp,
+// Recorded runs of the service set in Python (hbirl.read_log, bindings.hpp): app/recorded_problem.hpp,
 // in process -- the same problem `hbirl export` writes.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -10,9 +10,7 @@
 
 #include "app/recorded_problem.hpp"
 #include "learner/input_error.hpp"
-#include "recording.hpp"
-
-namespace py = pybind11;
+#include "bindings.hpp"
 
 namespace hbirl::python {
 
@@ -30,8 +28,7 @@ Problem read_log(const std::string& path, const std::optional<std::string>& key_
     std::shared_ptr<const Domain> domain;
     if (domain_file) domain = open_domain(*domain_file, {}, &warnings);
     try {
-      r = app::read_recorded_problem({path, key_file.value_or(""), allow_incomplete}, domain, prior,
-                                     "hbirl.read_log");
+      r = app::read_recorded_problem({path, key_file.value_or(""), allow_incomplete}, domain, prior, "hbirl.read_log");
     } catch (const InputError& e) {  // named by the recording first, as load_problem names its file
       throw InputError(path + (e.field().empty() ? "" : ": " + e.field()), e.message());
     }
