@@ -265,21 +265,8 @@ void DashboardState::set_domain(const std::string& domain) {
 }
 
 void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
-  if (m.episode < 0 || m.step < 0 || m.frame < 0)
-    throw InputError("camera_frame.episode", "episode, step and frame must be >= 0");
-  if (m.encoding != "png" && m.encoding != "jpeg")
-    throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
-  if (m.size <= 0 || m.size > static_cast<int>(m.data.size()))
-    throw InputError("camera_frame.size", "does not match its data");
-  // frame_png() decodes it: the image's header must state the message's size, within
-  // perception's limits, or the decoder allocates what a hostile header says
-  // (services/frame_header.hpp).
-  const auto stated = services::encoded_frame_size(m.data.data(), static_cast<size_t>(m.size), m.encoding);
-  if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096 || !stated || stated->first != m.width ||
-      stated->second != m.height) {
-    throw InputError("camera_frame.data",
-                     "is not a " + m.encoding + " image of the message's width x height (1x1 to 4096x4096)");
-  }
+  // frame_png() decodes it: validate(camera_frame_t) has checked that the image's header
+  // states the message's size, within perception's limits (services/messages.hpp).
   const std::lock_guard<std::mutex> lock(mutex_);
   Pending& p = pending_[{m.episode, m.step, m.frame}];
   p.image.assign(m.data.begin(), m.data.begin() + m.size);
@@ -297,14 +284,7 @@ void DashboardState::on_camera(const hbirl::camera_frame_t& m) {
   changed();
 }
 
-void DashboardState::on_detections(const hbirl::detections_t& m) {
-  if (m.n < 0) throw InputError("detections.n", "is negative");
-  for (int i = 0; i < m.n; ++i) {
-    const std::int8_t c = m.cls[static_cast<size_t>(i)];
-    if (c != hbirl::detections_t::CLASS_GRIPPER && c != hbirl::detections_t::CLASS_ONION) {
-      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
-    }
-  }
+void DashboardState::on_detections(const hbirl::detections_t& m) {  // validate(detections_t) has checked it
   const std::lock_guard<std::mutex> lock(mutex_);
   const auto it = pending_.find({m.episode, m.step, m.frame});
   if (it != pending_.end()) it->second.detections = m;  // else its frame was never seen (or is long gone)
@@ -330,8 +310,7 @@ void DashboardState::on_observations(const hbirl::observations_t& m) {
   changed();
 }
 
-void DashboardState::on_marker(const hbirl::episode_marker_t& m) {
-  if (m.episode < 0) throw InputError("episode_marker.episode", "is negative");
+void DashboardState::on_marker(const hbirl::episode_marker_t& m) {  // validate(episode_marker_t) has checked it
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   switch (m.kind) {
@@ -355,13 +334,7 @@ void DashboardState::on_marker(const hbirl::episode_marker_t& m) {
 }
 
 void DashboardState::on_truth(const hbirl::ground_truth_t& m) {
-  if (m.episode < 0 || m.step < 0 || m.step >= kMaxSteps || m.state < 0 || m.action < 0) {
-    throw InputError("ground_truth.step", "episode, step, state and action must be >= 0");
-  }
-  if (m.num_features < 0 || m.num_features > kMaxSymbols) throw InputError("ground_truth.num_features", "out of range");
-  for (double w : m.true_weights) {
-    if (!std::isfinite(w)) throw InputError("ground_truth.true_weights", "must be finite");
-  }
+  // validate(ground_truth_t) has checked it (services/messages.hpp).
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   truth_[m.episode][m.step] = {m.state, m.action};

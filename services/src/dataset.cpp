@@ -29,9 +29,7 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
                 bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
 }
 
-namespace {
-constexpr int kMaxFeatures = 100000;
-}  // namespace
+namespace {}  // namespace
 
 void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states,
                             int num_actions) {
@@ -100,6 +98,7 @@ void DatasetBuilder::mark_controlled(Episode& e, const hbirl::episode_marker_t& 
 }
 
 void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
+  // validate(episode_marker_t) has checked the marker itself (messages.hpp); here, the run.
   if (counters_) counters_->gaps += marker_seq_.see(m.seq);
   if (!expected_domain_.empty() && m.domain != expected_domain_) {
     throw InputError("episode_marker.domain",
@@ -135,9 +134,6 @@ void DatasetBuilder::on_marker(const hbirl::episode_marker_t& m) {
 void DatasetBuilder::on_begin_marker(const hbirl::episode_marker_t& m) {
   Episode& e = episode(m.episode);
   mark_controlled(e, m);
-  if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
-    throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
-  }
   if (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) {
     contradicted("episode " + std::to_string(m.episode) + " stated " + std::to_string(e.frames_per_step) +
                  " frames a step, then " + std::to_string(m.frames_per_step));
@@ -152,12 +148,6 @@ void DatasetBuilder::on_begin_marker(const hbirl::episode_marker_t& m) {
 
 void DatasetBuilder::on_end_episode(const hbirl::episode_marker_t& m) {
   Episode& e = episode(m.episode);
-  if (m.num_steps < 1 || m.num_steps > kMaxSteps) {
-    throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
-  }
-  if (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep) {
-    throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
-  }
   mark_controlled(e, m);
   // The simulator repeats every end marker each second until the reward comes: a
   // repeat leaves the counts as they are, without a walk over the episode's frames. An
@@ -185,7 +175,6 @@ void DatasetBuilder::on_end_run(const hbirl::episode_marker_t& m) {
   const bool any_ended =
       watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
   if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
-  if (m.num_steps < 0) throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
   // Without a number, an END_RUN ends the run once the episodes begun have ended: on a bus
   // anyone may publish to, a forger could end it in any pause of the sensor's (and repeat
   // it to pass the confirmation). Believed only when every message is signed.
@@ -276,10 +265,8 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
 }
 
 void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
+  // validate(ground_truth_t) has checked the message itself (messages.hpp); here, the run.
   if (counters_) counters_->gaps += truth_seq_.see(m.seq);
-  if (m.step < 0 || m.state < 0 || m.action < 0)
-    throw InputError("ground_truth.step", "step, state and action must be >= 0");
-  if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
   if (expected_states_ > 0 && (m.state >= expected_states_ || m.action >= expected_actions_)) {
     throw InputError("ground_truth.state", "state " + std::to_string(m.state) + " or action " +
                                                std::to_string(m.action) + " is not the domain's");
@@ -289,9 +276,6 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   if (!expected_domain_.empty() && m.domain != expected_domain_) {
     throw InputError("ground_truth.domain",
                      "'" + m.domain + "' is not the domain learned on ('" + expected_domain_ + "')");
-  }
-  if (m.num_features < 0 || m.num_features > kMaxFeatures) {
-    throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
   }
   if (watching_) {
     watch_truth(m);
@@ -313,7 +297,6 @@ void DatasetBuilder::on_truth(const hbirl::ground_truth_t& m) {
   // leave the ILE unknown; the steps above are kept either way.
   if (m.num_features > 0 && !weights_conflict_) {
     Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(m.true_weights.data(), m.num_features);
-    if (!w.allFinite()) throw InputError("ground_truth.true_weights", "must be finite");
     if (true_weights_ && (true_weights_->size() != w.size() || *true_weights_ != w)) {
       weights_conflict_ = true;
       true_weights_.reset();

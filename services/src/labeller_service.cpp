@@ -21,17 +21,12 @@ void LabellerService::on_detections(const hbirl::detections_t& m) {
   }
   if (m.height != camera_.height(m.width))
     throw InputError("detections.height", "is not the camera's height for this width (its aspect ratio)");
+  // validate(detections_t) has checked every blob (messages.hpp); the camera's own frame
+  // size is checked above.
   std::vector<perception::Detection> found(static_cast<size_t>(m.n));
   for (int i = 0; i < m.n; ++i) {
     auto& d = found[static_cast<size_t>(i)];
     const auto k = static_cast<size_t>(i);
-    if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
-      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
-    }
-    if (!(m.x[k] >= 0.0f && m.x[k] < m.width) || !(m.y[k] >= 0.0f && m.y[k] < m.height) || m.area[k] <= 0 ||
-        !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
-      throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
-    }
     d.cls = m.cls[k] == hbirl::detections_t::CLASS_GRIPPER ? perception::BlobClass::kGripper
                                                            : perception::BlobClass::kOnion;
     d.x = m.x[k];

@@ -1,10 +1,12 @@
 #include "services/messages.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "learner/input_error.hpp"
 #include "learner/observations.hpp"
+#include "services/frame_header.hpp"
 
 namespace hbirl::services {
 
@@ -30,6 +32,76 @@ void validate(const hbirl::observations_t& m) {
     std::vector<double> eta = m.eta[static_cast<size_t>(i)];
     const std::string wrong = normalise_eta(eta.data(), m.num_sources);
     if (!wrong.empty()) throw InputError("observations.eta[" + std::to_string(i) + "]", wrong);
+  }
+}
+
+void validate(const hbirl::camera_frame_t& m) {
+  if (m.episode < 0) throw InputError("camera_frame.episode", "is negative");
+  if (m.step < 0 || m.frame < 0 || m.step >= kMaxSteps || m.frame >= kMaxFramesPerStep) {
+    throw InputError("camera_frame.step", "step or frame out of range");
+  }
+  if (m.encoding != "png" && m.encoding != "jpeg")
+    throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
+  if (m.size <= 0 || m.size > static_cast<std::int64_t>(m.data.size()))
+    throw InputError("camera_frame.size", "does not match its data");
+  if (m.width < 1 || m.height < 1 || m.width > kMaxFrameSide || m.height > kMaxFrameSide) {
+    throw InputError("camera_frame.width", "the frame must be between 1x1 and " + std::to_string(kMaxFrameSide) + "x" +
+                                               std::to_string(kMaxFrameSide));
+  }
+  const auto stated = encoded_frame_size(m.data.data(), static_cast<size_t>(m.size), m.encoding);
+  if (!stated) throw InputError("camera_frame.data", "does not begin as " + m.encoding + " does");
+  if (stated->first != m.width || stated->second != m.height) {
+    throw InputError("camera_frame.width", "the image's header says " + std::to_string(stated->first) + "x" +
+                                               std::to_string(stated->second) + ", the message says " +
+                                               std::to_string(m.width) + "x" + std::to_string(m.height));
+  }
+}
+
+void validate(const hbirl::detections_t& m) {
+  if (m.n < 0) throw InputError("detections.n", "is negative");
+  if (m.width < 1 || m.height < 1 || m.width > kMaxFrameSide || m.height > kMaxFrameSide) {
+    throw InputError("detections.width", "the frame must be between 1x1 and " + std::to_string(kMaxFrameSide) + "x" +
+                                             std::to_string(kMaxFrameSide));
+  }
+  for (int i = 0; i < m.n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    if (m.cls[k] != hbirl::detections_t::CLASS_GRIPPER && m.cls[k] != hbirl::detections_t::CLASS_ONION) {
+      throw InputError("detections.cls[" + std::to_string(i) + "]", "is not a blob class");
+    }
+    if (!(m.x[k] >= 0.0f && m.x[k] < m.width) || !(m.y[k] >= 0.0f && m.y[k] < m.height) || m.area[k] <= 0 ||
+        !(m.dark_share[k] >= 0.0f && m.dark_share[k] <= 1.0f)) {
+      throw InputError("detections[" + std::to_string(i) + "]", "position, area or dark share out of range");
+    }
+  }
+}
+
+void validate(const hbirl::episode_marker_t& m) {
+  using Marker = hbirl::episode_marker_t;
+  if (m.kind != Marker::BEGIN_EPISODE && m.kind != Marker::BEGIN_STEP && m.kind != Marker::END_EPISODE &&
+      m.kind != Marker::END_RUN) {
+    throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
+  }
+  if (m.episode < 0) throw InputError("episode_marker.episode", "is negative");
+  if (m.kind == Marker::BEGIN_STEP && (m.step < 0 || m.step >= kMaxSteps))
+    throw InputError("episode_marker.step", "must be in [0, " + std::to_string(kMaxSteps) + ")");
+  if (m.kind != Marker::END_RUN && (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep)) {
+    throw InputError("episode_marker.frames_per_step", "must be in [1, " + std::to_string(kMaxFramesPerStep) + "]");
+  }
+  if (m.kind == Marker::END_EPISODE && (m.num_steps < 1 || m.num_steps > kMaxSteps))
+    throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
+  if (m.kind == Marker::END_RUN && m.num_steps < 0)
+    throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+}
+
+void validate(const hbirl::ground_truth_t& m) {
+  if (m.episode < 0 || m.step < 0 || m.state < 0 || m.action < 0)
+    throw InputError("ground_truth.step", "episode, step, state and action must be >= 0");
+  if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
+  if (m.num_features < 0 || m.num_features > kMaxFeatures) {
+    throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");
+  }
+  for (double w : m.true_weights) {
+    if (!std::isfinite(w)) throw InputError("ground_truth.true_weights", "must be finite");
   }
 }
 

@@ -3,7 +3,7 @@
 
 #include "learner/input_error.hpp"
 #include "perception/image_codec.hpp"
-#include "services/frame_header.hpp"
+#include "services/messages.hpp"
 
 namespace hbirl::services {
 
@@ -16,21 +16,10 @@ PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), 
 
 void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {
   counters_.gaps += frames_.see(m.seq);
-  if (m.encoding != "png" && m.encoding != "jpeg")
-    throw InputError("camera_frame.encoding", "'" + m.encoding + "' (png or jpeg)");
-  if (m.size <= 0) throw InputError("camera_frame.data", "is empty");
-  if (m.width < 1 || m.height < 1 || m.width > 4096 || m.height > 4096) {
-    throw InputError("camera_frame.width", "the frame must be between 1x1 and 4096x4096");  // before decoding it
-  }
-  // The image's own header too: it is what the decoder allocates for (frame_header.hpp).
-  const auto stated = encoded_frame_size(m.data.data(), m.data.size(), m.encoding);
-  if (!stated) throw InputError("camera_frame.data", "does not begin as " + m.encoding + " does");
-  if (stated->first != m.width || stated->second != m.height) {
-    throw InputError("camera_frame.width", "the image's header says " + std::to_string(stated->first) + "x" +
-                                               std::to_string(stated->second) + ", the message says " +
-                                               std::to_string(m.width) + "x" + std::to_string(m.height));
-  }
-  const cv::Mat frame = perception::decode_image(m.data.data(), m.data.size(), 4096, 4096);
+  // validate(camera_frame_t) has checked the message and its image's header (messages.hpp):
+  // the decoder allocates only what that states.
+  const cv::Mat frame =
+      perception::decode_image(m.data.data(), static_cast<size_t>(m.size), kMaxFrameSide, kMaxFrameSide);
   if (frame.empty()) throw InputError("camera_frame.data", "does not decode as " + m.encoding);
   if (frame.cols != m.width || frame.rows != m.height) {
     throw InputError("camera_frame.width", "the image is " + std::to_string(frame.cols) + "x" +

@@ -344,6 +344,7 @@ TEST(DashboardState, BadMessagesOnTheBusAreCounted) {
   e.episode = 2;
   e.kind = hbirl::episode_marker_t::BEGIN_STEP;
   e.step = 4;
+  e.frames_per_step = 1;
   services::publish(sender, services::channels::kEpisode, e, out);
   while (bus.handle(0) > 0) {
   }

@@ -39,7 +39,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   counters.service = "fuzz";
   counters.quiet = true;
   PerceptionService perception(bus, counters);
-  LabellerService labeller(bus, counters, *builtin_domain("onion")->camera());
+  LabellerService labeller(bus, counters, *hbirl::builtin_domain("onion")->camera());
   hbirl::dashboard::DashboardState dashboard;
   dashboard.subscribe(bus, counters);
   // The dashboard keeps frames of the onion domain (its marker makes the page's names).

@@ -955,11 +955,11 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
           m.controlled = !e.controlled;
           m.num_steps = 1;
           EXPECT_THROW(b.on_marker(m), InputError);
-        } else if (kind == 10) {  // frames per step out of range: refused (the episode is begun)
+        } else if (kind == 10) {  // frames per step out of range: refused before any reader (messages.hpp)
           m.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
           m.frames_per_step = 0;
-          EXPECT_THROW(b.on_marker(m), InputError);
-          e.marked = true;  // (it was marked before the check)
+          EXPECT_THROW(validate(m), InputError);
+          if (!known) sent.erase(id);  // the builder never heard of it
         } else if (kind == 8) {
           m.kind = hbirl::episode_marker_t::END_EPISODE;
           m.num_steps = static_cast<int>(1 + rng.uniform_int(4));
@@ -1033,12 +1033,12 @@ TEST(DatasetBuilder, TrueWeightsThatDisagreeLeaveTheIleUnknownAndKeepTheSteps) {
   EXPECT_FALSE(d.true_weights.has_value());
   ASSERT_EQ(d.controlled_truth.size(), 1u);
   EXPECT_EQ(d.controlled_truth[0].size(), 2u);
-  DatasetBuilder fresh;
-  fresh.on_marker(m);
+  // Weights that are not numbers never reach a reader (validate, messages.hpp).
   t.true_weights = {0, std::numeric_limits<double>::infinity(), 0, 0};
-  EXPECT_THROW(fresh.on_truth(t), InputError);
+  EXPECT_THROW(validate(t), InputError);
+  t.true_weights = {0, 0, 0, 1};
   t.num_features = -1;
-  EXPECT_THROW(fresh.on_truth(t), InputError);
+  EXPECT_THROW(validate(t), InputError);
 }
 
 // Corrupt inputs to the services: counted, and the services keep going.

@@ -6,6 +6,10 @@
 // domain's alphabet, what the dashboard can draw). Each throws InputError naming the field.
 // Declare every validate() here: typed subscribe finds those declared before it (messages
 // are in namespace hbirl, these in hbirl::services, so argument-dependent lookup does not).
+#include "hbirl/camera_frame_t.hpp"
+#include "hbirl/detections_t.hpp"
+#include "hbirl/episode_marker_t.hpp"
+#include "hbirl/ground_truth_t.hpp"
 #include "hbirl/observations_t.hpp"
 
 namespace hbirl::services {
@@ -13,10 +17,25 @@ namespace hbirl::services {
 // Frames of a step and steps of an episode a message may name.
 constexpr int kMaxSteps = 100000;         // per episode
 constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
+constexpr int kMaxFeatures = 100000;      // of the true weights a ground truth carries
+constexpr int kMaxFrameSide = 4096;       // a camera frame's width and height, in pixels
 
 // At least one symbol and one source; episode, step and frame in range; every symbol in
 // the alphabet; every eta a distribution (normalise_eta's tolerance); contexts none or one
 // per observation, each in [0, kMaxContexts).
 void validate(const hbirl::observations_t& m);
+// Episode, step and frame in range; png or jpeg; a size its data holds; 1x1 to
+// kMaxFrameSide a side; an image whose own header states that width and height (what a
+// decoder allocates for, frame_header.hpp).
+void validate(const hbirl::camera_frame_t& m);
+// A frame's size as a camera frame's; every blob of a known class, its centroid in the
+// frame, a positive area and a dark share in [0, 1].
+void validate(const hbirl::detections_t& m);
+// A known kind; the episode, and for a step's marker the step, in range; frames per step
+// in [1, kMaxFramesPerStep] (but END_RUN); an episode's end in [1, kMaxSteps] steps; END_RUN's
+// count of episodes not negative.
+void validate(const hbirl::episode_marker_t& m);
+// Episode, step, state and action in range; at most kMaxFeatures true weights, all finite.
+void validate(const hbirl::ground_truth_t& m);
 
 }  // namespace hbirl::services

@@ -84,7 +84,6 @@ class SamplerWorker {
   std::optional<hbirl::estep_request_t> request_;
   std::uint64_t request_run_ = 0;  // the run it was signed for (keyed_bus.hpp), whose answers it gets
   std::set<int> pending_;
-  bool said_missing_ = false;  // told the optimiser (a heartbeat) which blocks it lacks
   std::uint64_t last_dataset_digest_ = 0;
   // The E-step over the blocks it computes, and what it was made for.
   std::optional<ObservationEStep> estep_;
