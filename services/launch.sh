@@ -371,7 +371,8 @@ done
 if [ "$no_sim" = 0 ]; then
   for service in $listeners; do
     case "$service" in
-      perception|labeller) start "$service" "$build/hbirl-$service" --url "$url" "${key_args[@]}" ;;
+      perception) start perception "$build/hbirl-perception" --url "$url" "${key_args[@]}" ;;
+      labeller) start labeller "$build/hbirl-labeller" --url "$url" "${domain_args[@]}" "${key_args[@]}" ;;
     esac
   done
 fi

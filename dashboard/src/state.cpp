@@ -334,7 +334,8 @@ void DashboardState::on_marker(const hbirl::episode_marker_t& m) {  // validate(
 }
 
 void DashboardState::on_truth(const hbirl::ground_truth_t& m) {
-  // validate(ground_truth_t) has checked it (services/messages.hpp).
+  // validate(ground_truth_t) has checked it (services/messages.hpp); what the page shows is bounded here.
+  if (m.num_features > kMaxSymbols) throw InputError("ground_truth.num_features", "more than the page shows (10000)");
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   truth_[m.episode][m.step] = {m.state, m.action};

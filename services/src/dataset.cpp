@@ -29,8 +29,6 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
                 bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
 }
 
-namespace {}  // namespace
-
 void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states,
                             int num_actions) {
   expected_domain_ = domain;

@@ -13,7 +13,7 @@ namespace hbirl::services {
 void validate(const hbirl::observations_t& m) {
   if (m.num_symbols < 1) throw InputError("observations.num_symbols", "must be at least 1");
   if (m.num_sources < 1) throw InputError("observations.num_sources", "must be at least 1");
-  if (m.episode < 0) throw InputError("observations.episode", "is negative");
+  if (m.episode < 0 || m.episode >= kMaxEpisodes) throw InputError("observations.episode", "out of range");
   if (m.step < 0 || m.frame < 0 || m.step >= kMaxSteps || m.frame >= kMaxFramesPerStep) {
     throw InputError("observations.step", "step or frame out of range");
   }
@@ -36,7 +36,7 @@ void validate(const hbirl::observations_t& m) {
 }
 
 void validate(const hbirl::camera_frame_t& m) {
-  if (m.episode < 0) throw InputError("camera_frame.episode", "is negative");
+  if (m.episode < 0 || m.episode >= kMaxEpisodes) throw InputError("camera_frame.episode", "out of range");
   if (m.step < 0 || m.frame < 0 || m.step >= kMaxSteps || m.frame >= kMaxFramesPerStep) {
     throw InputError("camera_frame.step", "step or frame out of range");
   }
@@ -58,6 +58,10 @@ void validate(const hbirl::camera_frame_t& m) {
 }
 
 void validate(const hbirl::detections_t& m) {
+  if (m.episode < 0 || m.episode >= kMaxEpisodes) throw InputError("detections.episode", "out of range");
+  if (m.step < 0 || m.frame < 0 || m.step >= kMaxSteps || m.frame >= kMaxFramesPerStep) {
+    throw InputError("detections.step", "step or frame out of range");
+  }
   if (m.n < 0) throw InputError("detections.n", "is negative");
   if (m.width < 1 || m.height < 1 || m.width > kMaxFrameSide || m.height > kMaxFrameSide) {
     throw InputError("detections.width", "the frame must be between 1x1 and " + std::to_string(kMaxFrameSide) + "x" +
@@ -81,7 +85,7 @@ void validate(const hbirl::episode_marker_t& m) {
       m.kind != Marker::END_RUN) {
     throw InputError("episode_marker.kind", std::to_string(m.kind) + " is not a marker kind");
   }
-  if (m.episode < 0) throw InputError("episode_marker.episode", "is negative");
+  if (m.episode < 0 || m.episode >= kMaxEpisodes) throw InputError("episode_marker.episode", "out of range");
   if (m.kind == Marker::BEGIN_STEP && (m.step < 0 || m.step >= kMaxSteps))
     throw InputError("episode_marker.step", "must be in [0, " + std::to_string(kMaxSteps) + ")");
   if (m.kind != Marker::END_RUN && (m.frames_per_step < 1 || m.frames_per_step > kMaxFramesPerStep)) {
@@ -96,6 +100,7 @@ void validate(const hbirl::episode_marker_t& m) {
 void validate(const hbirl::ground_truth_t& m) {
   if (m.episode < 0 || m.step < 0 || m.state < 0 || m.action < 0)
     throw InputError("ground_truth.step", "episode, step, state and action must be >= 0");
+  if (m.episode >= kMaxEpisodes) throw InputError("ground_truth.episode", "out of range");
   if (m.step >= kMaxSteps) throw InputError("ground_truth.step", "out of range");
   if (m.num_features < 0 || m.num_features > kMaxFeatures) {
     throw InputError("ground_truth.num_features", "must be in [0, " + std::to_string(kMaxFeatures) + "]");

@@ -15,6 +15,7 @@
 namespace hbirl::services {
 
 // Frames of a step and steps of an episode a message may name.
+constexpr int kMaxEpisodes = 10000000;    // per run
 constexpr int kMaxSteps = 100000;         // per episode
 constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
 constexpr int kMaxFeatures = 100000;      // of the true weights a ground truth carries
