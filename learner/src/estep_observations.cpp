@@ -269,11 +269,18 @@ double ObservationEStep::log_eta_prior_term(const RowMatrix& eta) const {
   return sum;
 }
 
-double ObservationEStep::data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
+EStepResult ObservationEStep::fixed_model_statistics(const SoftSolution& policy, const EStepState& state) const {
   const ObservationPrior& alpha = state.alpha ? *state.alpha : prior_;
   const std::optional<RowMatrix> eta = learned_eta(alpha);
-  return statistics(policy, dirichlet_mean(alpha), Rng(state.seed, state.calls).next_u64(), eta ? &*eta : nullptr)
-      .log_likelihood;
+  EStepStatistics s =
+      statistics(policy, dirichlet_mean(alpha), Rng(state.seed, state.calls).next_u64(), eta ? &*eta : nullptr);
+  EStepResult r;
+  r.counts = std::move(s.counts);
+  r.log_likelihood = s.log_likelihood;
+  r.objective = s.log_likelihood;
+  r.impossible_trajectories = s.impossible;
+  r.mcmc = s.mcmc;
+  return r;
 }
 
 std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSolution& policy,
@@ -304,7 +311,8 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     const ObservationKinds kinds = *observation_kinds(one, std::numeric_limits<int>::max());
     EStepStatistics own = EStepStatistics::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
     // By kinds when the engine can, as the E-step's own pass: a log per kind, not per observation.
-    if (!engine->accumulate_by_kind(policy, model, one, 0, 1, kinds, kind_emissions(model, kinds), -1, own)) {
+    if (!options_.engine.exact ||
+        !engine->accumulate_by_kind(policy, model, one, 0, 1, kinds, kind_emissions(model, kinds), -1, own)) {
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectory, rng, own);
     }

@@ -68,11 +68,16 @@ class EStep {
   virtual bool depends_on_policy() const = 0;
   // Number of trajectories and their lengths (the horizons of the data).
   virtual std::vector<int> trajectory_lengths() const = 0;
-  // log Pr(data | theta, O) at a point EM returned, with O the mean of the learned
-  // observation model (no refinement): what a user compares between models.
-  virtual double data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
+  // The posterior's expected visits and log Pr(data | theta, O) at this policy, with O the
+  // mean of the state's observation model held fixed (no refinement): the likelihood of
+  // theta alone, and what its gradient is made of (reward_posterior.hpp).
+  virtual EStepResult fixed_model_statistics(const SoftSolution& policy, const EStepState& state) const {
     EStepState copy = state;
-    return expect(policy, copy).log_likelihood;
+    return expect(policy, copy);
+  }
+  // Its log-likelihood at a point EM returned: what a user compares between models.
+  double data_log_likelihood(const SoftSolution& policy, const EStepState& state) const {
+    return fixed_model_statistics(policy, state).log_likelihood;
   }
   // Nothing when the E-step has no hyper-parameter to choose at this state.
   virtual std::optional<StrengthChoice> choose_strength(const SoftSolution&, const EStepState&) const {

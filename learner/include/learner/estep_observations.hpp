@@ -86,7 +86,7 @@ class ObservationEStep final : public EStep {
   EStepState initial_state(std::uint64_t seed) const override;
   EStepResult expect(const SoftSolution& policy, EStepState& state) const override;
   bool depends_on_policy() const override { return true; }
-  double data_log_likelihood(const SoftSolution& policy, const EStepState& state) const override;
+  EStepResult fixed_model_statistics(const SoftSolution& policy, const EStepState& state) const override;
   // The posterior update's subject prior strength s, when automatic: for every s on
   // prior_strength_grid() and each trajectory i, log Pr(trajectory i | theta, O_{-i}(s))
   // with O_{-i}(s) the mean of the Dirichlet posterior from the prior and the other
