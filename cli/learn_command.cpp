@@ -117,6 +117,13 @@ nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app:
   return om;
 }
 
+// Importance weights that few draws carry: the posterior's numbers are rough.
+void warn_if_rough(const RewardPosterior& p) {
+  if (p.effective_samples >= 0.1 * static_cast<double>(p.samples.rows())) return;
+  std::cerr << "hbirl learn: warning: the posterior's draws are worth " << p.effective_samples << " of "
+            << p.samples.rows() << " (the Laplace proposal fits it poorly): its numbers are rough\n";
+}
+
 // "restarts": each restart's start, result and how its EM and M-step ended.
 nlohmann::ordered_json restarts_json(const LearnResult& learned) {
   nlohmann::ordered_json restarts = nlohmann::ordered_json::array();
@@ -184,6 +191,10 @@ int run_learn(const LearnArgs& args) {
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) add_true_weight_metrics(out, problem, learned.theta, args);
   if (observed != nullptr) out["observation_model"] = learned_observation_model_json(mdp, learned_all, best);
+  if (learned_all.posterior) {
+    out["posterior"] = app::posterior_summary(learned_all);
+    warn_if_rough(*learned_all.posterior);
+  }
   out["selected_restart"] = learned.selected_restart;
   out["restarts"] = restarts_json(learned);
   warn_unconverged_restart(learned, args, *estep);

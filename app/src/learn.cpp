@@ -37,6 +37,21 @@ void check_possible(const Mdp& mdp, const std::vector<ObservedTrajectory>& obser
   throw InputError(where, "impossible under the observation model: " + impossible->why);
 }
 
+// The posterior over theta at what EM learned (the selected restart's observation model),
+// when the settings ask for draws, and the confidence in the learned policy it gives.
+void draw_posterior(const Mdp& mdp, const LearnSettings& settings, Learned& out) {
+  if (settings.posterior.samples == 0) return;
+  if (out.observed != nullptr && !out.observed->options().engine.exact) {
+    throw InputError("posterior_samples", "needs the exact engine: the MCMC E-step's likelihood of theta is noisy");
+  }
+  EStepState state = out.estep->initial_state(out.seed);
+  if (out.observed != nullptr) state.alpha = out.refined;
+  RewardPosteriorOptions options = settings.posterior;
+  options.seed = settings.em.seed;
+  out.posterior = sample_reward_posterior(mdp, *out.estep, state, out.em.theta, options, settings.em.soft_vi);
+  out.confidence = policy_confidence(mdp, *out.posterior, out.em.theta);
+}
+
 }  // namespace
 
 void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior) {
@@ -83,6 +98,7 @@ Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observation
   out.model = dirichlet_mean(out.refined);
   out.learned_eta = estep->learned_eta_report(out.refined);
   out.estep = std::move(estep);
+  draw_posterior(mdp, settings, out);
   return out;
 }
 
@@ -92,6 +108,7 @@ Learned learn_from_truth(const Mdp& mdp, std::vector<Trajectory> truth, const Le
   out.seed = settings.em.seed;
   out.estep = std::make_unique<TruthEStep>(mdp, std::move(truth));
   out.em = learn_reward(mdp, *out.estep, em_options(settings), report_of(hooks, nullptr));
+  draw_posterior(mdp, settings, out);
   return out;
 }
 
@@ -105,6 +122,26 @@ EStepStatistics Learned::final_statistics(const Mdp& mdp) const {
   }
   const std::optional<RowMatrix> eta = observed->learned_eta(refined);
   return observed->statistics(policy, model, seed, eta ? &*eta : nullptr);
+}
+
+nlohmann::ordered_json posterior_summary(const Learned& learned) {
+  const RewardPosterior& p = *learned.posterior;
+  const auto list = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+  nlohmann::ordered_json j;
+  j["confidence"] = learned.confidence->near_optimal;
+  j["probability_optimal"] = learned.confidence->optimal;
+  j["expected_ile_relative"] = learned.confidence->expected_relative_ile;
+  j["mean"] = list(p.mean());
+  const Eigen::VectorXd lo = p.quantile(0.05), hi = p.quantile(0.95);
+  nlohmann::ordered_json intervals = nlohmann::ordered_json::array();
+  for (Eigen::Index k = 0; k < lo.size(); ++k) intervals.push_back({lo[k], hi[k]});
+  j["interval_90"] = intervals;
+  j["mode"] = list(p.mode);
+  j["prior_scale"] = p.prior_scale;
+  j["samples"] = p.samples.rows();
+  j["effective_samples"] = p.effective_samples;
+  j["evaluations"] = p.evaluations;
+  return j;
 }
 
 }  // namespace hbirl::app

@@ -168,6 +168,25 @@ void add_em_settings(std::vector<Setting>& schema) {
                                      1e6, [](LearnSettings& l) -> int& { return l.max_alpha_iterations; })));
 }
 
+// The posterior over theta (learner/reward_posterior.hpp), drawn after EM when asked. Not on
+// the optimiser yet: it reports a point.
+void add_posterior_settings(std::vector<Setting>& schema) {
+  Setting samples = integer<int>(
+      "posterior_samples", "--posterior-samples",
+      "Draw this many samples of theta from its posterior (importance sampling around the Laplace approximation, "
+      "the observation model held at what EM learned; 0: none) and report the confidence in the learned policy, "
+      "credible intervals and the expected ILE (docs/MODEL.md \"The posterior over theta\"); the exact engine only",
+      0, 1e6, [](LearnSettings& l) -> int& { return l.posterior.samples; });
+  samples.optimiser = false;
+  schema.push_back(std::move(samples));
+  Setting scale = number("prior_scale", "--prior-scale",
+                         "The posterior's Gaussian prior on each weight of theta: its standard deviation (0: chosen "
+                         "from the data by the Laplace evidence over 0.25 .. 128)",
+                         0, false, [](LearnSettings& l) -> double& { return l.posterior.prior_scale; });
+  scale.optimiser = false;
+  schema.push_back(std::move(scale));
+}
+
 // How the observation model and eta are learned; unset, as the prior says (unset_means).
 void add_prior_settings(std::vector<Setting>& schema) {
   const auto add = [&schema](Setting s) { schema.push_back(std::move(s)); };
@@ -235,6 +254,7 @@ std::vector<Setting> make_schema() {
   add_optimiser_settings(schema);
   add_em_settings(schema);
   add_prior_settings(schema);
+  add_posterior_settings(schema);
   return schema;
 }
 

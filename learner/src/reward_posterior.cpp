@@ -9,6 +9,7 @@
 
 #include "learner/input_error.hpp"
 #include "learner/maxcausalent.hpp"
+#include "learner/metrics.hpp"
 #include "learner/optimize.hpp"
 #include "learner/rng.hpp"
 
@@ -19,7 +20,7 @@ namespace {
 // 1 / sigma^2; 0 for a flat prior (sigma = inf: the likelihood alone).
 double prior_precision(double sigma) { return std::isfinite(sigma) ? 1.0 / (sigma * sigma) : 0.0; }
 
-double standard_normal(Rng& rng) {  // Box-Muller; one of the pair
+double standard_normal(Rng& rng) {       // Box-Muller; one of the pair
   const double u = 1.0 - rng.uniform();  // (0, 1]
   return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * 3.14159265358979323846 * rng.uniform());
 }
@@ -174,7 +175,8 @@ RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, cons
   out.mode = posterior_mode(f, theta_hat, data_size(estep));
   const auto k = theta_hat.size();
   Eigen::MatrixXd root;  // Sigma = root root^T
-  const Eigen::MatrixXd precision = floored(-hessian_by_differences(f, out.mode), prior_precision(out.prior_scale), &root);
+  const Eigen::MatrixXd precision =
+      floored(-hessian_by_differences(f, out.mode), prior_precision(out.prior_scale), &root);
   out.laplace_covariance = precision.inverse();
   // Student-t draws: mode + root z sqrt(nu / u), z ~ N(0, I), u ~ chi^2_nu.
   const double nu = options.student_dof;
@@ -200,6 +202,20 @@ RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, cons
   out.weights /= out.weights.sum();
   out.effective_samples = 1.0 / out.weights.squaredNorm();
   out.evaluations += f.evaluations();
+  return out;
+}
+
+PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
+                                   const Eigen::VectorXd& learned_theta, double near) {
+  PolicyConfidence out;
+  for (Eigen::Index i = 0; i < posterior.samples.rows(); ++i) {
+    const double w = posterior.weights[i];
+    if (w == 0.0) continue;
+    const double relative = policy_metrics(mdp, posterior.samples.row(i).transpose(), learned_theta).ile.relative();
+    out.near_optimal += relative <= near ? w : 0.0;
+    out.optimal += relative <= 1e-9 ? w : 0.0;
+    out.expected_relative_ile += w * relative;
+  }
   return out;
 }
 

@@ -19,6 +19,7 @@ Bad input raises ValueError with the command line's one-line message, naming the
 argument (README.md "Python"). Every long call releases the GIL.
 """
 import inspect
+import json
 import math
 import os
 
@@ -375,7 +376,9 @@ class MaxCausalEntIRL(_Estimator):
     {parameters}
 
     Fitted attributes: theta_ (K,), policy_ (S, A) the soft policy of theta_,
-    log_likelihood_ (the causal log-likelihood of the demonstrations).
+    log_likelihood_ (the causal log-likelihood of the demonstrations), posterior_ (None
+    unless posterior_samples > 0: what the posterior over theta says, the dict `hbirl
+    learn` prints as "posterior").
     """
 
     def fit(self, mdp, trajectories):
@@ -386,6 +389,7 @@ class MaxCausalEntIRL(_Estimator):
         self.theta_ = result["theta"]
         self.log_likelihood_ = result["log_likelihood"]
         self.policy_ = mdp.soft_policy(self.theta_)
+        self.posterior_ = None if result["posterior"] is None else json.loads(result["posterior"])
         return self
 
 
@@ -409,7 +413,9 @@ class HierarchicalIRL(_Estimator):
     catch-all when the prior asks for one), prior_ (the learned Dirichlet parameters, an
     ObservationPrior), learned_eta_ (None, or dict: per context "stated" (C, J'),
     "learned" (C, J'), "observations" (C,)), mcmc_diagnostics_ (MCMC only: worst R-hat and
-    bulk ESS over the pair marginals).
+    bulk ESS over the pair marginals), posterior_ (None unless posterior_samples > 0: what
+    the posterior over theta says -- "confidence", credible intervals and more, the dict
+    `hbirl learn` prints as "posterior").
     """
 
     def fit(self, mdp, observations, prior):
@@ -440,6 +446,7 @@ class HierarchicalIRL(_Estimator):
         self.prior_ = fit.refined
         self.learned_eta_ = fit.learned_eta
         self.mcmc_diagnostics_ = fit.mcmc_diagnostics
+        self.posterior_ = None if fit.posterior is None else json.loads(fit.posterior)
         return self
 
     def score(self, observations):

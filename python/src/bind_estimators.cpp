@@ -87,14 +87,15 @@ py::list settings_schema() {
 py::dict fit_maxcausalent(const Mdp& mdp, const std::vector<IntArray>& arrays, const py::dict& values) {
   const app::LearnSettings settings = settings_of(values);
   std::vector<Trajectory> truth = trajectories_of(mdp, arrays, "trajectories");
-  LearnResult learned;
+  std::optional<app::Learned> learned;
   {
     py::gil_scoped_release released;  // minutes on large MDPs: other Python threads run meanwhile
-    learned = app::learn_from_truth(mdp, std::move(truth), settings).em;
+    learned.emplace(app::learn_from_truth(mdp, std::move(truth), settings));
   }
   py::dict out;
-  out["theta"] = learned.theta;
-  out["log_likelihood"] = learned.log_likelihood;
+  out["theta"] = learned->em.theta;
+  out["log_likelihood"] = learned->em.log_likelihood;
+  out["posterior"] = learned->posterior ? py::object(py::str(app::posterior_summary(*learned).dump())) : py::none();
   return out;
 }
 
@@ -176,6 +177,10 @@ void bind_hierarchical(py::module_& m) {
                                return out;
                              })
       .def_readonly("refined", &FittedHierarchical::refined)
+      .def_property_readonly("posterior",
+                             [](const FittedHierarchical& f) -> py::object {
+                               return f.posterior.empty() ? py::none() : py::object(py::str(f.posterior));
+                             })
       .def_property_readonly("subject", [](const FittedHierarchical& f) { return f.model.subject; })
       .def_property_readonly("confounders", [](const FittedHierarchical& f) { return f.model.confounders; })
       .def_property_readonly("learned_eta",

@@ -51,6 +51,7 @@ FittedHierarchical fit_hierarchical(const Mdp& mdp, const std::vector<ObservedTr
   fit.model = learned.model;
   fit.learned_eta = learned.learned_eta;
   if (settings.engine == "mcmc") fit.mcmc = learned.final_statistics(mdp).mcmc;
+  if (learned.posterior) fit.posterior = app::posterior_summary(learned).dump();
   return fit;
 }
 

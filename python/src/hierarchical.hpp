@@ -30,6 +30,7 @@ struct FittedHierarchical {
   std::optional<LearnedEta> learned_eta;
   bool contexts_given = false;  // the observations carried contexts (else each distinct eta was one)
   std::optional<McmcDiagnostics> mcmc;
+  std::string posterior;        // app::posterior_summary as JSON text; empty unless posterior_samples asked for it
   app::LearnSettings settings;  // fitted with
 
   // The observations as this model sees them: the unlisted catch-all added as when fitting,

@@ -78,6 +78,31 @@ TEST(Learn, ReportsEveryIterate) {
   EXPECT_EQ(calls, learned.best().em_iterations);
 }
 
+// The posterior is drawn only when asked, around EM's theta, and needs the exact engine;
+// its summary has a probability for a confidence and an interval that holds its mean.
+TEST(Learn, DrawsThePosteriorWhenAsked) {
+  const RandomTask task = small_task(6);
+  LearnSettings settings;
+  settings.em.threads = 1;
+  EXPECT_FALSE(learn(task.mdp, task.observed.trajectories, task.prior, settings).posterior);
+  settings.posterior.samples = 40;
+  const Learned learned = learn(task.mdp, task.observed.trajectories, task.prior, settings);
+  ASSERT_TRUE(learned.posterior && learned.confidence);
+  EXPECT_EQ(learned.posterior->samples.rows(), 40);
+  const nlohmann::ordered_json j = posterior_summary(learned);
+  EXPECT_GE(j["confidence"].get<double>(), 0.0);
+  EXPECT_LE(j["confidence"].get<double>(), 1.0);
+  EXPECT_GE(j["confidence"].get<double>(), j["probability_optimal"].get<double>());
+  for (size_t k = 0; k < j["mean"].size(); ++k) {
+    EXPECT_LE(j["interval_90"][k][0].get<double>(), j["interval_90"][k][1].get<double>());
+  }
+  settings.engine = "mcmc";
+  settings.mcmc.samples = 20;
+  settings.mcmc.burn_in = 5;
+  settings.em.max_em_iterations = 2;
+  EXPECT_THROW(learn(task.mdp, task.observed.trajectories, task.prior, settings), InputError);
+}
+
 // An observation no source can make is named as the front end names its data.
 TEST(Learn, AnImpossibleObservationIsNamedByTheFrontEnd) {
   const RandomTask task = small_task(5);

@@ -207,8 +207,7 @@ TEST(RewardPosterior, TwoFeaturesFromTrueTrajectoriesAgreeWithAGrid) {
       for (int i = 0; i < n; ++i) {
         g.x.push_back(lo + (hi - lo) * i / (n - 1));
         double p = 0.0;
-        for (int j = 0; j < n; ++j)
-          p += std::exp(l[static_cast<size_t>(k == 0 ? i * n + j : j * n + i)] - top);
+        for (int j = 0; j < n; ++j) p += std::exp(l[static_cast<size_t>(k == 0 ? i * n + j : j * n + i)] - top);
         g.p.push_back(p);
         total += p;
       }
@@ -223,7 +222,8 @@ TEST(RewardPosterior, TheEvidenceChoosesAScaleFromTheData) {
   const TruthEStep estep(d.mdp, d.truth);
   RewardPosteriorOptions o;
   o.samples = 50;
-  const RewardPosterior post = sample_reward_posterior(d.mdp, estep, estep.initial_state(1), Eigen::VectorXd::Zero(2), o);
+  const RewardPosterior post =
+      sample_reward_posterior(d.mdp, estep, estep.initial_state(1), Eigen::VectorXd::Zero(2), o);
   const std::vector<double> grid = prior_scale_grid();
   EXPECT_NE(std::find(grid.begin(), grid.end(), post.prior_scale), grid.end());
   EXPECT_TRUE(post.mean().allFinite());

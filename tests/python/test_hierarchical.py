@@ -504,3 +504,18 @@ def test_the_estimators_parameters_are_hbirl_learns_settings():
     assert hbirl.HierarchicalIRL().get_params()["max_em_iterations"] == 300
     with pytest.raises(TypeError):
         hbirl.HierarchicalIRL(max_em_iteration=3)  # a misspelt setting
+
+
+def test_the_posterior_is_hbirl_learns(grid):
+    """posterior_ is `hbirl learn --posterior-samples`'s "posterior", from observations and
+    from true trajectories (the same app function: app::posterior_summary)."""
+    problem, path = grid
+    out = json.loads(cli("learn", "--problem", path, "--posterior-samples", "30"))
+    model = hbirl.HierarchicalIRL(posterior_samples=30).fit(problem.mdp, problem.observations(), problem.observation_prior)
+    assert model.posterior_ == out["posterior"]
+    assert 0.0 <= model.posterior_["confidence"] <= 1.0
+    assert len(model.posterior_["interval_90"]) == problem.mdp.num_features
+    truth = json.loads(cli("learn", "--problem", path, "--from", "truth", "--posterior-samples", "30", "--prior-scale", "2"))
+    fitted = hbirl.MaxCausalEntIRL(posterior_samples=30, prior_scale=2).fit(problem.mdp, problem.truth_trajectories())
+    assert fitted.posterior_ == truth["posterior"]
+    assert hbirl.HierarchicalIRL().fit(problem.mdp, problem.observations(), problem.observation_prior).posterior_ is None

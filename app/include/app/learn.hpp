@@ -15,6 +15,7 @@
 #include "app/learn_settings.hpp"
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
+#include "learner/reward_posterior.hpp"
 
 namespace hbirl::app {
 
@@ -50,12 +51,24 @@ struct Learned {
   ObservationModel model;    // their Dirichlet mean
   std::optional<LearnedEta> learned_eta;
   std::uint64_t seed = 1;
+  // The posterior over theta and what it says of the learned policy, when the settings ask
+  // for draws (posterior_samples).
+  std::optional<RewardPosterior> posterior;
+  std::optional<PolicyConfidence> confidence;
 
   const RestartResult& best() const { return em.restarts[static_cast<size_t>(em.selected_restart)]; }
   // The E-step at the learned theta and model (the policy of theta; learned eta when eta is
   // learned): expected counts and, for MCMC, its convergence diagnostics.
   EStepStatistics final_statistics(const Mdp& mdp) const;
 };
+
+// What the posterior over theta says (learned.posterior must be there; docs/MODEL.md "The
+// posterior over theta"), as `hbirl learn` prints it under "posterior" and the Python
+// estimators' posterior_: "confidence" (the probability that the learned policy is within
+// 5% of the optimal value), "probability_optimal", "expected_ile_relative", per weight its
+// "mean" and 90% credible interval ("interval_90"), the "mode", the "prior_scale", and how
+// it was drawn ("samples", "effective_samples", "evaluations").
+nlohmann::ordered_json posterior_summary(const Learned& learned);
 
 // InputError("prior") unless the prior's shapes are the MDP's.
 void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior);

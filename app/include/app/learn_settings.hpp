@@ -16,6 +16,7 @@
 #include "learner/estep_observations.hpp"
 #include "learner/hidden_data_em.hpp"
 #include "learner/observation_model.hpp"
+#include "learner/reward_posterior.hpp"
 
 namespace hbirl::app {
 
@@ -33,6 +34,9 @@ struct LearnSettings {
   std::optional<AlphaUpdate> alpha_update;
   std::optional<double> c;        // the paper's step size (alpha_update paper)
   std::optional<bool> learn_eta;  // eta "learned" per context or "stated"
+  // The posterior over theta drawn after EM (learner/reward_posterior.hpp): none unless
+  // posterior.samples > 0.
+  RewardPosteriorOptions posterior;
 
   // R-hat compares chains: four unless told (Vehtari et al. 2021 run 4 by default).
   static McmcOptions four_chains() {

@@ -29,10 +29,10 @@
 namespace hbirl {
 
 struct RewardPosteriorOptions {
-  int samples = 200;          // importance draws
-  double prior_scale = 0.0;   // sigma; 0: chosen by the evidence
+  int samples = 0;           // importance draws (at least 1; front ends draw none unless asked)
+  double prior_scale = 0.0;  // sigma; 0: chosen by the evidence
   std::uint64_t seed = 1;
-  double student_dof = 4.0;   // the proposal's degrees of freedom
+  double student_dof = 4.0;  // the proposal's degrees of freedom
 };
 
 // The evidence's grid of prior scales (0: sigma chosen on it).
@@ -67,12 +67,12 @@ Eigen::MatrixXd hessian_by_differences(RewardLogPosterior& f, const Eigen::Vecto
 
 struct RewardPosterior {
   double prior_scale = 0.0;
-  Eigen::VectorXd mode;          // the posterior's mode (MAP)
+  Eigen::VectorXd mode;                // the posterior's mode (MAP)
   Eigen::MatrixXd laplace_covariance;  // the inverse of -Hessian at the mode
-  Eigen::MatrixXd samples;       // one draw per row (samples x features)
-  Eigen::VectorXd weights;       // their normalised importance weights
-  double effective_samples = 0.0;  // 1 / sum w^2: how many equally weighted draws they are worth
-  int evaluations = 0;           // of the log-posterior (each: a soft value iteration and an E-step pass)
+  Eigen::MatrixXd samples;             // one draw per row (samples x features)
+  Eigen::VectorXd weights;             // their normalised importance weights
+  double effective_samples = 0.0;      // 1 / sum w^2: how many equally weighted draws they are worth
+  int evaluations = 0;                 // of the log-posterior (each: a soft value iteration and an E-step pass)
 
   Eigen::VectorXd mean() const;
   // Per feature, the weighted q-quantile of the draws.
@@ -80,6 +80,18 @@ struct RewardPosterior {
   // The posterior probability of an event, given per draw.
   double probability(const std::vector<char>& holds) const;
 };
+
+// What the posterior says of a learned reward's optimal policy: the probability that it is
+// within `near` of the optimal value (ILE <= near ||V*||_1, metrics.hpp) and that it is
+// optimal (ILE 0, to rounding), and the expected relative ILE -- each over the draws, by
+// their weights.
+struct PolicyConfidence {
+  double near_optimal = 0.0;
+  double optimal = 0.0;
+  double expected_relative_ile = 0.0;
+};
+PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
+                                   const Eigen::VectorXd& learned_theta, double near = 0.05);
 
 // The posterior around EM's theta (`theta_hat`), the E-step in `state` (EM's last).
 // Throws InputError for options out of range.
