@@ -131,6 +131,10 @@ nlohmann::ordered_json posterior_summary(const Learned& learned) {
   j["confidence"] = learned.confidence->near_optimal;
   j["probability_optimal"] = learned.confidence->optimal;
   j["expected_ile_relative"] = learned.confidence->expected_relative_ile;
+  nlohmann::ordered_json actions = nlohmann::ordered_json::array();
+  const Eigen::MatrixXd& optimal = learned.confidence->action_optimal;
+  for (Eigen::Index s = 0; s < optimal.rows(); ++s) actions.push_back(list(optimal.row(s).transpose()));
+  j["action_optimal"] = actions;
   j["mean"] = list(p.mean());
   const Eigen::VectorXd lo = p.quantile(0.05), hi = p.quantile(0.95);
   nlohmann::ordered_json intervals = nlohmann::ordered_json::array();

@@ -39,6 +39,11 @@ double agreement_of(const Mdp& mdp, const OptimalPolicy& expert, const OptimalPo
 
 }  // namespace
 
+InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_reward,
+                                            const OptimalPolicy& expert, const OptimalPolicy& learner) {
+  return ile_of(mdp, true_reward, expert, learner);
+}
+
 InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_theta,
                                             const Eigen::VectorXd& learned_theta) {
   const Eigen::VectorXd true_reward = mdp.reward(true_theta);

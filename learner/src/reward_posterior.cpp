@@ -12,6 +12,7 @@
 #include "learner/metrics.hpp"
 #include "learner/optimize.hpp"
 #include "learner/rng.hpp"
+#include "learner/value_iteration.hpp"
 
 namespace hbirl {
 
@@ -79,6 +80,19 @@ double scale_by_evidence(const Mdp& mdp, const EStep& estep, const EStepState& s
     }
   }
   return chosen;
+}
+
+// Adds w to every action optimal at each state (within rounding of the value scale, as
+// metrics.hpp counts ties).
+void add_optimal_actions(const Mdp& mdp, const OptimalPolicy& optimal, double w, Eigen::MatrixXd& out) {
+  const double tie = 1e-9 * std::max(1.0, optimal.value.lpNorm<Eigen::Infinity>());
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s)) continue;
+    for (int a = 0; a < mdp.num_actions; ++a) {
+      const double q = optimal.q[mdp.pair(s, a)];
+      if (std::isfinite(q) && q >= optimal.value[s] - tie) out(s, a) += w;
+    }
+  }
 }
 
 void check(const RewardPosteriorOptions& o) {
@@ -208,13 +222,18 @@ RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, cons
 PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
                                    const Eigen::VectorXd& learned_theta, double near) {
   PolicyConfidence out;
+  out.action_optimal = Eigen::MatrixXd::Zero(mdp.num_states, mdp.num_actions);
+  const OptimalPolicy learned = value_iteration(mdp, mdp.reward(learned_theta));
   for (Eigen::Index i = 0; i < posterior.samples.rows(); ++i) {
     const double w = posterior.weights[i];
     if (w == 0.0) continue;
-    const double relative = policy_metrics(mdp, posterior.samples.row(i).transpose(), learned_theta).ile.relative();
+    const Eigen::VectorXd reward = mdp.reward(posterior.samples.row(i).transpose());
+    const OptimalPolicy optimal = value_iteration(mdp, reward);
+    const double relative = inverse_learning_error(mdp, reward, optimal, learned).relative();
     out.near_optimal += relative <= near ? w : 0.0;
     out.optimal += relative <= 1e-9 ? w : 0.0;
     out.expected_relative_ile += w * relative;
+    add_optimal_actions(mdp, optimal, w, out.action_optimal);
   }
   return out;
 }

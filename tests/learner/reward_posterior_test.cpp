@@ -12,6 +12,7 @@
 #include "learner/estep_observations.hpp"
 #include "learner/input_error.hpp"
 #include "learner/soft_value_iteration.hpp"
+#include "learner/value_iteration.hpp"
 #include "random_mdp.hpp"
 #include "tiny_observed_problem.hpp"
 
@@ -213,6 +214,28 @@ TEST(RewardPosterior, TwoFeaturesFromTrueTrajectoriesAgreeWithAGrid) {
       }
       for (double& p : g.p) p /= total;
       expect_agrees(post, g, k);
+    }
+  }
+}
+
+// Per state, some action is optimal under every draw, so the probabilities of a state's
+// actions sum to at least 1; the learned policy is optimal only where each of its actions is.
+TEST(RewardPosterior, ActionProbabilitiesAgreeWithTheConfidence) {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    const TinyData d = tiny_data(2, seed);
+    const TruthEStep estep(d.mdp, d.truth);
+    RewardPosteriorOptions o;
+    o.samples = 300;
+    o.prior_scale = 2.0;
+    const RewardPosterior post =
+        sample_reward_posterior(d.mdp, estep, estep.initial_state(1), Eigen::VectorXd::Zero(2), o);
+    const PolicyConfidence c = policy_confidence(d.mdp, post, post.mode);
+    const OptimalPolicy learned = value_iteration(d.mdp, d.mdp.reward(post.mode));
+    EXPECT_LE(c.optimal, c.near_optimal);
+    for (int s = 0; s < d.mdp.num_states; ++s) {
+      EXPECT_GE(c.action_optimal.row(s).sum(), 1.0 - 1e-9) << "state " << s;
+      EXPECT_LE(c.action_optimal.row(s).maxCoeff(), 1.0 + 1e-9);
+      EXPECT_LE(c.optimal, c.action_optimal(s, learned.actions[static_cast<size_t>(s)]) + 1e-9) << "state " << s;
     }
   }
 }

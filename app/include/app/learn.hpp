@@ -65,7 +65,8 @@ struct Learned {
 // What the posterior over theta says (learned.posterior must be there; docs/MODEL.md "The
 // posterior over theta"), as `hbirl learn` prints it under "posterior" and the Python
 // estimators' posterior_: "confidence" (the probability that the learned policy is within
-// 5% of the optimal value), "probability_optimal", "expected_ile_relative", per weight its
+// 5% of the optimal value), "probability_optimal", "expected_ile_relative", per state the
+// probability that each action is optimal ("action_optimal"), per weight its
 // "mean" and 90% credible interval ("interval_90"), the "mode", the "prior_scale", and how
 // it was drawn ("samples", "effective_samples", "evaluations").
 nlohmann::ordered_json posterior_summary(const Learned& learned);

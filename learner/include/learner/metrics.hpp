@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "learner/mdp.hpp"
+#include "learner/value_iteration.hpp"
 
 namespace hbirl {
 
@@ -17,6 +18,12 @@ struct InverseLearningError {
 // a one-step estimate) under the TRUE reward.
 InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_theta,
                                             const Eigen::VectorXd& learned_theta);
+
+// The same from both rewards' optimal policies already planned (value_iteration): for many
+// true rewards against one learned policy (reward_posterior.hpp's confidence) without
+// planning the learned reward again.
+InverseLearningError inverse_learning_error(const Mdp& mdp, const Eigen::VectorXd& true_reward,
+                                            const OptimalPolicy& expert, const OptimalPolicy& learner);
 
 // Share of non-terminal states where the learned reward's optimal action is also optimal
 // under the true reward (ties within 1e-9 of the value scale count as optimal).

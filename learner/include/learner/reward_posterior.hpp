@@ -83,12 +83,14 @@ struct RewardPosterior {
 
 // What the posterior says of a learned reward's optimal policy: the probability that it is
 // within `near` of the optimal value (ILE <= near ||V*||_1, metrics.hpp) and that it is
-// optimal (ILE 0, to rounding), and the expected relative ILE -- each over the draws, by
-// their weights.
+// optimal (ILE 0, to rounding), the expected relative ILE, and per state the probability
+// that each action is optimal (where the data leave the task open) -- each over the draws,
+// by their weights.
 struct PolicyConfidence {
   double near_optimal = 0.0;
   double optimal = 0.0;
   double expected_relative_ile = 0.0;
+  Eigen::MatrixXd action_optimal;  // states x actions; 0 at terminal states and impossible actions
 };
 PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
                                    const Eigen::VectorXd& learned_theta, double near = 0.05);
