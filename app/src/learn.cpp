@@ -37,13 +37,19 @@ void check_possible(const Mdp& mdp, const std::vector<ObservedTrajectory>& obser
   throw InputError(where, "impossible under the observation model: " + impossible->why);
 }
 
+// What the posterior needs, checked before EM rather than after it.
+void check_posterior_settings(const LearnSettings& settings) {
+  if (settings.posterior.samples == 0) return;
+  if (settings.engine != "exact") {
+    throw InputError("posterior_samples", "needs the exact engine: the MCMC E-step's likelihood of theta is noisy");
+  }
+  check_posterior_options(settings.posterior);
+}
+
 // The posterior over theta at what EM learned (the selected restart's observation model),
 // when the settings ask for draws, and the confidence in the learned policy it gives.
 void draw_posterior(const Mdp& mdp, const LearnSettings& settings, Learned& out) {
   if (settings.posterior.samples == 0) return;
-  if (out.observed != nullptr && !out.observed->options().engine.exact) {
-    throw InputError("posterior_samples", "needs the exact engine: the MCMC E-step's likelihood of theta is noisy");
-  }
   EStepState state = out.estep->initial_state(out.seed);
   if (out.observed != nullptr) state.alpha = out.refined;
   RewardPosteriorOptions options = settings.posterior;
@@ -70,6 +76,7 @@ Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observation
               const LearnSettings& settings, const LearnHooks& hooks) {
   check_prior_fits(mdp, prior);
   if (observations.empty()) throw InputError("observations", "none given");
+  check_posterior_settings(settings);
   Learned out;
   out.seed = settings.em.seed;
   apply_to_prior(settings, prior);
@@ -104,6 +111,7 @@ Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observation
 
 Learned learn_from_truth(const Mdp& mdp, std::vector<Trajectory> truth, const LearnSettings& settings,
                          const LearnHooks& hooks) {
+  check_posterior_settings(settings);
   Learned out;
   out.seed = settings.em.seed;
   out.estep = std::make_unique<TruthEStep>(mdp, std::move(truth));

@@ -69,12 +69,13 @@ double scale_by_evidence(const Mdp& mdp, const EStep& estep, const EStepState& s
     const Eigen::MatrixXd precision =
         a + prior_precision(sigma) * Eigen::MatrixXd::Identity(theta.size(), theta.size());
     const Eigen::LLT<Eigen::MatrixXd> llt(precision);
+    if (llt.info() != Eigen::Success) continue;  // (only a curvature that is not a number)
     const Eigen::VectorXd mode = llt.solve(a * theta + g);
     const Eigen::VectorXd d = mode - theta;
     const double l = l0 + g.dot(d) - 0.5 * d.dot(a * d);
     const double log_det = 2.0 * Eigen::MatrixXd(llt.matrixL()).diagonal().array().log().sum();
     const double evidence = l - 0.5 * prior_precision(sigma) * mode.squaredNorm() - k * std::log(sigma) - 0.5 * log_det;
-    if (evidence > best) {
+    if (std::isfinite(evidence) && evidence > best) {
       best = evidence;
       chosen = sigma;
     }
@@ -95,15 +96,15 @@ void add_optimal_actions(const Mdp& mdp, const OptimalPolicy& optimal, double w,
   }
 }
 
-void check(const RewardPosteriorOptions& o) {
+}  // namespace
+
+void check_posterior_options(const RewardPosteriorOptions& o) {
   if (o.samples < 1 || o.samples > 1000000) throw InputError("posterior_samples", "must be in [1, 1000000]");
-  if (!(o.prior_scale >= 0.0) || !std::isfinite(o.prior_scale))
-    throw InputError("prior_scale", "must be a finite number > 0 (0: chosen by the evidence)");
+  if (!(o.prior_scale == 0.0 || (o.prior_scale >= 1e-6 && o.prior_scale <= 1e6)))
+    throw InputError("prior_scale", "must be 0 (chosen by the evidence) or in [1e-6, 1e6]");
   if (!(o.student_dof >= 3.0 && o.student_dof <= 100.0) || o.student_dof != std::floor(o.student_dof))
     throw InputError("student_dof", "must be a whole number in [3, 100]");
 }
-
-}  // namespace
 
 std::vector<double> prior_scale_grid() { return {0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0}; }
 
@@ -172,6 +173,7 @@ Eigen::VectorXd RewardPosterior::quantile(double q) const {
 }
 
 double RewardPosterior::probability(const std::vector<char>& holds) const {
+  if (holds.size() != static_cast<size_t>(weights.size())) throw InputError("holds", "one per draw");
   double p = 0.0;
   for (size_t i = 0; i < holds.size(); ++i) p += holds[i] ? weights[static_cast<Eigen::Index>(i)] : 0.0;
   return p;
@@ -180,7 +182,7 @@ double RewardPosterior::probability(const std::vector<char>& holds) const {
 RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, const EStepState& state,
                                         const Eigen::VectorXd& theta_hat, const RewardPosteriorOptions& options,
                                         SoftViOptions soft_vi) {
-  check(options);
+  check_posterior_options(options);
   RewardPosterior out;
   out.prior_scale = options.prior_scale > 0.0
                         ? options.prior_scale
@@ -189,8 +191,13 @@ RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, cons
   out.mode = posterior_mode(f, theta_hat, data_size(estep));
   const auto k = theta_hat.size();
   Eigen::MatrixXd root;  // Sigma = root root^T
-  const Eigen::MatrixXd precision =
-      floored(-hessian_by_differences(f, out.mode), prior_precision(out.prior_scale), &root);
+  const Eigen::MatrixXd hessian = hessian_by_differences(f, out.mode);
+  if (!hessian.allFinite() || !out.mode.allFinite()) {
+    throw InputError("posterior",
+                     "the log-posterior's mode or its curvature is not a number (a likelihood of 0 "
+                     "near EM's theta?): no posterior");
+  }
+  const Eigen::MatrixXd precision = floored(-hessian, prior_precision(out.prior_scale), &root);
   out.laplace_covariance = precision.inverse();
   // Student-t draws: mode + root z sqrt(nu / u), z ~ N(0, I), u ~ chi^2_nu.
   const double nu = options.student_dof;

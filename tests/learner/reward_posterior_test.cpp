@@ -240,7 +240,9 @@ TEST(RewardPosterior, ActionProbabilitiesAgreeWithTheConfidence) {
   }
 }
 
-TEST(RewardPosterior, TheEvidenceChoosesAScaleFromTheData) {
+// (Only that the scale is one of the grid's: the evidence itself is not yet checked against an
+// independent computation, docs/MODEL.md.)
+TEST(RewardPosterior, TheEvidencesScaleIsOnTheGrid) {
   const TinyData d = tiny_data(2, 5);
   const TruthEStep estep(d.mdp, d.truth);
   RewardPosteriorOptions o;

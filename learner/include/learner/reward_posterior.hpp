@@ -35,6 +35,10 @@ struct RewardPosteriorOptions {
   double student_dof = 4.0;  // the proposal's degrees of freedom
 };
 
+// Throws InputError naming the option out of range (what sample_reward_posterior checks
+// first; a front end checks before it learns).
+void check_posterior_options(const RewardPosteriorOptions& options);
+
 // The evidence's grid of prior scales (0: sigma chosen on it).
 std::vector<double> prior_scale_grid();
 
