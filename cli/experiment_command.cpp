@@ -570,7 +570,7 @@ CLI::App* add_onion_experiment(CLI::App* cmd, OnionExperimentArgs& args) {
                    "comma-separated list of blue-shirt, other-onions, foreground, mirror")
       ->capture_default_str();
   onion_cmd->add_option("--width", args.options.scene.width, "Frame width in pixels")
-      ->check(CLI::Range(160, 4096))
+      ->check(CLI::Range(onion::camera_view().min_width, onion::camera_view().max_width))
       ->capture_default_str();
   onion_cmd->add_option("--fps", args.options.scene.fps, "Frames per simulated second")
       ->check(CLI::Range(1, 240))

@@ -98,7 +98,7 @@ Command add_render(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--every", a->every, "Write every N-th frame")->check(CLI::Range(1, 100000))->capture_default_str();
   cmd->add_option("--width", a->width, "Frame width in pixels (height = 3/4 of it)")
-      ->check(CLI::Range(160, 4096))
+      ->check(CLI::Range(onion::camera_view().min_width, onion::camera_view().max_width))
       ->capture_default_str();
   cmd->add_option("--fps", a->fps, "Frames per simulated second")->check(CLI::Range(1, 240))->capture_default_str();
   cmd->add_option("--start", a->start, "Sim time of the first sort, seconds (moves the confounders)")

@@ -137,6 +137,9 @@ nlohmann::ordered_json posterior_summary(const Learned& learned) {
   const auto list = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
   nlohmann::ordered_json j;
   j["confidence"] = learned.confidence->near_optimal;
+  j["confidence_means"] =
+      "the posterior probability that the learned reward's optimal policy is within 5% of the optimal value "
+      "(ILE <= 0.05 ||V*||_1); not yet calibrated from observations (docs/MODEL.md)";
   j["probability_optimal"] = learned.confidence->optimal;
   j["expected_ile_relative"] = learned.confidence->expected_relative_ile;
   nlohmann::ordered_json actions = nlohmann::ordered_json::array();

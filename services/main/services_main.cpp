@@ -23,6 +23,7 @@
 #include "services/perception_service.hpp"
 #include "services/process.hpp"
 #include "services/sampler_worker.hpp"
+#include "sim_driver/onion/scene.hpp"
 #include "sim_driver/simulator/simulator_service.hpp"
 
 namespace hbirl::services {
@@ -82,7 +83,7 @@ void add_onion_run_options(CLI::App& app, SimulationOptions& sim, std::string& c
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--width", sim.scene.width, "onion: frame width (height = 3/4)")
-      ->check(CLI::Range(160, 4096))
+      ->check(CLI::Range(onion::camera_view().min_width, onion::camera_view().max_width))
       ->capture_default_str();
   app.add_option("--fps", sim.scene.fps, "onion: frames per simulated second")
       ->check(CLI::Range(1, 240))
