@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "full_commands.hpp"
+#include "experiments/calibration_experiment.hpp"
 #include "experiments/eta_experiments.hpp"
 #include "experiments/gridworld_experiment.hpp"
 #include "experiments/onion_regimes.hpp"
@@ -309,6 +310,21 @@ int run_onion_experiment_command(OnionExperimentArgs& args) {
   return 0;
 }
 
+// An experiment's runs back from its CSV (--summarise): `parse` names the line of anything
+// wrong, and the error names the file.
+template <class Run>
+std::vector<Run> read_runs_csv(const std::string& path, std::vector<Run> (*parse)(const std::string&)) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("--summarise", "cannot open " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  try {
+    return parse(text.str());
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.field(), e.message());
+  }
+}
+
 struct RandomTasksArgs {
   std::string out = "results";
   std::string methods = "all";
@@ -324,15 +340,7 @@ int run_random_tasks_command(RandomTasksArgs& args) {
   std::vector<RandomTaskRun> runs;
   std::ostringstream footer;
   if (!args.runs_csv.empty()) {
-    std::ifstream in(args.runs_csv, std::ios::binary);
-    if (!in) throw InputError("--summarise", "cannot open " + args.runs_csv);
-    std::ostringstream text;
-    text << in.rdbuf();
-    try {
-      runs = random_task_runs_from_csv(text.str());
-    } catch (const InputError& e) {
-      throw InputError(args.runs_csv + ": " + e.field(), e.message());
-    }
+    runs = read_runs_csv(args.runs_csv, random_task_runs_from_csv);
     footer << runs.size() << " learning runs from " << std::filesystem::path(args.runs_csv).filename().string() << ".";
   } else {
     const auto [ran, seconds] = run_with_progress("learning runs", o, run_random_tasks);
@@ -352,6 +360,63 @@ int run_random_tasks_command(RandomTasksArgs& args) {
   std::cout << summary;
   std::cerr << "hbirl: wrote " << (args.runs_csv.empty() ? "random_tasks_runs.csv, " : "") << "random_tasks_summary.md"
             << (problem.empty() ? ", random_tasks.png, random_tasks.svg" : "") << " in " << args.out << "\n";
+  return 0;
+}
+
+struct CalibrationArgs {
+  std::string out = "results";
+  std::string data = "observations,truth";
+  std::string runs_csv;  // summarise these runs instead of running
+  CalibrationOptions options;
+};
+
+std::vector<std::string> parse_calibration_data(const std::string& text) {
+  std::vector<std::string> data;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (item != "observations" && item != "truth") {
+      throw InputError("--data", "unknown data \"" + item + "\" (observations, truth)");
+    }
+    data.push_back(item);
+  }
+  if (data.empty()) throw InputError("--data", "is empty");
+  return data;
+}
+
+int run_calibration_command(CalibrationArgs& args) {
+  CalibrationOptions& o = args.options;
+  o.data = parse_calibration_data(args.data);
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  std::vector<CalibrationRun> runs;
+  std::ostringstream footer;
+  if (!args.runs_csv.empty()) {
+    runs = read_runs_csv(args.runs_csv, calibration_runs_from_csv);
+    footer << runs.size() << " learning runs from " << std::filesystem::path(args.runs_csv).filename().string() << ".";
+  } else {
+    const auto [ran, seconds] = run_with_progress("learning runs", o, run_calibration);
+    runs = ran;
+    write_file(dir / "calibration_runs.csv", calibration_runs_csv(runs));
+    footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
+           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ") x " << o.draws << " data sets, " << o.samples
+           << " posterior draws, prior scale ";
+    if (o.prior_scale > 0.0) {
+      footer << o.prior_scale;
+    } else {
+      footer << "chosen by the evidence";
+    }
+    footer << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
+           << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
+  }
+  footer << " Reproduce one: `hbirl generate random-task --seed S --draw D --out task.json`, then `hbirl learn "
+         << "--problem task.json --posterior-samples " << o.samples << "` (add `--from truth` for the true steps).";
+  const std::string summary = calibration_summary(runs, footer.str());
+  write_file(dir / "calibration_summary.md", summary);
+  const std::string problem = draw_calibration_figure(runs, (dir / "calibration").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote " << (args.runs_csv.empty() ? "calibration_runs.csv, " : "") << "calibration_summary.md"
+            << (problem.empty() ? ", calibration.png, calibration.svg" : "") << " in " << args.out << "\n";
   return 0;
 }
 
@@ -609,6 +674,36 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
   return tasks_cmd;
 }
 
+// experiment calibration: is the posterior's confidence a promise?
+CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
+  CLI::App* c = cmd->add_subcommand(
+      "calibration",
+      "Is the confidence calibrated? Random tasks (seeds from --first-seed: not those the posterior's defaults\n"
+      "were looked at on), each data set learned as hbirl learn --posterior-samples learns it, from the observations\n"
+      "and from the true trajectories; the confidence (the posterior probability that the learned policy is within\n"
+      "5% of the optimal value) against whether it is. Writes calibration_runs.csv, calibration_summary.md (AUROC,\n"
+      "expected calibration error, Brier score, share right among confidence >= 0.9, the reliability table) and\n"
+      "calibration.png/.svg (the reliability diagram) to --out. The numbers do not depend on --threads.");
+  c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
+  c->add_option("--draws", args.options.draws, "Data sets per task")->check(CLI::Range(1, 1000))->capture_default_str();
+  c->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
+  c->add_option("--samples", args.options.samples, "Posterior draws per run (--posterior-samples)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  c->add_option("--prior-scale", args.options.prior_scale,
+                "The prior's scale sigma (--prior-scale); 0: chosen by the evidence, as hbirl learn does")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  c->add_option("--data", args.data, "Comma-separated: observations, truth")->capture_default_str();
+  c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  c->add_option("--summarise", args.runs_csv,
+                "Do not run: summarise and draw the runs of this calibration_runs.csv into --out");
+  return c;
+}
+
 // experiment eta-sensitivity: learned vs stated eta under imperfect labellers.
 CLI::App* add_eta_sensitivity_experiment(CLI::App* cmd, EtaSensitivityArgs& args) {
   CLI::App* eta_cmd = cmd->add_subcommand(
@@ -727,6 +822,7 @@ Command add_experiment(CLI::App& app) {
       subcommand(cmd, add_gridworld_experiment, run_gridworld_experiment_command),
       subcommand(cmd, add_onion_experiment, run_onion_experiment_command),
       subcommand(cmd, add_random_tasks_experiment, run_random_tasks_command),
+      subcommand(cmd, add_calibration_experiment, run_calibration_command),
       subcommand(cmd, add_eta_sensitivity_experiment, run_eta_sensitivity_command),
       subcommand(cmd, add_unlisted_experiment, run_unlisted_command),
       subcommand(cmd, add_onion_regimes_experiment, run_onion_regimes_command)};

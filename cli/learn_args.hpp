@@ -3,6 +3,7 @@
 // a recorded run (learn_log.cpp: it links the service set, so it runs in hbirl-full).
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "app/command_line.hpp"
 #include "commands.hpp"
@@ -16,7 +17,10 @@ struct LearnArgs {
   bool allow_incomplete = false;
   app::DomainArgs domain;  // --log: the domain file of a run on one (built-in domains come from the log)
   std::string from = "observations";
-  app::LearnSettings settings;  // every learning setting (app/learn_settings.hpp)
+  app::LearnSettings settings;     // every learning setting (app/learn_settings.hpp)
+  int demonstrations = 0;          // learn from the first this many (0: all)
+  std::vector<double> warm_start;  // EM also starts from these weights
+  bool anytime = false;            // an estimate after each demonstration
   bool verbose = false;
   std::string out;
 };

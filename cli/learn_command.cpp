@@ -13,6 +13,7 @@
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/observation_support.hpp"
+#include "learner/value_iteration.hpp"
 #include "problem/json_format.hpp"
 #include "problem/problem_observations.hpp"
 #include "learn_args.hpp"
@@ -50,23 +51,53 @@ void report_iterate(const app::Iterate& i) {
   std::cerr << line.str();
 }
 
+// The first `n` of a problem's demonstrations (0: all), as --demonstrations asks.
+template <typename T>
+void keep_first(std::vector<T>& items, int n) {
+  if (n == 0) return;
+  if (static_cast<size_t>(n) > items.size()) {
+    throw InputError("--demonstrations", "is " + std::to_string(n) + " but the file has " +
+                                             std::to_string(items.size()) + " to learn from");
+  }
+  items.resize(static_cast<size_t>(n));
+}
+
+// What a problem file gives app::learn: its true trajectories (--from truth) or its
+// observations, the first --demonstrations of them, and how to name one in an error.
+struct ProblemData {
+  std::vector<Trajectory> truth;
+  ProblemObservations observed;
+  app::LearnHooks hooks;
+};
+
+ProblemData problem_data(const Problem& problem, const LearnArgs& args) {
+  ProblemData data;
+  if (args.verbose) data.hooks.on_iteration = report_iterate;
+  try {
+    if (args.from == "truth") {
+      data.truth = problem.truth_trajectories();
+      keep_first(data.truth, args.demonstrations);
+      return data;
+    }
+    data.observed = observations_of(problem, args);
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
+  keep_first(data.observed.trajectories, args.demonstrations);
+  data.hooks.trajectory_name = [index = data.observed.demonstration_index](int i) {
+    return "demonstration[" + std::to_string(index[static_cast<size_t>(i)]) + "]";
+  };
+  return data;
+}
+
 // app::learn on the problem: from its observations, or (--from truth) its true trajectories.
 app::Learned learn_problem(const Problem& problem, const LearnArgs& args) {
-  app::LearnHooks hooks;
-  if (args.verbose) hooks.on_iteration = report_iterate;
-  if (args.from == "truth") {
-    try {
-      return app::learn_from_truth(problem.mdp, problem.truth_trajectories(), args.settings, hooks);
-    } catch (const InputError& e) {
-      throw in_file(args.problem, e);
-    }
-  }
-  ProblemObservations in = observations_of(problem, args);
-  hooks.trajectory_name = [&in](int i) {
-    return "demonstration[" + std::to_string(in.demonstration_index[static_cast<size_t>(i)]) + "]";
-  };
+  ProblemData data = problem_data(problem, args);
   try {
-    return app::learn(problem.mdp, in.trajectories, std::move(in.prior), args.settings, hooks);
+    if (args.from == "truth")
+      return app::learn_from_truth(problem.mdp, std::move(data.truth), args.settings, data.hooks);
+    return app::learn(problem.mdp, data.observed.trajectories, std::move(data.observed.prior), args.settings,
+                      data.hooks);
   } catch (const InputError& e) {
     throw in_file(args.problem, e);
   }
@@ -161,10 +192,76 @@ void warn_unconverged_restart(const LearnResult& learned, const LearnArgs& args,
   }
 }
 
-int run_learn(const LearnArgs& args) {
-  if (!args.log.empty()) return run_learn_from_log(args);
-  if (args.problem.empty()) throw InputError("--problem", "give a problem file (or --log with a recorded run)");
-  const Problem problem = load_problem(args.problem);
+// One estimate of --anytime, a line of JSON: after how many demonstrations, the weights,
+// whether EM's selected start was the previous estimate, the greedy policy, the
+// log-likelihood, with true weights the ILE, and the posterior's summary when drawn.
+nlohmann::ordered_json estimate_json(const Problem& problem, int demonstrations, const app::Learned& learned,
+                                     const LearnArgs& args) {
+  const Mdp& mdp = problem.mdp;
+  nlohmann::ordered_json out;
+  out["demonstrations"] = demonstrations;
+  out["weights"] = to_vector(learned.em.theta);
+  out["log_likelihood"] = learned.em.log_likelihood;
+  out["score"] = learned.best().score;
+  out["from_previous"] = learned.em.selected_restart == static_cast<int>(learned.em.restarts.size()) - 1 &&
+                         learned.em.restarts.size() > static_cast<size_t>(args.settings.em.restarts);
+  out["policy"] = value_iteration(mdp, mdp.reward(learned.em.theta)).actions;
+  if (problem.true_weights) {
+    const InverseLearningError ile = inverse_learning_error(mdp, *problem.true_weights, learned.em.theta);
+    out["ile_relative"] = ile.relative();
+  }
+  if (learned.posterior) out["posterior"] = app::posterior_summary(learned);
+  return out;
+}
+
+// --anytime: the estimate after each demonstration, one JSON line each, as it is learned.
+int run_learn_anytime(const Problem& problem, const LearnArgs& args) {
+  ProblemData data = problem_data(problem, args);
+  std::string lines;
+  const app::EstimateReport print = [&](int n, const app::Learned& learned) {
+    const std::string line = estimate_json(problem, n, learned, args).dump() + "\n";
+    if (args.out.empty()) {
+      emit(line, "");
+    } else {
+      lines += line;
+    }
+  };
+  try {
+    if (args.from == "truth") {
+      app::learn_from_truth_anytime(problem.mdp, data.truth, args.settings, data.hooks, print);
+    } else {
+      app::learn_anytime(problem.mdp, data.observed.trajectories, data.observed.prior, args.settings, data.hooks,
+                         print);
+    }
+  } catch (const InputError& e) {
+    throw in_file(args.problem, e);
+  }
+  if (!args.out.empty()) emit(lines, args.out);
+  return 0;
+}
+
+// The settings with --warm-start's weights (checked against the problem's features).
+LearnArgs with_warm_start(const LearnArgs& args, const Mdp& mdp) {
+  LearnArgs out = args;
+  if (args.warm_start.empty()) return out;
+  if (static_cast<int>(args.warm_start.size()) != mdp.num_features()) {
+    throw InputError("--warm-start", "has " + std::to_string(args.warm_start.size()) + " weights; the problem has " +
+                                         std::to_string(mdp.num_features()) + " features");
+  }
+  for (double w : args.warm_start) {
+    if (!std::isfinite(w)) throw InputError("--warm-start", "has a weight that is not a finite number");
+  }
+  out.settings.em.warm_start =
+      Eigen::Map<const Eigen::VectorXd>(args.warm_start.data(), static_cast<Eigen::Index>(args.warm_start.size()));
+  return out;
+}
+
+int run_learn(const LearnArgs& given) {
+  if (!given.log.empty()) return run_learn_from_log(given);
+  if (given.problem.empty()) throw InputError("--problem", "give a problem file (or --log with a recorded run)");
+  const Problem problem = load_problem(given.problem);
+  const LearnArgs args = with_warm_start(given, problem.mdp);
+  if (args.anytime) return run_learn_anytime(problem, args);
   const Mdp& mdp = problem.mdp;
   const bool from_truth = args.from == "truth";
   const app::Learned learned_all = learn_problem(problem, args);
@@ -217,10 +314,11 @@ Command add_learn(CLI::App& app) {
                          "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
                          "policy_agreement; then one entry per restart.");
   CLI::Option* problem = cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)");
-  cmd->add_option("--log", args->log,
-                  "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "
-                  "the same data and learning as hbirl-optimiser, so the same theta")
-      ->excludes(problem);
+  CLI::Option* log =
+      cmd->add_option("--log", args->log,
+                      "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "
+                      "the same data and learning as hbirl-optimiser, so the same theta")
+          ->excludes(problem);
   app::add_domain_options(
       cmd, args->domain,
       "With --log: the domain file the run was on (built-in domains, onion and gridworld, are named in the log)");
@@ -234,6 +332,22 @@ Command add_learn(CLI::App& app) {
       ->check(CLI::IsMember({"observations", "truth"}))
       ->capture_default_str();
   app::add_learn_settings(cmd, args->settings, app::Front::kCommandLine);
+  cmd->add_option("--demonstrations", args->demonstrations,
+                  "Learn from the file's first N demonstrations only (the controlled run not counted)")
+      ->check(CLI::Range(1, 1 << 30))
+      ->excludes(log);
+  cmd->add_option("--warm-start", args->warm_start,
+                  "EM also starts from these weights (comma-separated, one per feature) and keeps the better "
+                  "start by its selection rule: with --demonstrations n and estimate n-1 of --anytime, this "
+                  "reproduces estimate n")
+      ->delimiter(',')
+      ->excludes(log);
+  cmd->add_flag("--anytime", args->anytime,
+                "Learn while the demonstrations arrive: after each demonstration n, print one line of JSON "
+                "(demonstrations, weights, log_likelihood, score, from_previous, policy, with true weights "
+                "ile_relative, with --posterior-samples the posterior) -- what --demonstrations n gives with "
+                "--warm-start at estimate n-1 (docs/MODEL.md \"Learning while it watches\")")
+      ->excludes(log);
   cmd->add_flag("--verbose,-v", args->verbose, "Report every EM iteration on stderr");
   cmd->add_option("--out,-o", args->out, "Write the JSON result to this file instead of stdout");
   return [args] { return run_learn(*args); };

@@ -180,8 +180,9 @@ void add_posterior_settings(std::vector<Setting>& schema) {
   samples.optimiser = false;
   schema.push_back(std::move(samples));
   Setting scale = number("prior_scale", "--prior-scale",
-                         "The posterior's Gaussian prior on each weight of theta: its standard deviation (0: chosen "
-                         "from the data by the Laplace evidence over 0.25 .. 128)",
+                         "The posterior's Gaussian prior on each weight of theta: its standard deviation, for features "
+                         "of order 1 (scale it with yours; 0: chosen from the data by the Laplace evidence over "
+                         "0.25 .. 128, measured worse calibrated; docs/MODEL.md \"The posterior over theta\")",
                          0, false, [](LearnSettings& l) -> double& { return l.posterior.prior_scale; });
   scale.optimiser = false;
   schema.push_back(std::move(scale));

@@ -20,9 +20,6 @@ namespace hbirl {
 
 namespace {
 
-// "Near optimal": the learned policy loses at most this share of the optimal value.
-constexpr double kNearOptimal = 0.05;
-
 // Enough EM iterations for the slowest method to converge (the paper's update at c = 0.1
 // with one refinement per E-step needs several hundred).
 constexpr int kMaxEmIterations = 3000;
@@ -95,17 +92,6 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   r.theta.assign(learned.theta.data(), learned.theta.data() + learned.theta.size());
 }
 
-// 95% Wilson score interval of a proportion k / n.
-std::pair<double, double> wilson(int k, int n) {
-  if (n == 0) return {0.0, 1.0};
-  const double z = 1.959963984540054;
-  const double p = static_cast<double>(k) / n;
-  const double d = 1.0 + z * z / n;
-  const double centre = (p + z * z / (2.0 * n)) / d;
-  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / d;
-  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
-}
-
 // The groups of the breakdown: a name and which runs belong to it.
 struct Group {
   std::string name;
@@ -155,7 +141,7 @@ Cell cell(const std::vector<RandomTaskRun>& runs, const std::string& method, con
     if (r.method != method || !r.error.empty() || !group.member(r)) continue;
     ++c.n;
     c.optimal += r.optimal ? 1 : 0;
-    c.near += r.ile_relative <= kNearOptimal ? 1 : 0;
+    c.near += r.ile_relative <= kNearOptimalShare ? 1 : 0;
     c.ile.push_back(r.ile_relative);
   }
   return c;
@@ -231,42 +217,13 @@ std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& o) {
     for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
   }
   if (seeds.empty() || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
-  const int items = static_cast<int>(seeds.size()) * o.draws;
-  const size_t per_item = o.methods.size();
-  std::vector<RandomTaskRun> runs(static_cast<size_t>(items) * per_item);
-  std::atomic<int> done{0};
-  const int total = static_cast<int>(runs.size());
-  parallel_for(items, o.threads, [&](int i) {
-    const std::uint64_t seed = seeds[static_cast<size_t>(i / o.draws)];
-    const int draw = i % o.draws;
-    std::optional<RandomTask> task;
-    std::string task_error;
-    try {
-      task = make_random_task(seed, draw);
-    } catch (const std::exception& e) {
-      task_error = e.what();
-    }
-    for (size_t m = 0; m < per_item; ++m) {
-      RandomTaskRun& r = runs[static_cast<size_t>(i) * per_item + m];
-      const auto start = std::chrono::steady_clock::now();
-      if (task) {
-        r = describe(*task, o.methods[m]);
-        try {
-          learn(*task, o.methods[m], r);
-        } catch (const std::exception& e) {
-          r.error = e.what();  // one failed run must not lose the others
-        }
-      } else {
-        r.seed = seed;
-        r.draw = draw;
-        r.method = o.methods[m].key;
-        r.error = "no task: " + task_error;
-      }
-      r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const int finished = ++done;
-      if (o.progress) o.progress(finished, total);
-    }
-  });
+  std::vector<RandomTaskRun> runs =
+      on_random_data_sets<RandomTaskRun>(seeds, o.draws, o.methods.size(), o.threads, o.progress,
+                                         [&](const RandomTask& task, size_t m, RandomTaskRun& run) {
+                                           run = describe(task, o.methods[m]);
+                                           learn(task, o.methods[m], run);
+                                         });
+  for (size_t i = 0; i < runs.size(); ++i) runs[i].method = o.methods[i % o.methods.size()].key;  // a failed task's too
   return runs;
 }
 

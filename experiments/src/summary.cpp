@@ -17,6 +17,16 @@ std::string csv_text(std::string text) {
   return text;
 }
 
+std::pair<double, double> wilson(int k, int n) {
+  if (n == 0) return {0.0, 1.0};
+  const double z = 1.959963984540054;
+  const double p = static_cast<double>(k) / n;
+  const double d = 1.0 + z * z / n;
+  const double centre = (p + z * z / (2.0 * n)) / d;
+  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / d;
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
 SummaryRow mean_and_ci(const std::vector<double>& values) {
   SummaryRow row;
   row.n = static_cast<int>(values.size());

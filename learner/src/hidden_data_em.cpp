@@ -257,14 +257,21 @@ LearnResult learn_reward(const Mdp& mdp, const EStep& estep, const LearnOptions&
     }
     starts.push_back(std::move(theta));
   }
+  if (options.warm_start) {
+    if (options.warm_start->size() != k || !options.warm_start->allFinite()) {
+      throw InputError("warm_start", "must be " + std::to_string(k) + " finite weights, one per feature");
+    }
+    starts.push_back(*options.warm_start);
+  }
+  const int runs = static_cast<int>(starts.size());
   LearnResult result;
-  result.restarts.resize(static_cast<size_t>(options.restarts));
-  parallel_for(options.restarts, options.threads, [&](int r) {
+  result.restarts.resize(starts.size());
+  parallel_for(runs, options.threads, [&](int r) {
     result.restarts[static_cast<size_t>(r)] =
         run_restart(mdp, estep, options, on_iteration, starts[static_cast<size_t>(r)],
                     root.split(0x5EED0000ull + static_cast<std::uint64_t>(r)).next_u64(), r);
   });
-  for (int r = 1; r < options.restarts; ++r) {
+  for (int r = 1; r < runs; ++r) {
     if (result.restarts[static_cast<size_t>(r)].score >
         result.restarts[static_cast<size_t>(result.selected_restart)].score) {
       result.selected_restart = r;

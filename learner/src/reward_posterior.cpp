@@ -176,7 +176,7 @@ double RewardPosterior::probability(const std::vector<char>& holds) const {
   if (holds.size() != static_cast<size_t>(weights.size())) throw InputError("holds", "one per draw");
   double p = 0.0;
   for (size_t i = 0; i < holds.size(); ++i) p += holds[i] ? weights[static_cast<Eigen::Index>(i)] : 0.0;
-  return p;
+  return std::min(p, 1.0);  // the weights sum to 1 only to rounding
 }
 
 RewardPosterior sample_reward_posterior(const Mdp& mdp, const EStep& estep, const EStepState& state,
@@ -242,6 +242,10 @@ PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& poster
     out.expected_relative_ile += w * relative;
     add_optimal_actions(mdp, optimal, w, out.action_optimal);
   }
+  // The weights sum to 1 only to rounding: a probability must not print as 1 + 1e-16.
+  out.near_optimal = std::min(out.near_optimal, 1.0);
+  out.optimal = std::min(out.optimal, 1.0);
+  out.action_optimal = out.action_optimal.cwiseMin(1.0);
   return out;
 }
 

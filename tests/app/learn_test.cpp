@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 #include <set>
 
 #include "learner/input_error.hpp"
@@ -101,6 +102,59 @@ TEST(Learn, DrawsThePosteriorWhenAsked) {
   settings.mcmc.burn_in = 5;
   settings.em.max_em_iterations = 2;
   EXPECT_THROW(learn(task.mdp, task.observed.trajectories, task.prior, settings), InputError);
+}
+
+// Learning while it watches: estimate n is learn() on the first n demonstrations started
+// also from estimate n - 1 (bit for bit: any point of the sequence can be reproduced alone),
+// and never worse by EM's selection score than a start from scratch on the same n -- from
+// observations and from true trajectories (where the score is the log-likelihood).
+TEST(LearnAnytime, EachEstimateIsLearnOnThePrefixFromThePreviousAndNoWorseThanFresh) {
+  for (std::uint64_t seed : {4u, 9u}) {
+    const RandomTask task = small_task(seed);
+    LearnSettings settings;
+    settings.em.threads = 2;
+    std::vector<Eigen::VectorXd> estimates;
+    int warm_wins = 0;
+    const auto check = [&](int n, const Learned& got, const std::function<Learned(const LearnSettings&)>& again) {
+      ASSERT_EQ(n, static_cast<int>(estimates.size()) + 1);
+      LearnSettings from_previous = settings;
+      if (n > 1) from_previous.em.warm_start = estimates.back();
+      EXPECT_TRUE(same_bits(again(from_previous).em.theta, got.em.theta)) << "task " << seed << ", n " << n;
+      const Learned fresh = again(settings);
+      EXPECT_GE(got.best().score, fresh.best().score) << "task " << seed << ", n " << n;
+      if (got.em.theta != fresh.em.theta) ++warm_wins;
+      estimates.push_back(got.em.theta);
+    };
+    const std::vector<ObservedTrajectory>& observed = task.observed.trajectories;
+    learn_anytime(task.mdp, observed, task.prior, settings, {}, [&](int n, const Learned& got) {
+      const std::vector<ObservedTrajectory> first(observed.begin(), observed.begin() + n);
+      check(n, got, [&](const LearnSettings& s) { return learn(task.mdp, first, task.prior, s); });
+    });
+    EXPECT_EQ(estimates.size(), observed.size());
+    estimates.clear();
+    learn_from_truth_anytime(task.mdp, task.demonstrations, settings, {}, [&](int n, const Learned& got) {
+      const std::vector<Trajectory> first(task.demonstrations.begin(), task.demonstrations.begin() + n);
+      check(n, got, [&](const LearnSettings& s) { return learn_from_truth(task.mdp, first, s); });
+      // Concave: both starts reach the one optimum, to the M-step's tolerance.
+      const double fresh = learn_from_truth(task.mdp, first, settings).em.log_likelihood;
+      EXPECT_GE(got.em.log_likelihood, fresh - 1e-9 * std::abs(fresh));
+    });
+    EXPECT_EQ(estimates.size(), task.demonstrations.size());
+    RecordProperty("warm_start_changed_estimates_task_" + std::to_string(seed), warm_wins);
+  }
+}
+
+// A warm start of the wrong length is named.
+TEST(LearnAnytime, AWarmStartOfTheWrongLengthIsNamed) {
+  const RandomTask task = small_task(4);
+  LearnSettings settings;
+  settings.em.warm_start = Eigen::VectorXd::Zero(task.mdp.num_features() + 1);
+  try {
+    (void)learn_from_truth(task.mdp, task.demonstrations, settings);
+    FAIL() << "learned from a warm start of the wrong length";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "warm_start");
+  }
 }
 
 // An observation no source can make is named as the front end names its data.

@@ -219,6 +219,40 @@ TEST_F(Cli, GenerateThenLearn) {
   EXPECT_EQ(std::max_element(w.begin(), w.end()) - w.begin(), 2);
 }
 
+// --anytime prints an estimate per demonstration, and each is reproduced alone by
+// --demonstrations n --warm-start <estimate n-1> (the weights as printed: JSON's numbers
+// round-trip).
+TEST_F(Cli, AnytimeEstimatesAreReproducedOneByOne) {
+  const fs::path p = dir_ / "task.json";
+  ASSERT_EQ(run("generate random-task --seed 21 --out '" + p.string() + "'").status, 0);
+  const std::string problem = " --problem '" + p.string() + "'";
+  const Outcome all = run("learn --anytime --demonstrations 5" + problem);
+  ASSERT_EQ(all.status, 0) << all.err;
+  std::vector<json> lines;
+  std::istringstream in(all.out);
+  for (std::string line; std::getline(in, line);) lines.push_back(json::parse(line));
+  ASSERT_EQ(lines.size(), 5u);
+  for (int n : {1, 2, 5}) {
+    const json& estimate = lines[static_cast<size_t>(n - 1)];
+    EXPECT_EQ(estimate["demonstrations"], n);
+    std::string warm;
+    if (n > 1) {
+      for (const json& w : lines[static_cast<size_t>(n - 2)]["weights"]) warm += (warm.empty() ? "" : ",") + w.dump();
+      warm = " --warm-start " + warm;
+    }
+    const Outcome alone = run("learn --demonstrations " + std::to_string(n) + warm + problem);
+    ASSERT_EQ(alone.status, 0) << alone.err;
+    EXPECT_EQ(json::parse(alone.out)["weights"], estimate["weights"]) << "n " << n;
+  }
+  for (const std::string& bad :
+       {std::string("learn --warm-start 1") + problem, std::string("learn --demonstrations 100000") + problem,
+        std::string("learn --anytime --log x.lcmlog")}) {
+    const Outcome r = run(bad);
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_EQ(r.err_lines(), 1) << bad << ": " << r.err;
+  }
+}
+
 // Every generated random task is a valid problem file (the user's one-command way to
 // reproduce a benchmark run); learning it reports what the observation model did.
 TEST_F(Cli, EveryGeneratedRandomTaskValidates) {

@@ -87,4 +87,16 @@ Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observation
 Learned learn_from_truth(const Mdp& mdp, std::vector<Trajectory> truth, const LearnSettings& settings,
                          const LearnHooks& hooks = {});
 
+// Learning while the demonstrations arrive (docs/MODEL.md "Learning while it watches"):
+// for n = 1, 2, ..., N, what learn() (learn_from_truth()) gives on the first n
+// trajectories, EM started also from estimate n - 1's theta (LearnOptions::warm_start;
+// settings.em.warm_start is the first estimate's). So estimate n is exactly one learn() call
+// -- any point of the sequence can be reproduced alone, given the one before -- and, by EM's
+// selection rule, it is never worse than a start from scratch on the same n.
+using EstimateReport = std::function<void(int demonstrations, const Learned&)>;
+void learn_anytime(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const ObservationPrior& prior,
+                   const LearnSettings& settings, const LearnHooks& hooks, const EstimateReport& on_estimate);
+void learn_from_truth_anytime(const Mdp& mdp, const std::vector<Trajectory>& truth, const LearnSettings& settings,
+                              const LearnHooks& hooks, const EstimateReport& on_estimate);
+
 }  // namespace hbirl::app

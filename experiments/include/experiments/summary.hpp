@@ -1,7 +1,10 @@
 #pragma once
 // Summaries and figures of experiment runs: mean and 95% confidence interval per
 // (method, x) and a paper-style figure drawn by gnuplot.
+#include <chrono>
+#include <exception>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plot/gnuplot.hpp"
@@ -23,6 +26,22 @@ std::string csv_text(std::string text);
 
 // The mean, standard deviation and 95% t-interval of `values` (method and x left empty).
 SummaryRow mean_and_ci(const std::vector<double>& values);
+
+// One learning run of an experiment: `learn(run)`, timed into run.seconds, what it throws
+// kept in run.error (one failed run must not lose the others).
+template <class Run, class Learn>
+void record_run(Run& run, Learn&& learn) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    learn(run);
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The 95% Wilson score interval of a proportion k / n ([0, 1] when n is 0).
+std::pair<double, double> wilson(int k, int n);
 
 // values[i] belongs to (methods[i], xs[i]); rows come out ordered by method (first
 // appearance) then x.

@@ -8,8 +8,8 @@
 // does not depend on theta and this is plain MaxCausalEnt IRL (one M-step).
 //
 // Restarts: restart 0 starts from theta = 0, restart r > 0 from theta ~ U[-1, 1]^K drawn
-// from the stream r of the seed. Selection rule: the restart with the highest score --
-// the log-likelihood of the data (with the posterior observation-model update and an
+// from the stream r of the seed, and a warm start (LearnOptions::warm_start) after them. Selection rule: the restart
+// with the highest score -- the log-likelihood of the data (with the posterior observation-model update and an
 // automatic prior strength, the held-out log-likelihood that chose the strength) --
 // minus the L2 penalty when one is set; ties go to the lowest restart index.
 //
@@ -19,6 +19,7 @@
 // for any thread count.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,11 @@ struct LearnOptions {
   // deterministic E-step: turn it off for sampling engines.
   bool accelerate = true;
   SoftViOptions soft_vi;
+  // A start point besides the restarts' (the previous estimate, when learning while the
+  // demonstrations arrive: app::learn_anytime): EM also runs from it, as restart
+  // `restarts`, and the selection rule chooses among all -- so the result is never worse,
+  // by that rule, than without it.
+  std::optional<Eigen::VectorXd> warm_start;
 };
 
 // Called after every accepted EM iterate (from the restart's thread; SQUAREM's rejected

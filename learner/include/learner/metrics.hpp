@@ -13,6 +13,11 @@ struct InverseLearningError {
   double relative() const { return optimal_value_l1 > 0.0 ? ile / optimal_value_l1 : ile; }
 };
 
+// "Near optimal": the learned policy loses at most this share of the optimal value
+// (relative ILE <= 0.05) -- what hbirl's confidence is the probability of, and what the
+// experiments count as right (docs/MODEL.md "Metrics").
+constexpr double kNearOptimalShare = 0.05;
+
 // ILE = ||V^{pi_E} - V^{pi_L}||_1 where pi_E is optimal for the true reward, pi_L is
 // optimal for the learned reward, and both are evaluated exactly (policy evaluation, not
 // a one-step estimate) under the TRUE reward.

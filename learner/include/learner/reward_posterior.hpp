@@ -17,20 +17,25 @@
 // weights make every summary consistent whatever the Laplace approximation misses (skew,
 // a saturating likelihood); their effective number says how well the proposal covered it.
 //
-// sigma: given, or chosen by the evidence (empirical Bayes): the Laplace approximation of
-// log p(data | sigma) over a grid of scales, from the likelihood's curvature at EM's theta.
+// sigma: given (8 unless told), or chosen by the evidence (empirical Bayes): the Laplace
+// approximation of log p(data | sigma) over a grid of scales, from the likelihood's
+// curvature at EM's theta -- measured worse calibrated than 8 (docs/MODEL.md).
 #include <cstdint>
 #include <vector>
 
 #include "learner/estep.hpp"
 #include "learner/mdp.hpp"
+#include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
 
 namespace hbirl {
 
 struct RewardPosteriorOptions {
-  int samples = 0;           // importance draws (at least 1; front ends draw none unless asked)
-  double prior_scale = 0.0;  // sigma; 0: chosen by the evidence
+  int samples = 0;  // importance draws (at least 1; front ends draw none unless asked)
+  // sigma. 8: weakly informative for features of order 1 (indicators, as in the built-in
+  // domains and random tasks), and the confidence it gives measured calibrated on held-out
+  // random tasks (docs/MODEL.md "The posterior over theta"); 0: chosen by the evidence.
+  double prior_scale = 8.0;
   std::uint64_t seed = 1;
   double student_dof = 4.0;  // the proposal's degrees of freedom
 };
@@ -97,7 +102,7 @@ struct PolicyConfidence {
   Eigen::MatrixXd action_optimal;  // states x actions; 0 at terminal states and impossible actions
 };
 PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
-                                   const Eigen::VectorXd& learned_theta, double near = 0.05);
+                                   const Eigen::VectorXd& learned_theta, double near = kNearOptimalShare);
 
 // The posterior around EM's theta (`theta_hat`), the E-step in `state` (EM's last).
 // Throws InputError for options out of range.
