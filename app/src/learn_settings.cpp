@@ -174,7 +174,8 @@ void add_posterior_settings(std::vector<Setting>& schema) {
   Setting samples = integer<int>(
       "posterior_samples", "--posterior-samples",
       "Draw this many samples of theta from its posterior (importance sampling around the Laplace approximation, "
-      "the observation model held at what EM learned; 0: none) and report the confidence in the learned policy, "
+      "the observation model held at what EM learned, and when learned the confidence averaged with O at the "
+      "prior; 0: none) and report the confidence in the learned policy, "
       "credible intervals and the expected ILE (docs/MODEL.md \"The posterior over theta\"); the exact engine only",
       0, 1e6, [](LearnSettings& l) -> int& { return l.posterior.samples; });
   samples.optimiser = false;

@@ -221,8 +221,8 @@ std::vector<CalibrationRun> calibration_runs_from_csv(const std::string& csv) {
     for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
     if (!line.empty() && line.back() == ',') f.emplace_back();
     if (f.size() != 12) {
-      throw InputError("runs CSV", "line " + std::to_string(number) + ": " + std::to_string(f.size()) +
-                                       " fields, expected 12");
+      throw InputError("runs CSV",
+                       "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected 12");
     }
     try {
       CalibrationRun r;

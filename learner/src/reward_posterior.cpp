@@ -249,4 +249,13 @@ PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& poster
   return out;
 }
 
+PolicyConfidence mix(const PolicyConfidence& a, const PolicyConfidence& b, double w) {
+  PolicyConfidence out;
+  out.near_optimal = (1.0 - w) * a.near_optimal + w * b.near_optimal;
+  out.optimal = (1.0 - w) * a.optimal + w * b.optimal;
+  out.expected_relative_ile = (1.0 - w) * a.expected_relative_ile + w * b.expected_relative_ile;
+  out.action_optimal = (1.0 - w) * a.action_optimal + w * b.action_optimal;
+  return out;
+}
+
 }  // namespace hbirl

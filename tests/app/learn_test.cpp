@@ -97,6 +97,19 @@ TEST(Learn, DrawsThePosteriorWhenAsked) {
   for (size_t k = 0; k < j["mean"].size(); ++k) {
     EXPECT_LE(j["interval_90"][k][0].get<double>(), j["interval_90"][k][1].get<double>());
   }
+  // O learned: the confidence is the even mixture of the posterior with O as learned and
+  // the one with O held at the prior -- the latter what learning with O fixed draws, asked
+  // of this learned policy.
+  ASSERT_TRUE(learned.given.learn && learned.confidence_learned_o && learned.confidence_prior_o);
+  LearnSettings held = settings;
+  held.learn_observation_model = false;
+  const Learned at_prior = learn(task.mdp, task.observed.trajectories, task.prior, held);
+  EXPECT_FALSE(at_prior.confidence_prior_o);  // nothing to average when O is not learned
+  const PolicyConfidence expected = policy_confidence(task.mdp, *at_prior.posterior, learned.em.theta);
+  EXPECT_EQ(learned.confidence_prior_o->near_optimal, expected.near_optimal);
+  EXPECT_DOUBLE_EQ(learned.confidence->near_optimal,
+                   0.5 * (learned.confidence_learned_o->near_optimal + expected.near_optimal));
+  EXPECT_EQ(j["confidence_by_sensor_model"]["prior"].get<double>(), expected.near_optimal);
   settings.engine = "mcmc";
   settings.mcmc.samples = 20;
   settings.mcmc.burn_in = 5;

@@ -55,6 +55,10 @@ struct Learned {
   // for draws (posterior_samples).
   std::optional<RewardPosterior> posterior;
   std::optional<PolicyConfidence> confidence;
+  // When O was learned: the posterior with O held at the prior instead (the second model of
+  // the sensor the confidence averages over, docs/MODEL.md), and what each model alone says.
+  std::optional<RewardPosterior> posterior_prior_o;
+  std::optional<PolicyConfidence> confidence_learned_o, confidence_prior_o;
 
   const RestartResult& best() const { return em.restarts[static_cast<size_t>(em.selected_restart)]; }
   // The E-step at the learned theta and model (the policy of theta; learned eta when eta is

@@ -1,15 +1,15 @@
 # Written by hbirl; run `gnuplot docs/results/calibration/calibration.gp` to redraw.
 $d0 << EOD
-0.0166362 0.184211 0.0922177 0.334189 0.05 38
-0.147926 0.25 0.101821 0.494983 0.15 16
-0.253916 0 1.38778e-17 0.215311 0.25 14
-0.334285 0.25 0.111862 0.468701 0.35 20
-0.451818 0.157895 0.0552047 0.375655 0.45 19
-0.559152 0.428571 0.2447 0.634534 0.55 21
-0.644745 0.45 0.258198 0.657915 0.65 20
-0.752245 0.375 0.24223 0.529676 0.75 40
-0.852332 0.611111 0.477883 0.729581 0.85 54
-0.98574 0.810056 0.766214 0.847315 0.95 358
+0.0284938 0.227273 0.128419 0.369924 0.05 44
+0.156149 0.0526316 0.00935199 0.246387 0.15 19
+0.251609 0.285714 0.138139 0.499564 0.25 21
+0.351991 0.3 0.166647 0.478758 0.35 30
+0.459853 0.27451 0.171143 0.409467 0.45 51
+0.542412 0.442308 0.315951 0.576602 0.55 52
+0.656584 0.589744 0.434186 0.729207 0.65 39
+0.745555 0.566038 0.432654 0.690496 0.75 53
+0.853528 0.745763 0.622039 0.83944 0.85 59
+0.977619 0.926724 0.885797 0.95375 0.95 232
 EOD
 $d1 << EOD
 0.021004 0.333333 0.0967714 0.700007 0.05 6
@@ -34,7 +34,7 @@ set yrange [0:1]
 set xlabel 'confidence (mean in bin)'
 set ylabel 'share right'
 set title 'Reliability: share of runs within 5% of the optimal value against the confidence (95% Wilson)'
-plot x title 'calibrated' lc rgb '#888888' dt 2, $d0 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#d95f02' title 'from observations (ECE 0.194, AUROC 0.819)', $d1 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#1b9e77' title 'from truth (ECE 0.021, AUROC 0.912)'
+plot x title 'calibrated' lc rgb '#888888' dt 2, $d0 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#d95f02' title 'from observations (ECE 0.097, AUROC 0.849)', $d1 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#1b9e77' title 'from truth (ECE 0.021, AUROC 0.912)'
 set size 1,0.3
 set origin 0,0
 set title 'Runs per confidence bin'
@@ -57,7 +57,7 @@ set yrange [0:1]
 set xlabel 'confidence (mean in bin)'
 set ylabel 'share right'
 set title 'Reliability: share of runs within 5% of the optimal value against the confidence (95% Wilson)'
-plot x title 'calibrated' lc rgb '#888888' dt 2, $d0 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#d95f02' title 'from observations (ECE 0.194, AUROC 0.819)', $d1 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#1b9e77' title 'from truth (ECE 0.021, AUROC 0.912)'
+plot x title 'calibrated' lc rgb '#888888' dt 2, $d0 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#d95f02' title 'from observations (ECE 0.097, AUROC 0.849)', $d1 using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb '#1b9e77' title 'from truth (ECE 0.021, AUROC 0.912)'
 set size 1,0.3
 set origin 0,0
 set title 'Runs per confidence bin'

@@ -3,7 +3,8 @@
 //     p(theta | data) ∝ p(data | theta, O) N(theta; 0, sigma^2 I),
 // with the observation model O (and learned eta) held at the values EM learned -- what
 // that leaves out is their own uncertainty, which makes the posterior somewhat narrower
-// than the full one.
+// than the full one (app::learn averages the confidence over O as learned and O at the
+// prior, docs/MODEL.md).
 //
 // log p(data | theta, O) is the E-step's (EStep::fixed_model_statistics): the exact
 // forward-backward's log-likelihood of the observations, or sum log pi(a|s) on true
@@ -103,6 +104,10 @@ struct PolicyConfidence {
 };
 PolicyConfidence policy_confidence(const Mdp& mdp, const RewardPosterior& posterior,
                                    const Eigen::VectorXd& learned_theta, double near = kNearOptimalShare);
+
+// The confidence under a mixture of two posteriors with weights 1 - w and w (model
+// averaging: each number is the mixture's).
+PolicyConfidence mix(const PolicyConfidence& a, const PolicyConfidence& b, double w);
 
 // The posterior around EM's theta (`theta_hat`), the E-step in `state` (EM's last).
 // Throws InputError for options out of range.
