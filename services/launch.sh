@@ -23,6 +23,7 @@ confounders=3
 trajectories=20
 eta=plausible
 learn_eta_args=()
+stop_args=()
 config=all
 sorts=6
 controlled_sorts=20
@@ -105,6 +106,13 @@ Runs a demo as separate processes over LCM and prints the learned reward.
   --stall-timeout S      a service that has neither beaten its heartbeat nor computed for S
                          seconds (stopped, or blocked: alive, but silent) is killed and
                          restarted, like one that died (default $stall; 0: only deaths are noticed)
+  --anytime              the optimiser publishes an estimate after each demonstration
+                         (ESTIMATE, with its confidence: 200 posterior draws each), drawn by
+                         the dashboard demonstration by demonstration
+  --stop-at-confidence P knowing when it has seen enough: once --stop-after estimates in a row
+                         have a confidence >= P (in (0, 1)), the optimiser sends STOP and the
+                         sensor ends the run after the episode under way (implies --anytime)
+  --stop-after K         estimates in a row for --stop-at-confidence (default 3)
   --allow-incomplete     learn from what came when a run's frames stop coming before it is
                          complete, and exit 0 (the result says what is missing under
                          "incomplete"); by default such a run fails, after
@@ -145,6 +153,9 @@ while [ $# -gt 0 ]; do
     --key) key="$2"; key_mode=given; shift 2 ;;
     --no-key) key_mode=none; shift ;;
     --stall-timeout) stall="$2"; shift 2 ;;
+    --anytime) stop_args+=(--anytime); shift ;;
+    --stop-at-confidence) stop_args+=(--stop-at-confidence "$2"); shift 2 ;;
+    --stop-after) stop_args+=(--stop-after "$2"); shift 2 ;;
     --allow-incomplete) allow_incomplete=1; shift ;;
     --incomplete-after) incomplete_after="$2"; shift 2 ;;
     --sensor-key) sensor_key=1; shift ;;
@@ -379,6 +390,8 @@ fi
 : >"$out/logs/optimiser.log"
 : >"$out/logs/optimiser.err"
 optimiser_args=(--incomplete-after-ms "$((incomplete_after * 1000))")
+# Live estimates carry a confidence from 200 posterior draws (docs/MODEL.md).
+[ "${#stop_args[@]}" = 0 ] || optimiser_args+=("${stop_args[@]}" --posterior-samples 200)
 [ "$allow_incomplete" = 0 ] || optimiser_args+=(--allow-incomplete)
 start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" \
   "${optimiser_args[@]}" --out "$out/result.json"

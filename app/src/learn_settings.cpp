@@ -168,8 +168,8 @@ void add_em_settings(std::vector<Setting>& schema) {
                                      1e6, [](LearnSettings& l) -> int& { return l.max_alpha_iterations; })));
 }
 
-// The posterior over theta (learner/reward_posterior.hpp), drawn after EM when asked. Not on
-// the optimiser yet: it reports a point.
+// The posterior over theta (learner/reward_posterior.hpp), drawn after EM when asked; on the
+// optimiser, for its live estimates' confidence (--anytime).
 void add_posterior_settings(std::vector<Setting>& schema) {
   Setting samples = integer<int>(
       "posterior_samples", "--posterior-samples",
@@ -178,14 +178,12 @@ void add_posterior_settings(std::vector<Setting>& schema) {
       "prior; 0: none) and report the confidence in the learned policy, "
       "credible intervals and the expected ILE (docs/MODEL.md \"The posterior over theta\"); the exact engine only",
       0, 1e6, [](LearnSettings& l) -> int& { return l.posterior.samples; });
-  samples.optimiser = false;
-  schema.push_back(std::move(samples));
+  schema.push_back(std::move(samples));  // hbirl-optimiser: the confidence of its live estimates (--anytime)
   Setting scale = number("prior_scale", "--prior-scale",
                          "The posterior's Gaussian prior on each weight of theta: its standard deviation, for features "
                          "of order 1 (scale it with yours; 0: chosen from the data by the Laplace evidence over "
                          "0.25 .. 128, measured worse calibrated; docs/MODEL.md \"The posterior over theta\")",
                          0, false, [](LearnSettings& l) -> double& { return l.posterior.prior_scale; });
-  scale.optimiser = false;
   schema.push_back(std::move(scale));
 }
 

@@ -139,6 +139,19 @@ nlohmann::json em_json(const std::vector<hbirl::em_progress_t>& progress) {
   return em;
 }
 
+// One entry per live estimate (a value -1, unknown, as null).
+nlohmann::json estimates_json(const std::vector<hbirl::estimate_t>& estimates) {
+  const auto known = [](double x) { return x >= 0.0 ? finite_or_null(x) : nlohmann::json(nullptr); };
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& e : estimates) {
+    out.push_back({{"demonstrations", e.demonstrations},
+                   {"confidence", known(e.confidence)},
+                   {"ile_relative", known(e.ile_relative)},
+                   {"seconds", e.seconds}});
+  }
+  return out;
+}
+
 // The learned theta (the final reward's, else the newest iteration's) and the true one, or null.
 nlohmann::json theta_json(const std::optional<hbirl::reward_t>& reward,
                           const std::vector<hbirl::em_progress_t>& progress,
@@ -244,6 +257,8 @@ void DashboardState::subscribe(services::Bus& bus, services::Counters& counters)
                      bus, ch::kEmProgress, counters, [this](const auto& m, const Message&) { on_progress(m); }, 10000));
   subs_.add(bus, services::subscribe(
                      bus, ch::kReward, counters, [this](const auto& m, const Message&) { on_reward(m); }, 100));
+  subs_.add(bus, services::subscribe(
+                     bus, ch::kEstimate, counters, [this](const auto& m, const Message&) { on_estimate(m); }, 1000));
   subs_.add(bus,
             services::subscribe(
                 bus, ch::kObservationModel, counters, [this](const auto& m, const Message&) { on_model(m); }, 100));
@@ -373,6 +388,17 @@ void DashboardState::on_reward(const hbirl::reward_t& m) {
   changed();
 }
 
+void DashboardState::on_estimate(const hbirl::estimate_t& m) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  set_domain(m.domain);
+  // A new run's optimiser starts again from its first demonstration.
+  if (!estimates_.empty() && m.demonstrations <= estimates_.back().demonstrations) estimates_.clear();
+  if (estimates_.size() >= kMaxIterations) throw InputError("estimate.demonstrations", "more than the dashboard keeps");
+  estimates_.push_back(m);
+  estimates_.back().policy.clear();  // not shown
+  changed();
+}
+
 void DashboardState::on_status(const hbirl::service_status_t& m, std::int64_t now_utime) {
   if (m.id.empty()) throw InputError("status.id", "is empty");
   if (m.id.size() > 200 || m.service.size() > 100) throw InputError("status.id", "is too long");
@@ -499,6 +525,7 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   // Learning: EM iterations, theta, the posterior and the observation model.
   j["em"] = em_json(progress_);
   j["theta"] = theta_json(reward_, progress_, true_weights_);
+  j["estimates"] = estimates_json(estimates_);
   j["reward"] =
       reward_ ? nlohmann::json{{"final", reward_->final != 0},
                                {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},

@@ -163,6 +163,26 @@ function showEm(s) {
   filled('panel-em');
 }
 
+function showEstimates(s) {
+  const es = s.estimates || [];
+  if (!es.length) return;
+  const n = es.map((e) => e.demonstrations);
+  const datasets = [{ label: 'confidence', data: es.map((e) => e.confidence), borderColor: '#2e7d32', yAxisID: 'p', pointRadius: 3 }];
+  const hasIle = es.some((e) => e.ile_relative !== null);
+  if (hasIle) datasets.push({ label: 'relative ILE (true reward)', data: es.map((e) => e.ile_relative), borderColor: '#d84315', yAxisID: 'ile', pointRadius: 3 });
+  lineOrBar('estimates-chart', 'line', n, datasets, {
+    scales: {
+      x: { title: { display: true, text: 'demonstrations' } },
+      p: { position: 'left', min: 0, max: 1, title: { display: true, text: 'confidence' } },
+      ile: { position: 'right', display: hasIle, min: 0, title: { display: true, text: 'ILE / ||V*||₁' }, grid: { drawOnChartArea: false } },
+    },
+  });
+  const last = es[es.length - 1];
+  $('estimates-caption').textContent = `after ${last.demonstrations} demonstrations: confidence ${fmt(last.confidence)}` +
+    (last.ile_relative !== null ? `, relative ILE ${fmt(last.ile_relative)}` : '') + `; the update took ${fmt(last.seconds, 2)} s`;
+  filled('panel-estimates');
+}
+
 function showTheta(s) {
   const th = s.theta;
   if (!th) return;
@@ -260,7 +280,7 @@ async function poll() {
     $('connection').textContent = '';
     if (s.version !== shownVersion) {
       shownVersion = s.version;
-      for (const show of [showRun, showCamera, showPosterior, showEm, showTheta, showModel, showEta]) draw(show, s);
+      for (const show of [showRun, showCamera, showPosterior, showEm, showEstimates, showTheta, showModel, showEta]) draw(show, s);
     }
     draw(showServices, s);  // heartbeat ages change with the clock
   } catch (e) {

@@ -296,6 +296,16 @@ void add_collection_options(CLI::App& app, OptimiserOptions& o, std::int64_t& ma
                  "Without --allow-incomplete: fail the run once no frame has come for this long after its end")
       ->check(CLI::Range(1, 86400000))
       ->capture_default_str();
+  app.add_flag("--anytime", o.anytime,
+               "Publish an estimate (ESTIMATE) after each demonstration that ends with all its frames, learned\n"
+               "here while the run goes on, EM also started from the previous estimate; with --posterior-samples N\n"
+               "it carries the confidence (docs/MODEL.md \"Learning while it watches\")");
+  app.add_option("--stop-at-confidence", o.stop_at_confidence,
+                 "Knowing when it has seen enough: once --stop-after estimates in a row have a confidence >= p,\n"
+                 "send STOP (the simulator or hbirl publish ends the run after the episode under way). Needs\n"
+                 "--anytime (implied) and --posterior-samples");
+  app.add_option("--stop-after", o.stop_after, "With --stop-at-confidence: estimates in a row at or above it")
+      ->capture_default_str();
   app.add_flag("--same-numerics-only", o.executor.same_numerics_only,
                "Give work only to sampler workers whose floating-point results are this build's bit for bit (their\n"
                "numerics fingerprint): theta identical to a one-process run even when other builds or CPUs join");
@@ -309,12 +319,33 @@ void add_collection_options(CLI::App& app, OptimiserOptions& o, std::int64_t& ma
                "differs from the optimiser's own is reported, gets no more work, and its blocks are computed here)");
 }
 
+// --stop-at-confidence p and --stop-after k: p in (0, 1), k >= 1, the confidence drawn,
+// estimates made (--anytime).
+void check_stop_rule(const CLI::App& app, OptimiserOptions& o) {
+  if (o.stop_after < 1 || o.stop_after > 1000000) throw InputError("--stop-after", "must be in [1, 1000000]");
+  if (app.count("--stop-at-confidence") == 0) return;
+  if (!(o.stop_at_confidence > 0.0 && o.stop_at_confidence < 1.0)) {
+    throw InputError("--stop-at-confidence", "must be in (0, 1)");
+  }
+  if (o.learning.posterior.samples == 0) {
+    throw InputError("--stop-at-confidence",
+                     "needs --posterior-samples N: the confidence comes from N posterior draws");
+  }
+  o.anytime = true;
+}
+
 // What hbirl-optimiser prints (README.md "Services and channels": the result JSON).
 nlohmann::json result_json(const OptimiserResult& r, const OptimiserOptions& o, const Counters& counters) {
   nlohmann::json j;
   add_learned_run(j, r, o.domain);
   if (!r.incomplete.empty()) j["incomplete"] = r.incomplete;
   j["frame_requests"] = r.frame_requests;
+  if (o.anytime) {
+    nlohmann::json confidence = nlohmann::json::array();
+    for (const auto& e : r.estimates) confidence.push_back(e.confidence);
+    j["estimates"] = {{"demonstrations", r.estimates.size()}, {"confidence", confidence}};
+    if (r.stop_sent_after > 0) j["stop_sent_after"] = r.stop_sent_after;
+  }
   j["workers"] = r.workers;
   j["estep"] = {{"requests", r.estep.requests},
                 {"remote_blocks", r.estep.remote_blocks},
@@ -357,6 +388,7 @@ int optimiser(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   o.executor.spot_check = !no_spot_check;
   o.max_dataset_bytes = max_dataset_mb << 20;
+  check_stop_rule(app, o);
   if (!d.spec.empty()) o.domain = app::open_domain_args(d, "hbirl");
   Counters counters;
   counters.service = "optimiser";

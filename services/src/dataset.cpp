@@ -67,7 +67,9 @@ DatasetBuilder::Episode& DatasetBuilder::episode(int id) {
 void DatasetBuilder::count(const Episode& e, int id, int sign) {
   if (!e.ended || !in_run(id)) return;
   ended_in_run_ += sign;
-  missing_frames_ += sign * (static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - e.have_frames);
+  const std::int64_t lacking = static_cast<std::int64_t>(e.num_steps) * e.frames_per_step - e.have_frames;
+  missing_frames_ += sign * lacking;
+  if (!e.controlled && lacking == 0) complete_demonstrations_ += sign;
   if (e.controlled) missing_truth_ += sign * (static_cast<std::int64_t>(e.num_steps) - e.have_truth);
 }
 
@@ -409,6 +411,24 @@ void DatasetBuilder::finish_dataset(Dataset& d) {
   if (d.truth.size() != d.observed.size()) d.truth.clear();  // ground truth only when complete
 }
 
+int DatasetBuilder::complete_demonstration_prefix() const {
+  int n = 0;
+  for (const auto& [id, e] : episodes_) {
+    if (!in_run(id) || (e.marked && e.controlled)) continue;
+    if (!e.ended || e.have_frames != static_cast<std::int64_t>(e.num_steps) * e.frames_per_step) break;
+    ++n;
+  }
+  return n;
+}
+
+Dataset first_demonstrations(Dataset data, size_t n) {
+  n = std::min(n, data.observed.size());
+  data.observed.resize(n);
+  data.episodes.resize(n);
+  if (data.truth.size() > n) data.truth.resize(n);
+  return data;
+}
+
 Dataset DatasetBuilder::build() const {
   Dataset d = empty_dataset();
   for (const auto& [id, e] : episodes_) add_episode(d, id, e);
@@ -458,6 +478,7 @@ Dataset DatasetBuilder::take() {
   bytes_ = 0;
   missing_frames_ = missing_truth_ = outside_run_ = 0;
   ended_in_run_ = 0;
+  complete_demonstrations_ = 0;
   watching_ = true;
   finish_dataset(d);
   return d;

@@ -110,4 +110,42 @@ void validate(const hbirl::ground_truth_t& m) {
   }
 }
 
+namespace {
+
+// -1 (unknown) or a finite number >= 0.
+bool unknown_or_not_negative(double x) { return x == -1.0 || (std::isfinite(x) && x >= 0.0); }
+
+}  // namespace
+
+void validate(const hbirl::estimate_t& m) {
+  if (m.demonstrations < 1 || m.demonstrations > kMaxEpisodes) {
+    throw InputError("estimate.demonstrations", "must be in [1, " + std::to_string(kMaxEpisodes) + "]");
+  }
+  if (m.num_features < 1 || m.num_features > kMaxFeatures) {
+    throw InputError("estimate.num_features", "must be in [1, " + std::to_string(kMaxFeatures) + "]");
+  }
+  for (double w : m.theta) {
+    if (!std::isfinite(w)) throw InputError("estimate.theta", "must be finite");
+  }
+  if (!(m.log_likelihood <= 0.0)) throw InputError("estimate.log_likelihood", "must be a number <= 0");
+  if (!(m.confidence == -1.0 || (m.confidence >= 0.0 && m.confidence <= 1.0)))
+    throw InputError("estimate.confidence", "must be -1 or in [0, 1]");
+  if (!unknown_or_not_negative(m.ile)) throw InputError("estimate.ile", "must be -1 or a number >= 0");
+  if (!unknown_or_not_negative(m.ile_relative))
+    throw InputError("estimate.ile_relative", "must be -1 or a number >= 0");
+  for (const std::vector<double>& row : m.policy) {
+    for (double p : row) {
+      if (!(p >= 0.0 && p <= 1.0)) throw InputError("estimate.policy", "every entry must be in [0, 1]");
+    }
+  }
+}
+
+void validate(const hbirl::stop_t& m) {
+  if (m.demonstrations < 0 || m.demonstrations > kMaxEpisodes) {
+    throw InputError("stop.demonstrations", "must be in [0, " + std::to_string(kMaxEpisodes) + "]");
+  }
+  if (!(m.confidence >= 0.0 && m.confidence <= 1.0)) throw InputError("stop.confidence", "must be in [0, 1]");
+  if (m.reason.size() > 1000) throw InputError("stop.reason", "longer than 1000 bytes");
+}
+
 }  // namespace hbirl::services

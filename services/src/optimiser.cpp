@@ -81,9 +81,17 @@ void size_unobserved(Dataset& data, const Domain& domain) {
 // sensor's next one began): then collected again.
 class RunCollector {
  public:
+  // `on_data`: called after every message while collecting (the live estimates).
   RunCollector(Bus& bus, DatasetBuilder& builder, const OptimiserOptions& options, Counters& counters,
-               const std::function<bool()>& stop, const std::function<void(const std::string&)>& log)
-      : bus_(bus), builder_(builder), options_(options), counters_(counters), stop_(stop), log_(log) {}
+               const std::function<bool()>& stop, const std::function<void(const std::string&)>& log,
+               std::function<void()> on_data = nullptr)
+      : bus_(bus),
+        builder_(builder),
+        options_(options),
+        counters_(counters),
+        stop_(stop),
+        log_(log),
+        on_data_(std::move(on_data)) {}
 
   // False when asked to stop.
   bool collect() {
@@ -127,6 +135,7 @@ class RunCollector {
         break;
       }
       check_contradiction();
+      if (on_data_) on_data_();
       if (builder_.frames() != frames_) {
         frames_ = builder_.frames();
         last_frame_ = Clock::now();
@@ -206,6 +215,7 @@ class RunCollector {
   Counters& counters_;
   const std::function<bool()>& stop_;
   const std::function<void(const std::string&)>& log_;
+  std::function<void()> on_data_;
   std::int64_t frames_ = -1;
   Clock::time_point last_frame_ = Clock::now();
   Clock::time_point last_request_ = Clock::now();
@@ -213,6 +223,127 @@ class RunCollector {
   bool announced_end_ = false;
   std::string incomplete_;
   bool ended_ = false;  // the bus has (a log at its end)
+};
+
+// The final REWARD's learning: as hbirl learn --log's, without posterior draws (they are
+// the live estimates' confidence; the REWARD carries none).
+app::LearnSettings final_settings(app::LearnSettings settings) {
+  settings.posterior.samples = 0;
+  return settings;
+}
+
+// The estimate after each demonstration (OptimiserOptions::anytime): when more
+// demonstrations are complete than last time, learned on the data so far (here, one
+// thread), EM also started from the last estimate, and published on ESTIMATE. A data set
+// that cannot be learned from yet (no subject prior, say) is skipped, said once.
+class LiveEstimator {
+ public:
+  LiveEstimator(Bus& bus, const OptimiserOptions& options, Counters& counters,
+                const std::function<void(const std::string&)>& log)
+      : bus_(bus), options_(options), counters_(counters), log_(log) {}
+
+  // An estimate for each demonstration n of the complete prefix not yet estimated, in
+  // order (several, when several came at once): the same estimates whatever the timing.
+  void update(const DatasetBuilder& builder) {
+    if (builder.complete_demonstrations() == complete_seen_) return;  // nothing ended since (a cheap test)
+    complete_seen_ = builder.complete_demonstrations();
+    const int ready = builder.complete_demonstration_prefix();
+    if (ready <= estimated_) return;
+    const Dataset data = builder.build();
+    for (int n = estimated_ + 1; n <= ready; ++n) estimate(first_demonstrations(data, static_cast<size_t>(n)));
+    estimated_ = ready;
+  }
+
+  std::vector<hbirl::estimate_t> take() { return std::move(estimates_); }
+
+ private:
+  void estimate(Dataset data) {
+    const auto start = Clock::now();
+    try {
+      const std::shared_ptr<const Domain> domain = domain_of(data, options_.domain);
+      size_unobserved(data, *domain);
+      app::LearnSettings settings = options_.learning;
+      settings.em.warm_start = previous_;
+      const Learned learned = learn_from_dataset(*domain, data, settings);
+      previous_ = learned.theta;
+      publish_estimate(*domain, data, learned, std::chrono::duration<double>(Clock::now() - start).count());
+    } catch (const InputError& e) {
+      if (!said_) say("no estimate yet from " + std::to_string(data.observed.size()) + " demonstrations: " + e.what());
+      said_ = true;
+    }
+  }
+
+  void say(const std::string& s) const {
+    if (log_) log_(s);
+  }
+
+  void publish_estimate(const Domain& domain, const Dataset& data, const Learned& learned, double seconds) {
+    const Mdp& mdp = domain.mdp();
+    hbirl::estimate_t e{};
+    e.utime = data.last_utime;
+    e.domain = data.domain;
+    e.demonstrations = static_cast<std::int32_t>(data.observed.size());
+    e.num_features = static_cast<std::int32_t>(learned.theta.size());
+    e.theta = lcm_vector(learned.theta);
+    e.log_likelihood = learned.log_likelihood;
+    e.confidence = learned.confidence.value_or(-1.0);
+    e.ile = e.ile_relative = -1.0;
+    if (const auto truth = true_weights_of(domain, data)) {
+      const InverseLearningError ile = inverse_learning_error(mdp, *truth, learned.theta);
+      e.ile = ile.ile;
+      e.ile_relative = ile.relative();
+    }
+    const SoftSolution policy = soft_value_iteration(mdp, mdp.reward(learned.theta));
+    e.num_states = mdp.num_states;
+    e.num_actions = mdp.num_actions;
+    e.policy = lcm_rows(RowMatrix::Map(policy.policy.data(), mdp.num_states, mdp.num_actions));
+    e.seconds = seconds;
+    publish(bus_, channels::kEstimate, e, counters_);
+    estimates_.push_back(e);
+    char line[160];
+    std::snprintf(line, sizeof line, "estimate after %d demonstrations: confidence %.3f, %.3f s", e.demonstrations,
+                  e.confidence, seconds);
+    say(line);
+    apply_stop_rule(e);
+  }
+
+  // The stop rule (OptimiserOptions::stop_at_confidence): k estimates in a row at or above
+  // p, then STOP after this and every later estimate while it holds.
+  void apply_stop_rule(const hbirl::estimate_t& e) {
+    if (options_.stop_at_confidence <= 0.0) return;
+    streak_ = e.confidence >= options_.stop_at_confidence ? streak_ + 1 : 0;
+    if (streak_ < options_.stop_after) return;
+    hbirl::stop_t m{};
+    m.utime = e.utime;
+    m.domain = e.domain;
+    m.demonstrations = e.demonstrations;
+    m.confidence = e.confidence;
+    char reason[120];
+    std::snprintf(reason, sizeof reason, "confidence >= %g for %d estimates in a row", options_.stop_at_confidence,
+                  streak_);
+    m.reason = reason;
+    publish(bus_, channels::kStop, m, counters_);
+    if (stop_sent_after_ == 0) {
+      stop_sent_after_ = e.demonstrations;
+      say("seen enough: " + m.reason + " (after " + std::to_string(e.demonstrations) + "); STOP sent");
+    }
+  }
+
+ public:
+  int stop_sent_after() const { return stop_sent_after_; }
+
+ private:
+  Bus& bus_;
+  const OptimiserOptions& options_;
+  Counters& counters_;
+  const std::function<void(const std::string&)>& log_;
+  int streak_ = 0;
+  int stop_sent_after_ = 0;
+  int estimated_ = 0;       // demonstrations estimated from
+  int complete_seen_ = -1;  // the builder's complete demonstrations at the last look
+  std::optional<Eigen::VectorXd> previous_;
+  bool said_ = false;
+  std::vector<hbirl::estimate_t> estimates_;
 };
 
 // A builder of the run's data set, subscribed to the bus (expecting the domain's sizes when
@@ -283,7 +414,10 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const auto say = [&log](const std::string& s) {
     if (log) log(s);
   };
-  RunCollector collector(bus, *builder, options, counters, stop, log);
+  LiveEstimator estimator(bus, options, counters, log);
+  std::function<void()> on_data;
+  if (options.anytime) on_data = [&estimator, &builder] { estimator.update(*builder); };
+  RunCollector collector(bus, *builder, options, counters, stop, log, std::move(on_data));
   if (!collector.collect()) return std::nullopt;
   OptimiserResult result;
   result.missing_frames = builder->missing_frames();
@@ -293,6 +427,8 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   // From here the builder keeps nothing: it watches what still comes for a contradiction
   // (checked before the reward is published); frames are not read while learning.
   result.frame_requests = collector.frame_requests();
+  result.estimates = estimator.take();
+  result.stop_sent_after = estimator.stop_sent_after();
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);
   size_unobserved(result.data, *domain);
   const Mdp& mdp = domain->mdp();
@@ -315,7 +451,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   const std::int64_t utime = result.data.last_utime;
   try {
     result.learned = learn_from_dataset(
-        *domain, result.data, options.learning, executor,
+        *domain, result.data, final_settings(options.learning), executor,
         [&](int iteration, double ll, const Eigen::VectorXd& theta, const ObservationPrior& alpha,
             const EStepResult& estep, const LearnedEta* eta) {
           if (stop && stop()) throw Stopped();  // also when computing alone

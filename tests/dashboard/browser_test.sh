@@ -18,7 +18,7 @@ trap '[ -n "$launch" ] && kill -TERM "$launch" 2>/dev/null; wait 2>/dev/null; if
 fail() { echo "FAIL: $*" >&2; cat "$tmp/launch.out" >&2 2>/dev/null || true; tail -n 20 "$tmp"/run/logs/* >&2 2>/dev/null || true; exit 1; }
 
 port=8765  # the namespace's own loopback: no other test sees it
-"$repo/services/launch.sh" --build "$build" --out "$tmp/run" --sorts 4 --controlled-sorts 6 --fps 5 --max-fps 250 \
+"$repo/services/launch.sh" --build "$build" --out "$tmp/run" --sorts 4 --controlled-sorts 6 --fps 5 --max-fps 250 --anytime \
   --dashboard-port "$port" --keep-dashboard >"$tmp/launch.out" 2>&1 &
 launch=$!
 HOME="$tmp" python3 "$here/browser_check.py" "http://127.0.0.1:$port/" "$build/dashboard_screenshot.png" 240 || fail "the browser check"

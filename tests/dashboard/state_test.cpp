@@ -209,6 +209,47 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
   EXPECT_THROW(state.on_status(s, 0), InputError);
 }
 
+// The optimiser's estimate after each demonstration (ESTIMATE): drawn against the number
+// of demonstrations, unknown values as null; a new run starts over; a bad one is refused
+// by the type's validate() on the bus (services/messages.hpp), and named.
+TEST(DashboardState, EstimatesDemonstrationByDemonstration) {
+  DashboardState state;
+  EXPECT_TRUE(state.json(0)["estimates"].empty());
+  for (int n = 1; n <= 3; ++n) {
+    hbirl::estimate_t e{};
+    e.domain = "gridworld";
+    e.demonstrations = n;
+    e.num_features = 1;
+    e.theta = {1.0};
+    e.confidence = n == 1 ? -1.0 : 0.3 * n;
+    e.ile = e.ile_relative = n == 3 ? 0.0 : 0.2;
+    e.seconds = 0.1;
+    services::validate(e);
+    state.on_estimate(e);
+  }
+  nlohmann::json j = state.json(0);
+  ASSERT_EQ(j["estimates"].size(), 3u);
+  EXPECT_TRUE(j["estimates"][0]["confidence"].is_null());
+  EXPECT_DOUBLE_EQ(j["estimates"][2]["confidence"].get<double>(), 0.3 * 3);
+  EXPECT_EQ(j["estimates"][2]["ile_relative"], 0.0);
+  hbirl::estimate_t again{};  // a new optimiser run starts over
+  again.domain = "gridworld";
+  again.demonstrations = 1;
+  again.confidence = 0.5;
+  state.on_estimate(again);
+  EXPECT_EQ(state.json(0)["estimates"].size(), 1u);
+  hbirl::estimate_t bad = again;
+  bad.num_features = 1;
+  bad.theta = {1.0};
+  bad.confidence = 1.5;
+  try {
+    services::validate(bad);
+    FAIL() << "a confidence of 1.5 was taken";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "estimate.confidence");
+  }
+}
+
 // Hostile or stale input: dimensions whose product fools a naive check, frames that are
 // never completed (dropped in arrival order, whatever their numbers), text that is not
 // UTF-8 (replaced when sent, never a failed page).

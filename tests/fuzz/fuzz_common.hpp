@@ -13,6 +13,7 @@
 #include "hbirl/detections_t.hpp"
 #include "hbirl/em_progress_t.hpp"
 #include "hbirl/episode_marker_t.hpp"
+#include "hbirl/estimate_t.hpp"
 #include "hbirl/estep_request_t.hpp"
 #include "hbirl/estep_result_t.hpp"
 #include "hbirl/frame_request_t.hpp"
@@ -23,6 +24,7 @@
 #include "hbirl/posterior_t.hpp"
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
+#include "hbirl/stop_t.hpp"
 #include "hbirl/trajectory_t.hpp"
 #include "services/channels.hpp"
 
@@ -30,10 +32,11 @@ namespace hbirl::fuzz {
 
 // Channel k carries Types' k-th type. The order is part of the seed corpora's format:
 // append, never reorder.
-using Types = std::tuple<hbirl::camera_frame_t, hbirl::detections_t, hbirl::observations_t, hbirl::episode_marker_t,
-                         hbirl::ground_truth_t, hbirl::mdp_t, hbirl::trajectory_t, hbirl::estep_request_t,
-                         hbirl::estep_result_t, hbirl::em_progress_t, hbirl::observation_model_t, hbirl::posterior_t,
-                         hbirl::reward_t, hbirl::frame_request_t, hbirl::service_status_t>;
+using Types =
+    std::tuple<hbirl::camera_frame_t, hbirl::detections_t, hbirl::observations_t, hbirl::episode_marker_t,
+               hbirl::ground_truth_t, hbirl::mdp_t, hbirl::trajectory_t, hbirl::estep_request_t, hbirl::estep_result_t,
+               hbirl::em_progress_t, hbirl::observation_model_t, hbirl::posterior_t, hbirl::reward_t,
+               hbirl::frame_request_t, hbirl::service_status_t, hbirl::estimate_t, hbirl::stop_t>;
 constexpr int kNumChannels = static_cast<int>(std::tuple_size_v<Types>);
 
 // The id of the sampler worker the service-handler fuzzer runs (and the seeds address).
@@ -43,12 +46,23 @@ inline const std::string& channel(int k) {
   namespace ch = services::channels;
   // Trajectories go to one sampler's own channel: the fuzzed one's (fuzz_service_handlers).
   static const std::string trajectories = ch::trajectory_channel(kFuzzSampler).name;
-  static const std::string* const names[] = {
-      &ch::kCamera.name,     &ch::kDetections.name,       &ch::kObservations.name,
-      &ch::kEpisode.name,    &ch::kGroundTruth.name,      &ch::kMdp.name,
-      &trajectories,         &ch::kEStepRequest.name,     &ch::kEStepResult.name,
-      &ch::kEmProgress.name, &ch::kObservationModel.name, &ch::kPosterior.name,
-      &ch::kReward.name,     &ch::kFrameRequest.name,     &ch::kStatus.name};
+  static const std::string* const names[] = {&ch::kCamera.name,
+                                             &ch::kDetections.name,
+                                             &ch::kObservations.name,
+                                             &ch::kEpisode.name,
+                                             &ch::kGroundTruth.name,
+                                             &ch::kMdp.name,
+                                             &trajectories,
+                                             &ch::kEStepRequest.name,
+                                             &ch::kEStepResult.name,
+                                             &ch::kEmProgress.name,
+                                             &ch::kObservationModel.name,
+                                             &ch::kPosterior.name,
+                                             &ch::kReward.name,
+                                             &ch::kFrameRequest.name,
+                                             &ch::kStatus.name,
+                                             &ch::kEstimate.name,
+                                             &ch::kStop.name};
   static_assert(sizeof(names) / sizeof(names[0]) == kNumChannels);
   return *names[k];
 }

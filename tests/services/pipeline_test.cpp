@@ -323,6 +323,86 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   EXPECT_LT(*live->learned.ile, 0.5) << "theta " << live->learned.theta.transpose();
 }
 
+// Learning while it watches (--anytime): one ESTIMATE per demonstration as the run goes
+// on, each what learn_from_dataset gives on the demonstrations so far started also from the
+// one before (bit for bit), with a confidence; the final REWARD as without it.
+TEST(Pipeline, AnEstimateAfterEachDemonstration) {
+  const SimulatorOptions run = gridworld_run(7, 5, 5);
+  const std::shared_ptr<const Domain> domain = builtin_domain("gridworld");
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus sim_bus(hub), opt_bus(hub), listener(hub);
+  Counters sim_counters = quiet("sim_driver"), opt_counters = quiet("optimiser"), heard = quiet("listener");
+  std::vector<hbirl::estimate_t> on_bus;
+  Subscriptions subs;
+  subs.add(listener, subscribe(listener, channels::kEstimate, heard,
+                               [&](const hbirl::estimate_t& e, const Message&) { on_bus.push_back(e); }));
+  Simulator driver(sim_bus, *domain, run, sim_counters);
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    driver.publish_run(nullptr);
+  });
+  OptimiserOptions options;
+  options.anytime = true;
+  options.learning.posterior.samples = 30;
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  sim.join();
+  while (listener.handle(0) > 0) {
+  }
+  ASSERT_TRUE(live.has_value());
+  ASSERT_EQ(live->estimates.size(), 5u);
+  EXPECT_EQ(on_bus.size(), 5u);
+  EXPECT_EQ(heard.bad_messages, 0);
+  app::LearnSettings settings = options.learning;
+  for (size_t k = 0; k < live->estimates.size(); ++k) {
+    const hbirl::estimate_t& e = live->estimates[k];
+    EXPECT_EQ(e.demonstrations, static_cast<int>(k) + 1);
+    const Dataset first = first_demonstrations(live->data, k + 1);
+    const Learned expected = learn_from_dataset(*domain, first, settings);
+    ASSERT_EQ(e.theta.size(), static_cast<size_t>(expected.theta.size()));
+    for (size_t i = 0; i < e.theta.size(); ++i) EXPECT_EQ(e.theta[i], expected.theta[static_cast<Eigen::Index>(i)]);
+    ASSERT_TRUE(expected.confidence.has_value());
+    EXPECT_EQ(e.confidence, *expected.confidence);
+    EXPECT_GE(e.ile, 0.0);  // the gridworld's true weights are known
+    settings.em.warm_start = expected.theta;
+  }
+  const Learned local = learn_from_dataset(*domain, live->data, app::LearnSettings{});
+  EXPECT_EQ(live->learned.theta, local.theta);
+}
+
+// Knowing when it has seen enough: once the rule holds the optimiser sends STOP, the
+// simulator ends the run after the episode under way (END_RUN stating what it published),
+// and the run is learned from, complete. (A rule nearly any estimate meets, so the test
+// does not hang on the domain's confidence; where it stops depends on timing.)
+TEST(Pipeline, StopAtConfidenceEndsTheRunEarly) {
+  SimulatorOptions run = gridworld_run(9, 40, 5);
+  run.max_frames_per_second = 300;  // a sensor in real time, more or less
+  const std::shared_ptr<const Domain> domain = builtin_domain("gridworld");
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus sim_bus(hub), opt_bus(hub);
+  Counters sim_counters = quiet("sim_driver"), opt_counters = quiet("optimiser");
+  Simulator driver(sim_bus, *domain, run, sim_counters);
+  std::promise<void> listening;
+  std::thread sim([&] {
+    listening.get_future().wait();
+    driver.publish_run(nullptr, [&] { sim_bus.handle(0); });  // hears STOP between frames
+  });
+  OptimiserOptions options;
+  options.anytime = true;
+  options.stop_at_confidence = 1e-9;
+  options.stop_after = 2;
+  options.learning.posterior.samples = 20;
+  const auto live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  sim.join();
+  ASSERT_TRUE(live.has_value());
+  EXPECT_EQ(live->stop_sent_after, 2);
+  EXPECT_GE(live->data.observed.size(), 2u);
+  EXPECT_LT(live->data.observed.size(), 40u) << "the run did not stop early";
+  EXPECT_EQ(live->missing_frames, 0);
+  EXPECT_TRUE(live->incomplete.empty());
+  EXPECT_EQ(sim_counters.bad_messages, 0);
+}
+
 // Any size of Gridworld is a domain (--domain gridworld --size 10): the simulator, the
 // markers (named gridworld:10), the workers (sent the 100-state MDP over the bus) and the
 // optimiser agree on it, and the learned reward's best corner is the goal.

@@ -22,6 +22,8 @@
 #include "hbirl/observations_t.hpp"
 #include "hbirl/posterior_t.hpp"
 #include "hbirl/reward_t.hpp"
+#include "hbirl/estimate_t.hpp"
+#include "hbirl/stop_t.hpp"
 #include "hbirl/service_status_t.hpp"
 #include "hbirl/trajectory_t.hpp"
 
@@ -148,6 +150,17 @@ inline std::vector<SampleMessage> sample_messages() {
     m.service = "sampler", m.id = "sampler-x-1", m.state = "running", m.detail = "fine";
     m.num_held_blocks = 2, m.held_block = {3, 4};
     all.push_back(sample_of("STATUS", m));
+  }
+  {
+    hbirl::estimate_t m{};
+    m.domain = "onion", m.demonstrations = 2, m.num_features = 2, m.theta = {1, 2}, m.log_likelihood = -3,
+    m.confidence = 0.9, m.ile = m.ile_relative = 0, m.num_states = 1, m.num_actions = 2, m.policy = {{0.5, 0.5}};
+    all.push_back(sample_of("ESTIMATE", m));
+  }
+  {
+    hbirl::stop_t m{};
+    m.domain = "onion", m.reason = "seen enough", m.demonstrations = 4, m.confidence = 0.96;
+    all.push_back(sample_of("STOP", m));
   }
   return all;
 }

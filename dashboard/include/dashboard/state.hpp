@@ -20,6 +20,7 @@
 #include "hbirl/camera_frame_t.hpp"
 #include "hbirl/detections_t.hpp"
 #include "hbirl/em_progress_t.hpp"
+#include "hbirl/estimate_t.hpp"
 #include "hbirl/episode_marker_t.hpp"
 #include "hbirl/ground_truth_t.hpp"
 #include "hbirl/observation_model_t.hpp"
@@ -52,6 +53,7 @@ class DashboardState {
   void on_truth(const hbirl::ground_truth_t& m);
   void on_progress(const hbirl::em_progress_t& m);
   void on_reward(const hbirl::reward_t& m);
+  void on_estimate(const hbirl::estimate_t& m);
   void on_status(const hbirl::service_status_t& m, std::int64_t now_utime);
   void on_model(const hbirl::observation_model_t& m);
   void on_posterior(const hbirl::posterior_t& m);
@@ -64,6 +66,8 @@ class DashboardState {
   //   observations {episode, step, frame, n, by_source_symbol [source][symbol]} | null,
   //   em [{iteration, log_likelihood, ile, seconds, retries, local_blocks}],
   //   theta {learned, true, final} | null, reward {final, ile, log_likelihood} | null,
+  //   estimates [{demonstrations, confidence, ile_relative, seconds}] (the optimiser's
+  //     estimate after each demonstration, --anytime; confidence and ILE null when unknown),
   //   posterior {episode, iteration, steps, state_marginals [t][state], action_marginals
   //     [t][action], most_likely
   //     [{state, action, probability}], truth [{state, action}] | null, log_likelihood} | null,
@@ -126,6 +130,7 @@ class DashboardState {
   // Learning.
   std::vector<hbirl::em_progress_t> progress_;
   std::optional<hbirl::reward_t> reward_;
+  std::vector<hbirl::estimate_t> estimates_;  // without their policies
   std::optional<hbirl::observation_model_t> model_;
   std::optional<hbirl::posterior_t> posterior_;
   std::map<std::string, Service> services_;

@@ -8,6 +8,7 @@
 #include "hbirl/camera_frame_t.hpp"
 #include "hbirl/detections_t.hpp"
 #include "hbirl/em_progress_t.hpp"
+#include "hbirl/estimate_t.hpp"
 #include "hbirl/episode_marker_t.hpp"
 #include "hbirl/estep_request_t.hpp"
 #include "hbirl/estep_result_t.hpp"
@@ -19,6 +20,7 @@
 #include "hbirl/posterior_t.hpp"
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
+#include "hbirl/stop_t.hpp"
 #include "hbirl/trajectory_t.hpp"
 #include "learner/digest.hpp"
 
@@ -49,8 +51,10 @@ inline const Channel<hbirl::estep_request_t> kEStepRequest{"ESTEP_REQUEST"};  //
 inline const Channel<hbirl::estep_result_t> kEStepResult{"ESTEP_RESULT"};     // a block's counts
 inline const Channel<hbirl::em_progress_t> kEmProgress{"EM_PROGRESS"};        // one EM iteration
 inline const Channel<hbirl::observation_model_t> kObservationModel{"OBSERVATION_MODEL"};  // the learned O
-inline const Channel<hbirl::posterior_t> kPosterior{"POSTERIOR"};             // the newest demonstration's marginals
-inline const Channel<hbirl::reward_t> kReward{"REWARD"};                      // the learned reward
+inline const Channel<hbirl::posterior_t> kPosterior{"POSTERIOR"};  // the newest demonstration's marginals
+inline const Channel<hbirl::reward_t> kReward{"REWARD"};           // the learned reward
+inline const Channel<hbirl::estimate_t> kEstimate{"ESTIMATE"};     // after each demonstration (--anytime)
+inline const Channel<hbirl::stop_t> kStop{"STOP"};                 // seen enough: end the run (--stop-at-confidence)
 inline const Channel<hbirl::frame_request_t> kFrameRequest{"FRAME_REQUEST"};  // frames asked for again
 inline const Channel<hbirl::service_status_t> kStatus{"STATUS"};              // every service's heartbeat
 

@@ -37,6 +37,9 @@ struct Dataset {
   std::string contexts_note;  // non-empty: contexts were given for some observations only, and ignored
 };
 
+// The data set with its first `n` demonstrations only (the controlled run kept).
+Dataset first_demonstrations(Dataset data, size_t n);
+
 class DatasetBuilder {
  public:
   DatasetBuilder();
@@ -78,6 +81,12 @@ class DatasetBuilder {
   std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }
   int episodes() const { return static_cast<int>(episodes_.size()); }
+  // Demonstrations of the run that ended with every frame's observations.
+  int complete_demonstrations() const { return complete_demonstrations_; }
+  // How many of the run's first demonstrations, in episode order, ended with every frame's
+  // observations (the optimiser's estimate after each one, optimiser.hpp): the same
+  // whatever order the messages came in.
+  int complete_demonstration_prefix() const;
   // The data of the episodes that ended, in episode order (controlled episodes whose
   // ground truth is incomplete are left out and counted).
   Dataset build() const;
@@ -155,6 +164,7 @@ class DatasetBuilder {
   // outside the run (ids past END_RUN's count).
   std::int64_t missing_frames_ = 0, missing_truth_ = 0, outside_run_ = 0;
   int ended_in_run_ = 0;
+  int complete_demonstrations_ = 0;  // of them
   std::int64_t last_utime_ = 0;
   std::optional<Eigen::VectorXd> true_weights_;
   bool weights_conflict_ = false;

@@ -25,6 +25,9 @@ struct Learned {
   int trajectories = 0;
   std::uint64_t digest = 0;       // of the demonstrations learned from
   std::optional<LearnedEta> eta;  // when eta was learned
+  // When posterior draws were asked for (settings.posterior.samples): the posterior
+  // probability that the learned policy is within 5% of the optimal value (app::learn).
+  std::optional<double> confidence;
 };
 
 // Called after every EM iteration: iteration, log-likelihood, theta, the observation

@@ -9,8 +9,10 @@
 #include "hbirl/camera_frame_t.hpp"
 #include "hbirl/detections_t.hpp"
 #include "hbirl/episode_marker_t.hpp"
+#include "hbirl/estimate_t.hpp"
 #include "hbirl/ground_truth_t.hpp"
 #include "hbirl/observations_t.hpp"
+#include "hbirl/stop_t.hpp"
 
 namespace hbirl::services {
 
@@ -38,5 +40,12 @@ void validate(const hbirl::detections_t& m);
 void validate(const hbirl::episode_marker_t& m);
 // Episode, step, state and action in range; at most kMaxFeatures true weights, all finite.
 void validate(const hbirl::ground_truth_t& m);
+// Demonstrations in [1, kMaxEpisodes]; 1 to kMaxFeatures weights, all finite; a
+// log-likelihood not above 0; the confidence -1 or in [0, 1]; the ILE and its relative size
+// -1 or finite and not negative; every policy entry in [0, 1].
+void validate(const hbirl::estimate_t& m);
+// Demonstrations in [0, kMaxEpisodes]; the confidence in [0, 1]; a reason of at most 1000
+// bytes.
+void validate(const hbirl::stop_t& m);
 
 }  // namespace hbirl::services

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hbirl/em_progress_t.hpp"
+#include "hbirl/estimate_t.hpp"
 #include "hbirl/frame_request_t.hpp"
 #include "hbirl/observation_model_t.hpp"
 #include "hbirl/posterior_t.hpp"
@@ -43,6 +44,17 @@ struct OptimiserOptions {
   // The most memory the run's observations may take (hbirl-optimiser --max-dataset-mb):
   // frames beyond it are refused, counted, and not kept (DatasetBuilder::limit).
   std::int64_t max_dataset_bytes = std::int64_t{2048} << 20;
+  // An estimate after each demonstration that ends with every frame's observations
+  // (ESTIMATE), while the run goes on: what app::learn gives on the demonstrations so far,
+  // EM also started from the previous estimate (app::learn_anytime's rule), learned here
+  // rather than on the workers (a few demonstrations); with its confidence when
+  // learning.posterior.samples > 0. The final REWARD is learned as without it.
+  bool anytime = false;
+  // Knowing when it has seen enough (0: never): once `stop_after` estimates in a row have
+  // a confidence >= stop_at_confidence, STOP asks the sensor side to end the run (repeated
+  // after every estimate while the rule holds). Needs anytime and posterior draws.
+  double stop_at_confidence = 0.0;
+  int stop_after = 3;
   // Called often (every ~100 ms while collecting, every EM iteration) with what the
   // optimiser is doing ("collecting", "learning"): the process beats its heartbeat there,
   // so services that wait for it (the simulator) and the dashboard hear it throughout.
@@ -61,6 +73,8 @@ struct OptimiserResult {
   int workers = 0;
   BusBlockExecutor::Stats estep;
   std::string incomplete;  // learned with allow_incomplete from a run that lacks this ("" when complete)
+  std::vector<hbirl::estimate_t> estimates;  // published while collecting (OptimiserOptions::anytime)
+  int stop_sent_after = 0;                   // demonstrations when STOP was first sent (0: never)
 };
 // Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
 // to stop first; throws RunFailed for a run that is incomplete (unless allowed) or

@@ -14,6 +14,7 @@
 
 #include "hbirl/reward_t.hpp"
 #include "hbirl/service_status_t.hpp"
+#include "hbirl/stop_t.hpp"
 
 namespace hbirl {
 
@@ -66,6 +67,15 @@ Simulator::Simulator(Bus& bus, std::string domain_name, std::unique_ptr<Simulati
   subs_.add(bus_, subscribe(
                       bus_, channels::kFrameRequest, counters_,
                       [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
+  subs_.add(bus_, subscribe(bus_, channels::kStop, counters_, [this](const hbirl::stop_t& m, const Message&) {
+              // Another run's optimiser does not end this one.
+              if (m.domain != domain_) throw InputError("stop.domain", "'" + m.domain + "' is not this run's");
+              told_to_stop_ = true;
+            }));
+}
+
+int Simulator::episodes_in_run() const {
+  return episodes_in_run_ >= 0 ? episodes_in_run_ : static_cast<int>(run_->episodes.size());
 }
 
 Simulator::~Simulator() = default;
@@ -155,6 +165,10 @@ bool Simulator::publish_run(const std::function<bool()>& stop, const std::functi
   const auto started = Clock::now();
   std::int64_t frames_sent = 0;
   for (int id = 0; id < static_cast<int>(p.episodes.size()); ++id) {
+    if (told_to_stop_) {  // seen enough (STOP): the run ends here, complete
+      episodes_in_run_ = id;
+      break;
+    }
     const Simulation::Episode& e = p.episodes[static_cast<size_t>(id)];
     publish(bus_, channels::kEpisode, marker(id, hbirl::episode_marker_t::BEGIN_EPISODE, e.start_time), counters_);
     for (int t = 0; t < static_cast<int>(e.steps.size()); ++t) {
@@ -175,6 +189,7 @@ bool Simulator::publish_run(const std::function<bool()>& stop, const std::functi
       }
     }
     publish(bus_, channels::kEpisode, end_marker(id), counters_);
+    if (idle) idle();  // a STOP heard now ends the run before the next episode
   }
   publish(bus_, channels::kEpisode, end_of_run(), counters_);
   return true;
@@ -190,14 +205,13 @@ hbirl::episode_marker_t Simulator::end_marker(int id) {
 }
 
 void Simulator::republish_end_markers() {
-  for (int id = 0; id < static_cast<int>(run_->episodes.size()); ++id)
-    publish(bus_, channels::kEpisode, end_marker(id), counters_);
+  for (int id = 0; id < episodes_in_run(); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
   publish(bus_, channels::kEpisode, end_of_run(), counters_);
 }
 
 hbirl::episode_marker_t Simulator::end_of_run() {
   auto m = marker(0, hbirl::episode_marker_t::END_RUN, 0.0);
-  m.num_steps = static_cast<std::int32_t>(run_->episodes.size());  // END_RUN states the run's episodes
+  m.num_steps = static_cast<std::int32_t>(episodes_in_run());  // END_RUN states the run's episodes
   return m;
 }
 
@@ -240,7 +254,8 @@ bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
     tick("running");
   });
   say(std::string(finished ? "run published" : "stopped") + "; " + std::to_string(counters_.messages_out) +
-      " messages published");
+      " messages published" +
+      (episodes_in_run_ >= 0 ? "; ended after " + std::to_string(episodes_in_run_) + " episodes, as STOP asked" : ""));
   // Then frames lost on the way are sent again, and the end markers repeated in case they
   // were lost, until the optimiser has published its reward.
   auto next_markers = Clock::now() + std::chrono::seconds(1);

@@ -74,6 +74,11 @@ class Simulator {
   cv::Mat frame_;
   std::vector<unsigned char> bytes_;
   std::int64_t resent_ = 0;
+  // Told to stop (STOP, for this domain): the run ends before the next episode, END_RUN
+  // stating the episodes published.
+  bool told_to_stop_ = false;
+  int episodes_in_run_ = -1;  // once stopped early; -1: all of run_
+  int episodes_in_run() const;
   services::Subscriptions subs_;  // last: ends first
 };
 
