@@ -16,6 +16,7 @@
 #include "experiments/onion_regimes.hpp"
 #include "experiments/onion_experiment.hpp"
 #include "experiments/random_tasks_experiment.hpp"
+#include "experiments/stopping_experiment.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
 #include "learner/parallel.hpp"
@@ -420,6 +421,57 @@ int run_calibration_command(CalibrationArgs& args) {
   return 0;
 }
 
+struct StoppingArgs {
+  std::string out = "results";
+  std::string levels = "0.9,0.95";
+  StoppingOptions options;
+};
+
+std::vector<double> parse_levels(const std::string& text) {
+  std::vector<double> levels;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    double p = 0.0;
+    try {
+      size_t used = 0;
+      p = std::stod(item, &used);
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError("--levels", "\"" + item + "\" is not a number");
+    }
+    if (!(p > 0.0 && p < 1.0)) throw InputError("--levels", "each must be in (0, 1)");
+    levels.push_back(p);
+  }
+  if (levels.empty()) throw InputError("--levels", "is empty");
+  return levels;
+}
+
+int run_stopping_command(StoppingArgs& args) {
+  StoppingOptions& o = args.options;
+  o.levels = parse_levels(args.levels);
+  if (o.stop_after < 1) throw InputError("--stop-after", "must be at least 1");
+  make_folder(args.out);
+  const std::filesystem::path dir(args.out);
+  const auto [runs, seconds] = run_with_progress("tasks", o, run_stopping);
+  write_file(dir / "stopping_runs.csv", stopping_runs_csv(runs));
+  std::ostringstream footer;
+  footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
+         << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ", draw 0), " << o.samples
+         << " posterior draws per estimate; " << static_cast<long>(seconds + 0.5) << " s on "
+         << (o.threads > 0 ? o.threads : default_thread_count())
+         << " threads. Reproduce one: `hbirl generate random-task --seed S --out task.json`, then `hbirl learn "
+            "--problem task.json --anytime --posterior-samples "
+         << o.samples << "`.";
+  const std::string summary = stopping_summary(runs, o, footer.str());
+  write_file(dir / "stopping_summary.md", summary);
+  const std::string problem = draw_stopping_figure(runs, o, (dir / "stopping").string());
+  if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
+  std::cout << summary;
+  std::cerr << "hbirl: wrote stopping_runs.csv, stopping_summary.md"
+            << (problem.empty() ? ", stopping.png, stopping.svg" : "") << " in " << args.out << "\n";
+  return 0;
+}
+
 // The Gridworld as the eta experiments watch it: --trajectories, --length, --per-step, --seed.
 void add_scenario_options(CLI::App* cmd, GridworldScenarioOptions& s) {
   cmd->add_option("--trajectories", s.trajectories, "Demonstrations per run")
@@ -704,6 +756,29 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
   return c;
 }
 
+// experiment stopping: knowing when it has seen enough.
+CLI::App* add_stopping_experiment(CLI::App* cmd, StoppingArgs& args) {
+  CLI::App* c = cmd->add_subcommand(
+      "stopping",
+      "Knowing when it has seen enough: random tasks learned while their demonstrations arrive (hbirl learn\n"
+      "--anytime --posterior-samples), then the stop rule (--stop-after estimates in a row with confidence >= p)\n"
+      "for each level p: after how many demonstrations it stops and how often the policy it stops with is right,\n"
+      "against every demonstration. Writes stopping_runs.csv (one row per estimate), stopping_summary.md and\n"
+      "stopping.png/.svg to --out. The numbers do not depend on --threads.");
+  c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
+  c->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
+  c->add_option("--samples", args.options.samples, "Posterior draws per estimate")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  c->add_option("--levels", args.levels, "Confidence levels p, comma-separated, each in (0, 1)")->capture_default_str();
+  c->add_option("--stop-after", args.options.stop_after, "Estimates in a row at or above p")->capture_default_str();
+  c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  return c;
+}
+
 // experiment eta-sensitivity: learned vs stated eta under imperfect labellers.
 CLI::App* add_eta_sensitivity_experiment(CLI::App* cmd, EtaSensitivityArgs& args) {
   CLI::App* eta_cmd = cmd->add_subcommand(
@@ -823,6 +898,7 @@ Command add_experiment(CLI::App& app) {
       subcommand(cmd, add_onion_experiment, run_onion_experiment_command),
       subcommand(cmd, add_random_tasks_experiment, run_random_tasks_command),
       subcommand(cmd, add_calibration_experiment, run_calibration_command),
+      subcommand(cmd, add_stopping_experiment, run_stopping_command),
       subcommand(cmd, add_eta_sensitivity_experiment, run_eta_sensitivity_command),
       subcommand(cmd, add_unlisted_experiment, run_unlisted_command),
       subcommand(cmd, add_onion_regimes_experiment, run_onion_regimes_command)};

@@ -1,5 +1,7 @@
 #include "app/learn.hpp"
 
+#include <future>
+
 #include "learner/input_error.hpp"
 #include "learner/observation_support.hpp"
 #include "learner/soft_value_iteration.hpp"
@@ -65,17 +67,42 @@ void draw_posterior(const Mdp& mdp, const LearnSettings& settings, Learned& out)
 // weigh them (the learned O's is fitted to these data and always higher).
 constexpr double kPriorOWeight = 0.5;
 
-void average_over_sensor_models(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations,
-                                const LearnSettings& settings, Learned& out) {
+// The confidence with O held at the prior: what EM and the posterior give then, asked of
+// the policy learned with O learned.
+Learned learned_at_prior_o(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations,
+                           const LearnSettings& settings, const ObservationPrior& given, int threads) {
   LearnSettings held = settings;
   held.learn_observation_model = false;
   held.em.warm_start.reset();
-  Learned at_prior = learn(mdp, observations, out.given, held, {});
-  const PolicyConfidence prior_o = policy_confidence(mdp, *at_prior.posterior, out.em.theta);
+  held.em.threads = threads;
+  return learn(mdp, observations, given, held, {});
+}
+
+// The posterior at what EM learned and, when O was learned, the confidence averaged over
+// the two models of the sensor. The two are independent: on two threads when the settings
+// allow more than one (the same bits either way).
+void draw_posteriors(const Mdp& mdp, const std::vector<ObservedTrajectory>& observations, const LearnSettings& settings,
+                     Learned& out) {
+  if (settings.posterior.samples == 0) return;
+  if (!out.given.learn) {
+    draw_posterior(mdp, settings, out);
+    return;
+  }
+  std::optional<Learned> at_prior;
+  if (settings.em.threads == 1) {
+    draw_posterior(mdp, settings, out);
+    at_prior = learned_at_prior_o(mdp, observations, settings, out.given, 1);
+  } else {
+    std::future<Learned> second =
+        std::async(std::launch::async, [&] { return learned_at_prior_o(mdp, observations, settings, out.given, 1); });
+    draw_posterior(mdp, settings, out);
+    at_prior = second.get();
+  }
+  const PolicyConfidence prior_o = policy_confidence(mdp, *at_prior->posterior, out.em.theta);
   out.confidence_learned_o = out.confidence;
   out.confidence_prior_o = prior_o;
   out.confidence = mix(*out.confidence, prior_o, kPriorOWeight);
-  out.posterior_prior_o = std::move(at_prior.posterior);
+  out.posterior_prior_o = std::move(at_prior->posterior);
 }
 
 }  // namespace
@@ -125,8 +152,7 @@ Learned learn(const Mdp& mdp, const std::vector<ObservedTrajectory>& observation
   out.model = dirichlet_mean(out.refined);
   out.learned_eta = estep->learned_eta_report(out.refined);
   out.estep = std::move(estep);
-  draw_posterior(mdp, settings, out);
-  if (out.posterior && out.given.learn) average_over_sensor_models(mdp, observations, settings, out);
+  draw_posteriors(mdp, observations, settings, out);
   return out;
 }
 

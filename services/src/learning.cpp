@@ -41,7 +41,9 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app:
   const Mdp& mdp = domain.mdp();
   if (data.observed.empty()) throw InputError("demonstrations", "none received");
   app::LearnSettings one_at_a_time = settings;
-  one_at_a_time.em.threads = 1;  // one E-step at a time on the bus (the same bits whatever the thread count)
+  // One E-step at a time on the bus; computed here, restarts (the live estimates' warm
+  // start) in parallel. The same bits whatever the thread count (hidden_data_em.hpp).
+  if (executor) one_at_a_time.em.threads = 1;
   app::LearnHooks hooks;
   hooks.executor = std::move(executor);
   // An observation impossible under the domain's observation model names its episode.

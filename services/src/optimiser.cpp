@@ -310,9 +310,7 @@ class LiveEstimator {
   // The stop rule (OptimiserOptions::stop_at_confidence): k estimates in a row at or above
   // p, then STOP after this and every later estimate while it holds.
   void apply_stop_rule(const hbirl::estimate_t& e) {
-    if (options_.stop_at_confidence <= 0.0) return;
-    streak_ = e.confidence >= options_.stop_at_confidence ? streak_ + 1 : 0;
-    if (streak_ < options_.stop_after) return;
+    if (options_.stop_at_confidence <= 0.0 || !stop_rule_.holds_with(e.confidence)) return;
     hbirl::stop_t m{};
     m.utime = e.utime;
     m.domain = e.domain;
@@ -320,7 +318,7 @@ class LiveEstimator {
     m.confidence = e.confidence;
     char reason[120];
     std::snprintf(reason, sizeof reason, "confidence >= %g for %d estimates in a row", options_.stop_at_confidence,
-                  streak_);
+                  stop_rule_.streak());
     m.reason = reason;
     publish(bus_, channels::kStop, m, counters_);
     if (stop_sent_after_ == 0) {
@@ -337,7 +335,7 @@ class LiveEstimator {
   const OptimiserOptions& options_;
   Counters& counters_;
   const std::function<void(const std::string&)>& log_;
-  int streak_ = 0;
+  app::StopRule stop_rule_{options_.stop_at_confidence, options_.stop_after};
   int stop_sent_after_ = 0;
   int estimated_ = 0;       // demonstrations estimated from
   int complete_seen_ = -1;  // the builder's complete demonstrations at the last look

@@ -103,4 +103,24 @@ void learn_anytime(const Mdp& mdp, const std::vector<ObservedTrajectory>& observ
 void learn_from_truth_anytime(const Mdp& mdp, const std::vector<Trajectory>& truth, const LearnSettings& settings,
                               const LearnHooks& hooks, const EstimateReport& on_estimate);
 
+// Knowing when it has seen enough (docs/MODEL.md "Learning while it watches"): the rule
+// holds once `after` estimates in a row have a confidence >= `at`. Fed the estimates in
+// order; hbirl-optimiser --stop-at-confidence and the stopping experiment both use it.
+class StopRule {
+ public:
+  StopRule(double at, int after) : at_(at), after_(after) {}
+  // Whether the rule holds with this estimate's confidence (and stays holding while they
+  // stay >= at).
+  bool holds_with(double confidence) {
+    streak_ = confidence >= at_ ? streak_ + 1 : 0;
+    return streak_ >= after_;
+  }
+  int streak() const { return streak_; }
+
+ private:
+  double at_;
+  int after_;
+  int streak_ = 0;
+};
+
 }  // namespace hbirl::app

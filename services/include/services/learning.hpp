@@ -53,7 +53,8 @@ ObservationPrior observation_prior(const Domain& domain, const Dataset& data);
 // domain's observation model: "episode[N].steps[t]...", as `hbirl learn` refuses it).
 // Learned as `hbirl learn` learns (app::learn) with these settings, the same data and
 // prior: so a run learned live and the same data learned offline give the same theta. One
-// E-step at a time (the same bits whatever the thread count); the workers get each pass's
+// E-step at a time on the bus, restarts in parallel when computed here (the same bits
+// whatever the thread count); the workers get each pass's
 // learned eta with the request (estep_service.hpp).
 Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app::LearnSettings& settings,
                            std::shared_ptr<BlockExecutor> executor = nullptr, ProgressFn progress = nullptr);

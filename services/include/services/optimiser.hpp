@@ -128,6 +128,7 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
   if (r.learned.ile) j["ile"] = *r.learned.ile;
   j["log_likelihood"] = r.learned.log_likelihood;
   j["em_iterations"] = r.learned.em_iterations;
+  if (r.learned.confidence) j["confidence"] = *r.learned.confidence;  // with posterior draws (hbirl learn --log)
   if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta);
   j["demonstrations"] = r.learned.trajectories;
   j["controlled_episodes"] = r.data.controlled_observed.size();
