@@ -101,6 +101,30 @@ void em_figure(const json& s, const std::string& stem, Report& r) {
   (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
 }
 
+// The live estimates (--anytime): the confidence, and the relative ILE when known, against
+// the demonstrations seen.
+void estimates_figure(const json& s, const std::string& stem, Report& r) {
+  const json& es = s["estimates"];
+  if (es.empty()) return;
+  std::ostringstream data;
+  bool ile = false;
+  data << "$estimates << EOD\n";
+  for (const auto& e : es) {
+    data << e["demonstrations"].get<int>() << " " << (e["confidence"].is_null() ? "NaN" : number(e["confidence"], 8))
+         << " " << (e["ile_relative"].is_null() ? "NaN" : number(e["ile_relative"], 8)) << "\n";
+    ile = ile || !e["ile_relative"].is_null();
+  }
+  data << "EOD\nset title 'While it watches: the estimate after each demonstration'\n"
+       << "set xlabel 'demonstrations'\nset ylabel 'confidence (policy within 5% of optimal)'\nset yrange [0:1.05]\n"
+       << "set grid\nset key center right box opaque\n";
+  if (ile) data << "set y2label 'ILE / ||V*||_1 (true reward)'\nset y2tics\nset ytics nomirror\nset y2range [0:*]\n";
+  std::string plot = "plot $estimates using 1:2 with linespoints lw 2 pt 7 lc rgb '#2e7d32' title 'confidence'";
+  if (ile) plot += ", $estimates using 1:3 axes x1y2 with linespoints lw 2 pt 5 lc rgb '#d84315' title 'relative ILE'";
+  plot += "\n";
+  const std::string why = run_gnuplot(stem, data.str(), plot, 800, 450);
+  (why.empty() ? r.figures : r.problems).push_back(why.empty() ? stem : why);
+}
+
 void theta_figure(const json& s, const std::string& stem, Report& r) {
   const json& t = s["theta"];
   if (t.is_null()) return;
@@ -322,6 +346,9 @@ void page_camera(std::ostream& page, const json& s) {
 void page_figures(std::ostream& page, const Report& report, const std::filesystem::path& dir) {
   const std::vector<std::pair<std::string, std::string>> captions = {
       {"em", "Log-likelihood of the observations (and the ILE under the true reward, when known) per EM iteration."},
+      {"estimates",
+       "While it watched (--anytime): after each demonstration, the confidence that the policy learned so far is "
+       "within 5% of the optimal value and, with the expert's weights known, its relative ILE."},
       {"theta", "Learned reward weights against the expert's true weights."},
       {"posterior",
        "The expert's posterior state at each step of the newest demonstration (sources summed out), "
@@ -389,6 +416,7 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
     out.write(reinterpret_cast<const char*>(frame.data()), static_cast<std::streamsize>(frame.size()));
   }
   em_figure(s, (dir / "em").string(), report);
+  estimates_figure(s, (dir / "estimates").string(), report);
   theta_figure(s, (dir / "theta").string(), report);
   posterior_figure(s, (dir / "posterior").string(), report);
   model_figure(s, (dir / "observation_model").string(), report);

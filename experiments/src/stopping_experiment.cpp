@@ -21,12 +21,11 @@ void learn_while_watching(const RandomTask& task, const StoppingOptions& o, Stop
   settings.em.threads = 1;
   settings.em.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
   settings.posterior.samples = o.samples;
-  app::learn_anytime(task.mdp, task.observed.trajectories, task.prior, settings, {},
-                     [&](int, const app::Learned& learned) {
-                       r.confidence.push_back(learned.confidence->near_optimal);
-                       r.ile_relative.push_back(
-                           inverse_learning_error(task.mdp, task.true_weights, learned.em.theta).relative());
-                     });
+  app::learn_anytime(
+      task.mdp, task.observed.trajectories, task.prior, settings, {}, [&](int, const app::Learned& learned) {
+        r.confidence.push_back(learned.confidence->near_optimal);
+        r.ile_relative.push_back(inverse_learning_error(task.mdp, task.true_weights, learned.em.theta).relative());
+      });
 }
 
 // Where the rule at level p stops a run: the number of demonstrations (0: never).
@@ -112,13 +111,13 @@ std::string stopping_summary(const std::vector<StoppingRun>& runs, const Stoppin
     const int stopped = static_cast<int>(at.size());
     const auto [lo, hi] = wilson(right_stopped, stopped);
     char row[400];
-    std::snprintf(row, sizeof row,
-                  "| %.2f | %d of %zu | %.0f [%.0f, %.0f] | %.0f%% | %d of %d (%.1f%% [%.1f, %.1f]) | %d of %d | %d of %d "
-                  "|\n",
-                  p, stopped, ok.size(), quantile(at, 0.5), quantile(at, 0.25), quantile(at, 0.75),
-                  100.0 * quantile(share, 0.5), right_stopped, stopped,
-                  stopped ? 100.0 * right_stopped / stopped : 0.0, 100.0 * lo, 100.0 * hi, right_all, stopped,
-                  right_not_stopped, not_stopped);
+    std::snprintf(
+        row, sizeof row,
+        "| %.2f | %d of %zu | %.0f [%.0f, %.0f] | %.0f%% | %d of %d (%.1f%% [%.1f, %.1f]) | %d of %d | %d of %d "
+        "|\n",
+        p, stopped, ok.size(), quantile(at, 0.5), quantile(at, 0.25), quantile(at, 0.75), 100.0 * quantile(share, 0.5),
+        right_stopped, stopped, stopped ? 100.0 * right_stopped / stopped : 0.0, 100.0 * lo, 100.0 * hi, right_all,
+        stopped, right_not_stopped, not_stopped);
     out << row;
   }
   out << "\nWith every demonstration, " << right_at_end << " of " << ok.size() << " tasks are right.";
@@ -147,7 +146,8 @@ std::string draw_stopping_figure(const std::vector<StoppingRun>& runs, const Sto
       right += r->ile_relative[n - 1] <= kNearOptimalShare ? 1 : 0;
       confidence += r->confidence[n - 1];
     }
-    if (tasks >= std::min<int>(5, static_cast<int>(ok.size()))) data << n << " " << static_cast<double>(right) / tasks << " " << confidence / tasks << "\n";
+    if (tasks >= std::min<int>(5, static_cast<int>(ok.size())))
+      data << n << " " << static_cast<double>(right) / tasks << " " << confidence / tasks << "\n";
   }
   data << "EOD\n";
   for (size_t l = 0; l < o.levels.size(); ++l) {

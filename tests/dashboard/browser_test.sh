@@ -34,7 +34,7 @@ kill -TERM "$launch"
 wait "$launch" || fail "launch.sh exited non-zero"
 launch=""
 grep -q "learned (also in" "$tmp/launch.out" || fail "no learned reward"
-for f in index.html state.json camera.png em.svg em.png theta.svg posterior.svg observation_model.svg eta.svg; do
+for f in index.html state.json camera.png em.svg em.png estimates.svg theta.svg posterior.svg observation_model.svg eta.svg; do
   [ -s "$tmp/run/report/$f" ] || fail "the report has no $f"
 done
 echo "report: $(find "$tmp/run/report" -mindepth 1 -maxdepth 1 -printf '%f ')"
