@@ -398,9 +398,14 @@ int run_calibration_command(CalibrationArgs& args) {
     const auto [ran, seconds] = run_with_progress("learning runs", o, run_calibration);
     runs = ran;
     write_file(dir / "calibration_runs.csv", calibration_runs_csv(runs));
-    footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
-           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ") x " << o.draws << " data sets, " << o.samples
-           << " posterior draws, prior scale ";
+    if (o.tasks_from == "gridworld") {
+      footer << o.tasks << " runs of the Gridworld figure (seed " << o.first_seed
+             << ", |E| = 0, 1, 3, ..., 15 in turn, plausible eta), ";
+    } else {
+      footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
+             << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ") x " << o.draws << " data sets, ";
+    }
+    footer << o.samples << " posterior draws, prior scale ";
     if (o.prior_scale > 0.0) {
       footer << o.prior_scale;
     } else {
@@ -409,8 +414,10 @@ int run_calibration_command(CalibrationArgs& args) {
     footer << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
            << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
   }
-  footer << " Reproduce one: `hbirl generate random-task --seed S --draw D --out task.json`, then `hbirl learn "
-         << "--problem task.json --posterior-samples " << o.samples << "` (add `--from truth` for the true steps).";
+  if (o.tasks_from == "random") {
+    footer << " Reproduce one: `hbirl generate random-task --seed S --draw D --out task.json`, then `hbirl learn "
+           << "--problem task.json --posterior-samples " << o.samples << "` (add `--from truth` for the true steps).";
+  }
   const std::string summary = calibration_summary(runs, footer.str());
   write_file(dir / "calibration_summary.md", summary);
   const std::string problem = draw_calibration_figure(runs, (dir / "calibration").string());
@@ -748,6 +755,11 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   c->add_option("--data", args.data, "Comma-separated: observations, truth")->capture_default_str();
+  c->add_option("--tasks-from", args.options.tasks_from,
+                "random (random tasks, --draws data sets each) or gridworld (the Gridworld figure's runs: task t\n"
+                "with |E| = 0, 1, 3, ..., 15 in turn, plausible eta; --first-seed is the figure's seed)")
+      ->check(CLI::IsMember({"random", "gridworld"}))
+      ->capture_default_str();
   c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/learn.hpp"
+#include "experiments/gridworld_scenario.hpp"
 #include "experiments/random_tasks_experiment.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
@@ -24,16 +25,26 @@ namespace {
 constexpr int kBins = 10;
 constexpr double kConfident = 0.9;
 
+// What a run learns from and is judged by.
+struct CalibrationTask {
+  const Mdp& mdp;
+  const std::vector<ObservedTrajectory>& observed;
+  const ObservationPrior& prior;
+  const std::vector<Trajectory>& truth;
+  const Eigen::VectorXd& true_weights;
+  std::uint64_t seed = 0;
+  int draw = 0;
+};
+
 // One data set learned as `hbirl learn --posterior-samples` learns it, one thread per run.
-void learn_and_score(const RandomTask& task, const CalibrationOptions& o, CalibrationRun& r) {
+void learn_and_score(const CalibrationTask& task, const CalibrationOptions& o, CalibrationRun& r) {
   app::LearnSettings settings;
   settings.em.threads = 1;
   settings.em.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
   settings.posterior.samples = o.samples;
   settings.posterior.prior_scale = o.prior_scale;
-  const app::Learned learned = r.data == "truth"
-                                   ? app::learn_from_truth(task.mdp, task.demonstrations, settings)
-                                   : app::learn(task.mdp, task.observed.trajectories, task.prior, settings);
+  const app::Learned learned = r.data == "truth" ? app::learn_from_truth(task.mdp, task.truth, settings)
+                                                 : app::learn(task.mdp, task.observed, task.prior, settings);
   r.confidence = learned.confidence->near_optimal;
   r.probability_optimal = learned.confidence->optimal;
   r.expected_ile_relative = learned.confidence->expected_relative_ile;
@@ -41,6 +52,54 @@ void learn_and_score(const RandomTask& task, const CalibrationOptions& o, Calibr
   r.right = r.ile_relative <= kNearOptimalShare;
   r.prior_scale = learned.posterior->prior_scale;
   r.effective_samples = learned.posterior->effective_samples;
+}
+
+void learn_random_task(const RandomTask& task, const CalibrationOptions& o, CalibrationRun& r) {
+  learn_and_score(
+      {task.mdp, task.observed.trajectories, task.prior, task.demonstrations, task.true_weights, task.seed, task.draw},
+      o, r);
+}
+
+// The Gridworld figure's confounders, in turn.
+constexpr int kGridworldConfounders[] = {0, 1, 3, 5, 7, 9, 11, 13, 15};
+
+// Task t of the Gridworld figure (gridworld_experiment.hpp's default method: plausible eta,
+// the controlled run's prior, uninformative priors for the elements).
+void learn_gridworld_run(const CalibrationOptions& o, int t, CalibrationRun& r) {
+  const int confounders = kGridworldConfounders[t % 9];
+  GridworldScenarioOptions options;
+  options.seed = o.first_seed;
+  GridworldScenario s = make_gridworld_scenario(options, t, confounders);
+  Rng eta_rng =
+      Rng(o.first_seed).split(static_cast<std::uint64_t>(t)).split(2000 + static_cast<std::uint64_t>(confounders));
+  assign_eta(s.observations, 1 + confounders, EtaKind::kPlausible, eta_rng);
+  ObservationPrior prior;
+  prior.num_symbols = 4;
+  prior.learn = true;
+  prior.subject_alpha = s.controlled_alpha;
+  prior.num_confounders = confounders;
+  prior.confounder_alpha = Eigen::MatrixXd::Ones(confounders, 4);
+  learn_and_score({s.task.mdp, s.observations.trajectories, prior, s.task.trajectories, s.task.true_weights,
+                   o.first_seed + static_cast<std::uint64_t>(t), confounders},
+                  o, r);
+}
+
+std::vector<CalibrationRun> run_on_gridworld(const CalibrationOptions& o) {
+  const size_t per_task = o.data.size();
+  std::vector<CalibrationRun> runs(static_cast<size_t>(o.tasks) * per_task);
+  std::atomic<int> done{0};
+  parallel_for(o.tasks, o.threads, [&](int t) {
+    for (size_t d = 0; d < per_task; ++d) {
+      CalibrationRun& r = runs[static_cast<size_t>(t) * per_task + d];
+      r.seed = o.first_seed + static_cast<std::uint64_t>(t);
+      r.draw = kGridworldConfounders[t % 9];
+      r.data = o.data[d];
+      record_run(r, [&](CalibrationRun& run) { learn_gridworld_run(o, t, run); });
+      const int finished = ++done;
+      if (o.progress) o.progress(finished, static_cast<int>(runs.size()));
+    }
+  });
+  return runs;
 }
 
 std::vector<const CalibrationRun*> runs_of(const std::vector<CalibrationRun>& runs, const std::string& data) {
@@ -186,12 +245,14 @@ CalibrationScore calibration_score(const std::vector<double>& confidence, const 
 std::vector<CalibrationRun> run_calibration(const CalibrationOptions& o) {
   if (o.tasks < 1 || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
   if (o.data.empty()) throw InputError("data", "none to learn from");
+  if (o.tasks_from == "gridworld") return run_on_gridworld(o);
+  if (o.tasks_from != "random") throw InputError("tasks_from", "must be random or gridworld");
   std::vector<std::uint64_t> seeds;
   for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
   return on_random_data_sets<CalibrationRun>(seeds, o.draws, o.data.size(), o.threads, o.progress,
                                              [&](const RandomTask& task, size_t d, CalibrationRun& run) {
                                                run.data = o.data[d];
-                                               learn_and_score(task, o, run);
+                                               learn_random_task(task, o, run);
                                              });
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <memory>
 
+#include "app/learn.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/soft_value_iteration.hpp"
@@ -235,7 +236,8 @@ app::LearnSettings final_settings(app::LearnSettings settings) {
 // The estimate after each demonstration (OptimiserOptions::anytime): when more
 // demonstrations are complete than last time, learned on the data so far (here, one
 // thread), EM also started from the last estimate, and published on ESTIMATE. A data set
-// that cannot be learned from yet (no subject prior, say) is skipped, said once.
+// that cannot be learned from yet (no subject prior, say) is skipped, said once: a live
+// estimate never ends the run.
 class LiveEstimator {
  public:
   LiveEstimator(Bus& bus, const OptimiserOptions& options, Counters& counters,
@@ -267,7 +269,7 @@ class LiveEstimator {
       const Learned learned = learn_from_dataset(*domain, data, settings);
       previous_ = learned.theta;
       publish_estimate(*domain, data, learned, std::chrono::duration<double>(Clock::now() - start).count());
-    } catch (const InputError& e) {
+    } catch (const std::exception& e) {  // a live estimate never ends the run: the final learning says what is wrong
       if (!said_) say("no estimate yet from " + std::to_string(data.observed.size()) + " demonstrations: " + e.what());
       said_ = true;
     }

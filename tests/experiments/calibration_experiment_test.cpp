@@ -65,5 +65,24 @@ TEST(CalibrationExperiment, RunsAndReadsBack) {
   EXPECT_THROW(calibration_runs_from_csv("seed,draw\n"), InputError);
 }
 
+// The Gridworld figure's runs as tasks: |E| in the figure's order, each learned from
+// observations and truth; an unknown source of tasks is named.
+TEST(CalibrationExperiment, OnTheGridworldFiguresRuns) {
+  CalibrationOptions o;
+  o.tasks_from = "gridworld";
+  o.first_seed = 1;
+  o.tasks = 2;
+  o.samples = 20;
+  o.threads = 2;
+  const std::vector<CalibrationRun> runs = run_calibration(o);
+  ASSERT_EQ(runs.size(), 4u);
+  for (const CalibrationRun& r : runs) EXPECT_EQ(r.error, "");
+  EXPECT_EQ(runs[0].draw, 0);  // |E| = 0, then 1
+  EXPECT_EQ(runs[2].draw, 1);
+  EXPECT_EQ(runs[1].data, "truth");
+  o.tasks_from = "mars";
+  EXPECT_THROW(run_calibration(o), InputError);
+}
+
 }  // namespace
 }  // namespace hbirl

@@ -24,6 +24,10 @@ struct CalibrationOptions {
   int samples = 200;                                          // posterior draws per run
   double prior_scale = RewardPosteriorOptions{}.prior_scale;  // hbirl learn's default; 0: chosen by the evidence
   std::vector<std::string> data = {"observations", "truth"};
+  // "random" (random tasks) or "gridworld": the Gridworld figure's runs (paper §Experiments
+  // A: 5x5, 20 demonstrations of 10 steps, 40 observations a step, plausible eta), task t
+  // with |E| = 0, 1, 3, ..., 15 in turn, its run t of the seed `first_seed` ("draw" is |E|).
+  std::string tasks_from = "random";
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads
 };
