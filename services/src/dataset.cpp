@@ -257,9 +257,10 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   bytes_ += bytes;
   e.frames.emplace(std::make_pair(m.step, m.frame), std::move(f));
   ++frames_;
-  if (e.ended && m.step < e.num_steps && m.frame < e.frames_per_step) {
+  if (e.ended && m.step < e.num_steps && m.frame < e.frames_per_step) {  // a frame that came after its episode's end
+    count(e, m.episode, -1);
     ++e.have_frames;
-    if (in_run(m.episode)) --missing_frames_;
+    count(e, m.episode, +1);
   }
   last_utime_ = std::max(last_utime_, m.utime);
 }

@@ -1075,6 +1075,22 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
       ASSERT_EQ(b.unfinished_episodes(), unfinished) << "message " << message;
       ASSERT_EQ(b.complete(), run_ended && all_there && unfinished == 0 && missing_frames == 0 && missing_truth == 0)
           << "message " << message;
+      // The demonstrations with every frame (in any order of markers and frames: a frame may
+      // come after its episode's end), and how many of the first, in episode order, are.
+      int complete_demonstrations = 0, prefix = 0;
+      bool prefix_open = true;
+      for (const auto& [i, x] : sent) {
+        if (!in_run(i)) continue;
+        std::int64_t have = 0;
+        for (const auto& [step, frame] : x.frames) have += step < x.steps && frame < x.per_step;
+        const bool whole = x.ended && have == static_cast<std::int64_t>(x.steps) * x.per_step;
+        complete_demonstrations += !x.controlled && whole;
+        if (x.marked && x.controlled) continue;
+        prefix_open = prefix_open && whole;
+        prefix += prefix_open;
+      }
+      ASSERT_EQ(b.complete_demonstrations(), complete_demonstrations) << "message " << message;
+      ASSERT_EQ(b.complete_demonstration_prefix(), prefix) << "message " << message;
     }
   }
 }
