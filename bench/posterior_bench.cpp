@@ -25,7 +25,7 @@ void BM_LearnRandomTask(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_LearnRandomTask)
-    ->ArgsProduct({{1001, 1002, 1003, 1004, 1005, 1006, 1007, 1008, 1009}, {0, 200}})
+    ->ArgsProduct({{1001, 1002, 1003, 1004, 1005, 1006, 1007, 1008, 1009}, {0, kConfidenceDraws}})
     ->ArgNames({"seed", "samples"})
     ->Unit(benchmark::kMillisecond);
 
@@ -72,7 +72,7 @@ void BM_LearnOnionDemo(benchmark::State& state) {
     benchmark::DoNotOptimize(services::learn_from_dataset(*builtin_domain("onion"), data, settings).theta);
   }
 }
-BENCHMARK(BM_LearnOnionDemo)->Arg(0)->Arg(200)->ArgName("samples")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LearnOnionDemo)->Arg(0)->Arg(kConfidenceDraws)->ArgName("samples")->Unit(benchmark::kMillisecond);
 
 // The live optimiser's update after demonstration n of the onion demo (hbirl-optimiser
 // --anytime under launch.sh: 200 posterior draws, EM also from estimate n-1, the two EM
@@ -82,7 +82,7 @@ void BM_LiveUpdateOnionDemo(benchmark::State& state) {
   const std::shared_ptr<const Domain> onion = builtin_domain("onion");
   app::LearnSettings settings;
   settings.em.threads = static_cast<int>(state.range(1));
-  settings.posterior.samples = 200;
+  settings.posterior.samples = kConfidenceDraws;
   if (n > 1) {
     settings.em.warm_start =
         services::learn_from_dataset(*onion, services::first_demonstrations(onion_demo(), n - 1), settings).theta;

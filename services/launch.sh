@@ -390,7 +390,8 @@ fi
 : >"$out/logs/optimiser.log"
 : >"$out/logs/optimiser.err"
 optimiser_args=(--incomplete-after-ms "$((incomplete_after * 1000))")
-# Live estimates carry a confidence from 200 posterior draws (docs/MODEL.md).
+# Live estimates carry a confidence from 200 posterior draws (learner/reward_posterior.hpp's
+# kConfidenceDraws, as the experiments; docs/MODEL.md).
 [ "${#stop_args[@]}" = 0 ] || optimiser_args+=("${stop_args[@]}" --posterior-samples 200)
 [ "$allow_incomplete" = 0 ] || optimiser_args+=(--allow-incomplete)
 start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" \

@@ -108,6 +108,7 @@ void learn_from_truth_anytime(const Mdp& mdp, const std::vector<Trajectory>& tru
 // order; hbirl-optimiser --stop-at-confidence and the stopping experiment both use it.
 class StopRule {
  public:
+  static constexpr int kDefaultAfter = 3;  // k unless told (--stop-after)
   StopRule(double at, int after) : at_(at), after_(after) {}
   // Whether the rule holds with this estimate's confidence (and stays holding while they
   // stay >= at).

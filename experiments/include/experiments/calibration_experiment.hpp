@@ -21,7 +21,7 @@ struct CalibrationOptions {
   // Not the seeds the posterior's defaults were looked at on (1001-1060, docs/MODEL.md).
   std::uint64_t first_seed = 5001;
   int draws = 3;                                              // data sets per task
-  int samples = 200;                                          // posterior draws per run
+  int samples = kConfidenceDraws;                             // posterior draws per run
   double prior_scale = RewardPosteriorOptions{}.prior_scale;  // hbirl learn's default; 0: chosen by the evidence
   std::vector<std::string> data = {"observations", "truth"};
   // "random" (random tasks) or "gridworld": the Gridworld figure's runs (paper §Experiments

@@ -10,14 +10,17 @@
 #include <string>
 #include <vector>
 
+#include "app/learn.hpp"
+#include "learner/reward_posterior.hpp"
+
 namespace hbirl {
 
 struct StoppingOptions {
   int tasks = 60;
   std::uint64_t first_seed = 8001;  // not a seed anything was tuned on
-  int samples = 200;                // posterior draws per estimate
+  int samples = kConfidenceDraws;   // posterior draws per estimate
   std::vector<double> levels = {0.9, 0.95};
-  int stop_after = 3;
+  int stop_after = app::StopRule::kDefaultAfter;
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads
 };

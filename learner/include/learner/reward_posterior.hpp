@@ -31,6 +31,11 @@
 
 namespace hbirl {
 
+// The draws the experiments (calibration, stopping) and services/launch.sh's live
+// estimates ask for: the confidence to about +-0.035 when they are worth as many
+// independent ones (hbirl learn warns when the importance weights make them worth a tenth).
+constexpr int kConfidenceDraws = 200;
+
 struct RewardPosteriorOptions {
   int samples = 0;  // importance draws (at least 1; front ends draw none unless asked)
   // sigma. 8: weakly informative for features of order 1 (indicators, as in the built-in

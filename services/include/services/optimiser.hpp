@@ -16,6 +16,7 @@
 #include "services/channels.hpp"
 #include "services/dataset.hpp"
 #include "services/estep_service.hpp"
+#include "app/learn.hpp"
 #include "services/learning.hpp"
 #include "problem/json_format.hpp"
 #include "sim_driver/registry/domain.hpp"
@@ -54,7 +55,7 @@ struct OptimiserOptions {
   // a confidence >= stop_at_confidence, STOP asks the sensor side to end the run (repeated
   // after every estimate while the rule holds). Needs anytime and posterior draws.
   double stop_at_confidence = 0.0;
-  int stop_after = 3;
+  int stop_after = app::StopRule::kDefaultAfter;
   // Called often (every ~100 ms while collecting, every EM iteration) with what the
   // optimiser is doing ("collecting", "learning"): the process beats its heartbeat there,
   // so services that wait for it (the simulator) and the dashboard hear it throughout.
