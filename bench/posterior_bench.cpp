@@ -75,14 +75,15 @@ void BM_LearnOnionDemo(benchmark::State& state) {
 BENCHMARK(BM_LearnOnionDemo)->Arg(0)->Arg(kConfidenceDraws)->ArgName("samples")->Unit(benchmark::kMillisecond);
 
 // The live optimiser's update after demonstration n of the onion demo (hbirl-optimiser
-// --anytime under launch.sh: 200 posterior draws, EM also from estimate n-1, the two EM
-// starts on `threads` threads).
+// --anytime under launch.sh: kLiveConfidenceDraws posterior draws, EM also from estimate
+// n-1, the two EM starts on `threads` threads); with 0 draws what EM alone costs of it, with
+// kConfidenceDraws what the calibration experiment's draws would.
 void BM_LiveUpdateOnionDemo(benchmark::State& state) {
   const auto n = static_cast<size_t>(state.range(0));
   const std::shared_ptr<const Domain> onion = builtin_domain("onion");
   app::LearnSettings settings;
   settings.em.threads = static_cast<int>(state.range(1));
-  settings.posterior.samples = kConfidenceDraws;
+  settings.posterior.samples = static_cast<int>(state.range(2));
   if (n > 1) {
     settings.em.warm_start =
         services::learn_from_dataset(*onion, services::first_demonstrations(onion_demo(), n - 1), settings).theta;
@@ -91,8 +92,8 @@ void BM_LiveUpdateOnionDemo(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(services::learn_from_dataset(*onion, upto, settings).theta);
 }
 BENCHMARK(BM_LiveUpdateOnionDemo)
-    ->ArgsProduct({{2, 4, 6}, {1, 2}})
-    ->ArgNames({"n", "threads"})
+    ->ArgsProduct({{2, 4, 6}, {1, 2}, {0, kLiveConfidenceDraws, kConfidenceDraws}})
+    ->ArgNames({"n", "threads", "samples"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "full_commands.hpp"
 #include "experiments/calibration_experiment.hpp"
+#include "experiments/judged_tasks.hpp"
 #include "experiments/eta_experiments.hpp"
 #include "experiments/gridworld_experiment.hpp"
 #include "experiments/onion_regimes.hpp"
@@ -367,7 +368,8 @@ int run_random_tasks_command(RandomTasksArgs& args) {
 struct CalibrationArgs {
   std::string out = "results";
   std::string data = "observations,truth";
-  std::string runs_csv;  // summarise these runs instead of running
+  std::string demonstrations;  // comma-separated n, or empty: every demonstration
+  std::string runs_csv;        // summarise these runs instead of running
   CalibrationOptions options;
 };
 
@@ -384,9 +386,20 @@ std::vector<std::string> parse_calibration_data(const std::string& text) {
   return data;
 }
 
+// --demonstrations: empty for every demonstration, else each n at least 1.
+std::vector<int> parse_demonstrations(const std::string& text) {
+  if (text.empty()) return {};
+  std::vector<int> counts = parse_int_list(text, "--demonstrations");
+  for (int n : counts) {
+    if (n < 1) throw InputError("--demonstrations", "each must be at least 1");
+  }
+  return counts;
+}
+
 int run_calibration_command(CalibrationArgs& args) {
   CalibrationOptions& o = args.options;
   o.data = parse_calibration_data(args.data);
+  o.demonstrations = parse_demonstrations(args.demonstrations);
   make_folder(args.out);
   const std::filesystem::path dir(args.out);
   std::vector<CalibrationRun> runs;
@@ -398,14 +411,12 @@ int run_calibration_command(CalibrationArgs& args) {
     const auto [ran, seconds] = run_with_progress("learning runs", o, run_calibration);
     runs = ran;
     write_file(dir / "calibration_runs.csv", calibration_runs_csv(runs));
-    if (o.tasks_from == "gridworld") {
-      footer << o.tasks << " runs of the Gridworld figure (seed " << o.first_seed
-             << ", |E| = 0, 1, 3, ..., 15 in turn, plausible eta), ";
-    } else {
-      footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
-             << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ") x " << o.draws << " data sets, ";
-    }
-    footer << o.samples << " posterior draws, prior scale ";
+    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " (seeds " << o.first_seed << "-"
+           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ")";
+    if (o.tasks_from == "random") footer << " x " << o.draws << " data sets";
+    if (!o.demonstrations.empty())
+      footer << ", each learned from its first " << args.demonstrations << " demonstrations";
+    footer << "; " << o.samples << " posterior draws, prior scale ";
     if (o.prior_scale > 0.0) {
       footer << o.prior_scale;
     } else {
@@ -431,6 +442,7 @@ int run_calibration_command(CalibrationArgs& args) {
 struct StoppingArgs {
   std::string out = "results";
   std::string levels = "0.9,0.95";
+  std::string runs_csv;  // summarise these runs instead of running
   StoppingOptions options;
 };
 
@@ -459,22 +471,32 @@ int run_stopping_command(StoppingArgs& args) {
   if (o.stop_after < 1) throw InputError("--stop-after", "must be at least 1");
   make_folder(args.out);
   const std::filesystem::path dir(args.out);
-  const auto [runs, seconds] = run_with_progress("tasks", o, run_stopping);
-  write_file(dir / "stopping_runs.csv", stopping_runs_csv(runs));
+  std::vector<StoppingRun> runs;
   std::ostringstream footer;
-  footer << o.tasks << " random tasks (seeds " << o.first_seed << "-"
-         << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ", draw 0), " << o.samples
-         << " posterior draws per estimate; " << static_cast<long>(seconds + 0.5) << " s on "
-         << (o.threads > 0 ? o.threads : default_thread_count())
-         << " threads. Reproduce one: `hbirl generate random-task --seed S --out task.json`, then `hbirl learn "
-            "--problem task.json --anytime --posterior-samples "
-         << o.samples << "`.";
+  if (!args.runs_csv.empty()) {
+    runs = read_runs_csv(args.runs_csv, stopping_runs_from_csv);
+    footer << runs.size() << " tasks from " << std::filesystem::path(args.runs_csv).filename().string() << " ("
+           << judged_task_label(o.tasks_from) << ", as --tasks-from says).";
+  } else {
+    const auto [ran, seconds] = run_with_progress("tasks", o, run_stopping);
+    runs = ran;
+    write_file(dir / "stopping_runs.csv", stopping_runs_csv(runs));
+    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " (seeds " << o.first_seed << "-"
+           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ", one data set each), " << o.samples
+           << " posterior draws per estimate; " << static_cast<long>(seconds + 0.5) << " s on "
+           << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
+    if (o.tasks_from == "random") {
+      footer << " Reproduce one: `hbirl generate random-task --seed S --out task.json`, then `hbirl learn "
+                "--problem task.json --anytime --posterior-samples "
+             << o.samples << "`.";
+    }
+  }
   const std::string summary = stopping_summary(runs, o, footer.str());
   write_file(dir / "stopping_summary.md", summary);
   const std::string problem = draw_stopping_figure(runs, o, (dir / "stopping").string());
   if (!problem.empty()) std::cerr << "hbirl: warning: no figure: " << problem << "\n";
   std::cout << summary;
-  std::cerr << "hbirl: wrote stopping_runs.csv, stopping_summary.md"
+  std::cerr << "hbirl: wrote " << (args.runs_csv.empty() ? "stopping_runs.csv, " : "") << "stopping_summary.md"
             << (problem.empty() ? ", stopping.png, stopping.svg" : "") << " in " << args.out << "\n";
   return 0;
 }
@@ -733,12 +755,24 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
   return tasks_cmd;
 }
 
+// --tasks-from of the experiments that judge the confidence (judged_tasks.hpp).
+void add_tasks_from(CLI::App* c, std::string& tasks_from) {
+  c->add_option("--tasks-from", tasks_from,
+                "random (random tasks, --draws data sets each where there is --draws); gridworld (the Gridworld\n"
+                "figure's runs: task t with |E| = 0, 1, 3, ..., 15 in turn, plausible eta, 20 demonstrations); onion\n"
+                "(the onion figure's runs: 10 sorts rendered and perceived, the labeller's eta). For a figure,\n"
+                "--first-seed is the figure's seed and task t its run t")
+      ->check(CLI::IsMember(judged_task_sources()))
+      ->capture_default_str();
+}
+
 // experiment calibration: is the posterior's confidence a promise?
 CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
   CLI::App* c = cmd->add_subcommand(
       "calibration",
       "Is the confidence calibrated? Random tasks (seeds from --first-seed: not those the posterior's defaults\n"
-      "were looked at on), each data set learned as hbirl learn --posterior-samples learns it, from the observations\n"
+      "were looked at on) or a figure's runs (--tasks-from), each data set learned as hbirl learn --posterior-samples "
+      "learns it, from the observations\n"
       "and from the true trajectories; the confidence (the posterior probability that the learned policy is within\n"
       "5% of the optimal value) against whether it is. Writes calibration_runs.csv, calibration_summary.md (AUROC,\n"
       "expected calibration error, Brier score, share right among confidence >= 0.9, the reliability table) and\n"
@@ -755,11 +789,10 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   c->add_option("--data", args.data, "Comma-separated: observations, truth")->capture_default_str();
-  c->add_option("--tasks-from", args.options.tasks_from,
-                "random (random tasks, --draws data sets each) or gridworld (the Gridworld figure's runs: task t\n"
-                "with |E| = 0, 1, 3, ..., 15 in turn, plausible eta; --first-seed is the figure's seed)")
-      ->check(CLI::IsMember({"random", "gridworld"}))
-      ->capture_default_str();
+  add_tasks_from(c, args.options.tasks_from);
+  c->add_option("--demonstrations", args.demonstrations,
+                "Comma-separated n: learn each data set from its first n demonstrations, a run per n (e.g. 1,2,3\n"
+                "for the onion figure's first points); default: from every demonstration");
   c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();
@@ -772,7 +805,8 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
 CLI::App* add_stopping_experiment(CLI::App* cmd, StoppingArgs& args) {
   CLI::App* c = cmd->add_subcommand(
       "stopping",
-      "Knowing when it has seen enough: random tasks learned while their demonstrations arrive (hbirl learn\n"
+      "Knowing when it has seen enough: random tasks (or a figure's runs, --tasks-from) learned while their "
+      "demonstrations arrive (hbirl learn\n"
       "--anytime --posterior-samples), then the stop rule (--stop-after estimates in a row with confidence >= p)\n"
       "for each level p: after how many demonstrations it stops and how often the policy it stops with is right,\n"
       "against every demonstration. Writes stopping_runs.csv (one row per estimate), stopping_summary.md and\n"
@@ -784,7 +818,11 @@ CLI::App* add_stopping_experiment(CLI::App* cmd, StoppingArgs& args) {
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   c->add_option("--levels", args.levels, "Confidence levels p, comma-separated, each in (0, 1)")->capture_default_str();
+  add_tasks_from(c, args.options.tasks_from);
   c->add_option("--stop-after", args.options.stop_after, "Estimates in a row at or above p")->capture_default_str();
+  c->add_option("--summarise", args.runs_csv,
+                "Do not run: summarise and draw the runs of this stopping_runs.csv into --out (with its --tasks-from\n"
+                "and --samples for the labels)");
   c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();

@@ -107,7 +107,7 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          seconds (stopped, or blocked: alive, but silent) is killed and
                          restarted, like one that died (default $stall; 0: only deaths are noticed)
   --anytime              the optimiser publishes an estimate after each demonstration
-                         (ESTIMATE, with its confidence: 200 posterior draws each), drawn by
+                         (ESTIMATE, with its confidence: 100 posterior draws each), drawn by
                          the dashboard demonstration by demonstration
   --stop-at-confidence P knowing when it has seen enough: once --stop-after estimates in a row
                          have a confidence >= P (in (0, 1)), the optimiser sends STOP and the
@@ -390,9 +390,9 @@ fi
 : >"$out/logs/optimiser.log"
 : >"$out/logs/optimiser.err"
 optimiser_args=(--incomplete-after-ms "$((incomplete_after * 1000))")
-# Live estimates carry a confidence from 200 posterior draws (learner/reward_posterior.hpp's
-# kConfidenceDraws, as the experiments; docs/MODEL.md).
-[ "${#stop_args[@]}" = 0 ] || optimiser_args+=("${stop_args[@]}" --posterior-samples 200)
+# Live estimates carry a confidence from 100 posterior draws (learner/reward_posterior.hpp's
+# kLiveConfidenceDraws, as the stopping experiment; docs/MODEL.md).
+[ "${#stop_args[@]}" = 0 ] || optimiser_args+=("${stop_args[@]}" --posterior-samples 100)
 [ "$allow_incomplete" = 0 ] || optimiser_args+=(--allow-incomplete)
 start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" \
   "${optimiser_args[@]}" --out "$out/result.json"

@@ -9,14 +9,12 @@
 #include <sstream>
 
 #include "app/learn.hpp"
-#include "experiments/gridworld_scenario.hpp"
-#include "experiments/random_tasks_experiment.hpp"
+#include "experiments/judged_tasks.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
 #include "learner/parallel.hpp"
 #include "plot/gnuplot.hpp"
-#include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
 
@@ -25,26 +23,28 @@ namespace {
 constexpr int kBins = 10;
 constexpr double kConfident = 0.9;
 
-// What a run learns from and is judged by.
-struct CalibrationTask {
-  const Mdp& mdp;
-  const std::vector<ObservedTrajectory>& observed;
-  const ObservationPrior& prior;
-  const std::vector<Trajectory>& truth;
-  const Eigen::VectorXd& true_weights;
-  std::uint64_t seed = 0;
-  int draw = 0;
-};
+// The first n demonstrations of `all` (n = 0: every one).
+template <class T>
+std::vector<T> first(const std::vector<T>& all, int n) {
+  if (n == 0) return all;
+  return std::vector<T>(all.begin(), all.begin() + n);
+}
 
-// One data set learned as `hbirl learn --posterior-samples` learns it, one thread per run.
-void learn_and_score(const CalibrationTask& task, const CalibrationOptions& o, CalibrationRun& r) {
+// One data set learned as `hbirl learn --posterior-samples` learns it, one thread per run,
+// from its first r.demonstrations demonstrations.
+void learn_and_score(const JudgedTask& task, const DataSetId& id, const CalibrationOptions& o, CalibrationRun& r) {
+  const int n = r.demonstrations;
+  if (n > static_cast<int>(task.truth.size())) {
+    throw InputError("demonstrations",
+                     std::to_string(n) + " asked, the data set has " + std::to_string(task.truth.size()));
+  }
   app::LearnSettings settings;
   settings.em.threads = 1;
-  settings.em.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
+  settings.em.seed = id.seed * 1000003ull + static_cast<std::uint64_t>(id.draw);
   settings.posterior.samples = o.samples;
   settings.posterior.prior_scale = o.prior_scale;
-  const app::Learned learned = r.data == "truth" ? app::learn_from_truth(task.mdp, task.truth, settings)
-                                                 : app::learn(task.mdp, task.observed, task.prior, settings);
+  const app::Learned learned = r.data == "truth" ? app::learn_from_truth(task.mdp, first(task.truth, n), settings)
+                                                 : app::learn(task.mdp, first(task.observed, n), task.prior, settings);
   r.confidence = learned.confidence->near_optimal;
   r.probability_optimal = learned.confidence->optimal;
   r.expected_ile_relative = learned.confidence->expected_relative_ile;
@@ -52,54 +52,6 @@ void learn_and_score(const CalibrationTask& task, const CalibrationOptions& o, C
   r.right = r.ile_relative <= kNearOptimalShare;
   r.prior_scale = learned.posterior->prior_scale;
   r.effective_samples = learned.posterior->effective_samples;
-}
-
-void learn_random_task(const RandomTask& task, const CalibrationOptions& o, CalibrationRun& r) {
-  learn_and_score(
-      {task.mdp, task.observed.trajectories, task.prior, task.demonstrations, task.true_weights, task.seed, task.draw},
-      o, r);
-}
-
-// The Gridworld figure's confounders, in turn.
-constexpr int kGridworldConfounders[] = {0, 1, 3, 5, 7, 9, 11, 13, 15};
-
-// Task t of the Gridworld figure (gridworld_experiment.hpp's default method: plausible eta,
-// the controlled run's prior, uninformative priors for the elements).
-void learn_gridworld_run(const CalibrationOptions& o, int t, CalibrationRun& r) {
-  const int confounders = kGridworldConfounders[t % 9];
-  GridworldScenarioOptions options;
-  options.seed = o.first_seed;
-  GridworldScenario s = make_gridworld_scenario(options, t, confounders);
-  Rng eta_rng =
-      Rng(o.first_seed).split(static_cast<std::uint64_t>(t)).split(2000 + static_cast<std::uint64_t>(confounders));
-  assign_eta(s.observations, 1 + confounders, EtaKind::kPlausible, eta_rng);
-  ObservationPrior prior;
-  prior.num_symbols = 4;
-  prior.learn = true;
-  prior.subject_alpha = s.controlled_alpha;
-  prior.num_confounders = confounders;
-  prior.confounder_alpha = Eigen::MatrixXd::Ones(confounders, 4);
-  learn_and_score({s.task.mdp, s.observations.trajectories, prior, s.task.trajectories, s.task.true_weights,
-                   o.first_seed + static_cast<std::uint64_t>(t), confounders},
-                  o, r);
-}
-
-std::vector<CalibrationRun> run_on_gridworld(const CalibrationOptions& o) {
-  const size_t per_task = o.data.size();
-  std::vector<CalibrationRun> runs(static_cast<size_t>(o.tasks) * per_task);
-  std::atomic<int> done{0};
-  parallel_for(o.tasks, o.threads, [&](int t) {
-    for (size_t d = 0; d < per_task; ++d) {
-      CalibrationRun& r = runs[static_cast<size_t>(t) * per_task + d];
-      r.seed = o.first_seed + static_cast<std::uint64_t>(t);
-      r.draw = kGridworldConfounders[t % 9];
-      r.data = o.data[d];
-      record_run(r, [&](CalibrationRun& run) { learn_gridworld_run(o, t, run); });
-      const int finished = ++done;
-      if (o.progress) o.progress(finished, static_cast<int>(runs.size()));
-    }
-  });
-  return runs;
 }
 
 std::vector<const CalibrationRun*> runs_of(const std::vector<CalibrationRun>& runs, const std::string& data) {
@@ -191,13 +143,13 @@ void write_confident_wrong(std::ostream& out, const std::vector<CalibrationRun>&
     out << ".\n";
     return;
   }
-  out << " (seed/draw data: confidence, relative ILE):";
+  out << " (seed/draw/demonstrations (0: all) data: confidence, relative ILE):";
   const size_t shown = std::min<size_t>(wrong.size(), 20);
   for (size_t i = 0; i < shown; ++i) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "%s %llu/%d %s: %.3f, %.3f", i ? ";" : "",
-                  static_cast<unsigned long long>(wrong[i]->seed), wrong[i]->draw, wrong[i]->data.c_str(),
-                  wrong[i]->confidence, wrong[i]->ile_relative);
+    std::snprintf(buf, sizeof buf, "%s %llu/%d/%d %s: %.3f, %.3f", i ? ";" : "",
+                  static_cast<unsigned long long>(wrong[i]->seed), wrong[i]->draw, wrong[i]->demonstrations,
+                  wrong[i]->data.c_str(), wrong[i]->confidence, wrong[i]->ile_relative);
     out << buf;
   }
   out << (shown < wrong.size() ? "; ...\n" : ".\n");
@@ -243,28 +195,31 @@ CalibrationScore calibration_score(const std::vector<double>& confidence, const 
 }
 
 std::vector<CalibrationRun> run_calibration(const CalibrationOptions& o) {
-  if (o.tasks < 1 || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
   if (o.data.empty()) throw InputError("data", "none to learn from");
-  if (o.tasks_from == "gridworld") return run_on_gridworld(o);
-  if (o.tasks_from != "random") throw InputError("tasks_from", "must be random or gridworld");
-  std::vector<std::uint64_t> seeds;
-  for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
-  return on_random_data_sets<CalibrationRun>(seeds, o.draws, o.data.size(), o.threads, o.progress,
-                                             [&](const RandomTask& task, size_t d, CalibrationRun& run) {
-                                               run.data = o.data[d];
-                                               learn_random_task(task, o, run);
-                                             });
+  for (int n : o.demonstrations) {
+    if (n < 1) throw InputError("demonstrations", "each must be at least 1");
+  }
+  // Per data set, for each prefix n (or all), each data: variant v = prefix * |data| + data.
+  const std::vector<int> prefixes = o.demonstrations.empty() ? std::vector<int>{0} : o.demonstrations;
+  const size_t variants = prefixes.size() * o.data.size();
+  return on_judged_tasks<CalibrationRun>({o.tasks_from, o.tasks, o.first_seed, o.draws}, variants, o.threads,
+                                         o.progress, [&](const JudgedTask& task, size_t v, CalibrationRun& run) {
+                                           run.demonstrations = prefixes[v / o.data.size()];
+                                           run.data = o.data[v % o.data.size()];
+                                           learn_and_score(task, {run.seed, run.draw}, o, run);
+                                         });
 }
 
 std::string calibration_runs_csv(const std::vector<CalibrationRun>& runs) {
   std::ostringstream out;
   out.precision(10);
-  out << "seed,draw,data,confidence,probability_optimal,expected_ile_relative,ile_relative,right,prior_scale,"
+  out << "seed,draw,demonstrations,data,confidence,probability_optimal,expected_ile_relative,ile_relative,right,prior_"
+         "scale,"
          "effective_samples,seconds,error\n";
   for (const CalibrationRun& r : runs) {
-    out << r.seed << "," << r.draw << "," << r.data << "," << r.confidence << "," << r.probability_optimal << ","
-        << r.expected_ile_relative << "," << r.ile_relative << "," << (r.right ? 1 : 0) << "," << r.prior_scale << ","
-        << r.effective_samples << "," << r.seconds << "," << csv_text(r.error) << "\n";
+    out << r.seed << "," << r.draw << "," << r.demonstrations << "," << r.data << "," << r.confidence << ","
+        << r.probability_optimal << "," << r.expected_ile_relative << "," << r.ile_relative << "," << (r.right ? 1 : 0)
+        << "," << r.prior_scale << "," << r.effective_samples << "," << r.seconds << "," << csv_text(r.error) << "\n";
   }
   return out.str();
 }
@@ -281,16 +236,17 @@ std::vector<CalibrationRun> calibration_runs_from_csv(const std::string& csv) {
     std::istringstream cells(line);
     for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
     if (!line.empty() && line.back() == ',') f.emplace_back();
-    if (f.size() != 12) {
+    if (f.size() != 13) {
       throw InputError("runs CSV",
-                       "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected 12");
+                       "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected 13");
     }
     try {
       CalibrationRun r;
       r.seed = std::stoull(f[0]);
       r.draw = std::stoi(f[1]);
-      r.data = f[2];
-      size_t i = 3;
+      r.demonstrations = std::stoi(f[2]);
+      r.data = f[3];
+      size_t i = 4;
       for (double* x : {&r.confidence, &r.probability_optimal, &r.expected_ile_relative, &r.ile_relative})
         *x = std::stod(f[i++]);
       r.right = f[i++] == "1";

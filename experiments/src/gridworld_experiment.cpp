@@ -24,6 +24,42 @@ Scenario make_scenario(const GridworldExperimentOptions& o, int run, int confoun
   return make_gridworld_scenario({o.seed, o.size, o.trajectories, o.length, o.per_step}, run, confounders);
 }
 
+}  // namespace
+
+GridworldMethodData gridworld_method_data(const GridworldScenario& s, GridworldMethod method, std::uint64_t seed,
+                                          int run, int confounders) {
+  GridworldMethodData out{s.observations, {}};
+  ObservationPrior& prior = out.prior;
+  prior.num_symbols = 4;
+  prior.learn = true;
+  prior.subject_alpha = s.controlled_alpha;
+  Rng eta_rng = Rng(seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
+  switch (method) {
+    case GridworldMethod::kTrueObservationFunction:
+      prior.num_confounders = confounders;
+      prior.subject_alpha = s.subject_o;  // its Dirichlet mean is the true O
+      prior.confounder_alpha = s.confounder_o;
+      prior.learn = false;
+      assign_eta(out.observations, 1 + confounders, EtaKind::kUniform, eta_rng);
+      break;
+    case GridworldMethod::kUniformEta:
+    case GridworldMethod::kPlausibleEta:
+      prior.num_confounders = confounders;
+      prior.confounder_alpha = Eigen::MatrixXd::Ones(confounders, 4);
+      assign_eta(out.observations, 1 + confounders,
+                 method == GridworldMethod::kUniformEta ? EtaKind::kUniform : EtaKind::kPlausible, eta_rng);
+      break;
+    default:  // Ignore CE (and True Trajectories, which reads no observations): no confounding elements
+      prior.num_confounders = 0;
+      prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 4);
+      assign_eta(out.observations, 1, EtaKind::kSubject, eta_rng);
+      break;
+  }
+  return out;
+}
+
+namespace {
+
 GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, int run, int confounders,
                         GridworldMethod method) {
   const auto start = std::chrono::steady_clock::now();
@@ -39,36 +75,9 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
   if (method == GridworldMethod::kTrueTrajectories) {
     learned = learn_reward(mdp, TruthEStep(mdp, s.task.trajectories), learn);
   } else {
-    GridworldObservations observations = s.observations;
-    ObservationPrior prior;
-    prior.num_symbols = 4;
-    prior.learn = true;
+    auto [observations, prior] = gridworld_method_data(s, method, o.seed, run, confounders);
     use_alpha_update(prior, o.update);
     prior.c = o.c;
-    prior.subject_alpha = s.controlled_alpha;
-    Rng eta_rng =
-        Rng(o.seed).split(static_cast<std::uint64_t>(run)).split(2000 + static_cast<std::uint64_t>(confounders));
-    switch (method) {
-      case GridworldMethod::kTrueObservationFunction:
-        prior.num_confounders = confounders;
-        prior.subject_alpha = s.subject_o;  // its Dirichlet mean is the true O
-        prior.confounder_alpha = s.confounder_o;
-        prior.learn = false;
-        assign_eta(observations, 1 + confounders, EtaKind::kUniform, eta_rng);
-        break;
-      case GridworldMethod::kUniformEta:
-      case GridworldMethod::kPlausibleEta:
-        prior.num_confounders = confounders;
-        prior.confounder_alpha = Eigen::MatrixXd::Ones(confounders, 4);
-        assign_eta(observations, 1 + confounders,
-                   method == GridworldMethod::kUniformEta ? EtaKind::kUniform : EtaKind::kPlausible, eta_rng);
-        break;
-      default:  // Ignore CE: a model without confounding elements
-        prior.num_confounders = 0;
-        prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 4);
-        assign_eta(observations, 1, EtaKind::kSubject, eta_rng);
-        break;
-    }
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = o.max_alpha_iterations;
     estep_options.alpha_tolerance = o.alpha_tolerance;

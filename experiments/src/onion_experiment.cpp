@@ -141,44 +141,13 @@ RowMatrix miscalibrated(const RowMatrix& eta, double power) {
 
 namespace {
 
-// What every run learns with: the MDP, and the subject prior from a controlled run of
-// o.controlled_sorts sorts (its alpha, and its mean O for ML Trajectories).
-struct OnionSetup {
-  Mdp mdp = make_onion_mdp();
-  Eigen::MatrixXd subject_alpha;
-  Eigen::MatrixXd subject_o;
-};
-
-OnionSetup onion_setup(const OnionExperimentOptions& o) {
-  OnionSetup setup;
-  const Mdp& mdp = setup.mdp;
-  const SceneConfig& scene = o.scene;
-  SceneConfig controlled_scene = SceneConfig::controlled();
-  controlled_scene.width = scene.width;
-  controlled_scene.fps = scene.fps;
-  controlled_scene.step_seconds = scene.step_seconds;
-  DemonstrationOptions controlled_options;
-  controlled_options.sorts = o.controlled_sorts;
-  const OnionDemonstration controlled =
-      demonstrate(mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
-  setup.subject_alpha = controlled_run_prior(mdp, controlled.truth, controlled.observed, perception::kNumSymbols,
-                                             controlled_prior_options());
-  setup.subject_o = dirichlet_mean(setup.subject_alpha);
-  return setup;
-}
-
 // The reward `method` learns from the first n sorts of run `run`'s demonstration.
 LearnResult learn_onion_method(const OnionSetup& setup, OnionMethod method, const OnionDemonstration& demo, int n,
                                int run, const OnionExperimentOptions& o) {
   const Mdp& mdp = setup.mdp;
-  const Eigen::MatrixXd& subject_alpha = setup.subject_alpha;
   const Eigen::MatrixXd& subject_o = setup.subject_o;
   const LearnOptions learn = learning_run_options(o, run, n);
-  ObservationPrior prior;
-  prior.num_symbols = perception::kNumSymbols;
-  prior.subject_alpha = subject_alpha;
-  use_alpha_update(prior, o.update);
-  prior.c = o.c;
+  ObservationPrior prior = onion_prior(setup, o);
   ObservationEStepOptions estep_options;
   estep_options.max_alpha_iterations = o.max_alpha_iterations;
   estep_options.alpha_tolerance = o.alpha_tolerance;
@@ -196,8 +165,6 @@ LearnResult learn_onion_method(const OnionSetup& setup, OnionMethod method, cons
       return learn_reward(mdp, ObservationEStep(mdp, ml_observations(observed), prior, estep_options), learn);
     case OnionMethod::kPlausibleEta:
     case OnionMethod::kUniformEta:
-      prior.num_confounders = perception::kNumSources - 1;
-      prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
       return learn_reward(
           mdp,
           ObservationEStep(mdp, method == OnionMethod::kUniformEta ? with_uniform_eta(observed) : observed, prior,
@@ -209,24 +176,55 @@ LearnResult learn_onion_method(const OnionSetup& setup, OnionMethod method, cons
 
 }  // namespace
 
+OnionSetup onion_setup(const OnionExperimentOptions& o) {
+  OnionSetup setup;
+  SceneConfig controlled_scene = SceneConfig::controlled();
+  controlled_scene.width = o.scene.width;
+  controlled_scene.fps = o.scene.fps;
+  controlled_scene.step_seconds = o.scene.step_seconds;
+  DemonstrationOptions controlled_options;
+  controlled_options.sorts = o.controlled_sorts;
+  const OnionDemonstration controlled =
+      demonstrate(setup.mdp, controlled_scene, controlled_options, Rng(o.seed).split(1u << 30).next_u64());
+  setup.subject_alpha = controlled_run_prior(setup.mdp, controlled.truth, controlled.observed, perception::kNumSymbols,
+                                             controlled_prior_options());
+  setup.subject_o = dirichlet_mean(setup.subject_alpha);
+  return setup;
+}
+
+OnionDemonstration onion_run_demonstration(const OnionExperimentOptions& o, const Mdp& mdp, int run, int sorts) {
+  DemonstrationOptions options;
+  options.sorts = sorts;
+  options.start_time = 1000.0 * run;  // the confounders' clock: each run sees other moments
+  OnionDemonstration demo =
+      demonstrate(mdp, o.scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
+  if (o.eta_power != 1.0) {
+    for (ObservedTrajectory& t : demo.observed) t.eta = miscalibrated(t.eta, o.eta_power);
+  }
+  return demo;
+}
+
+ObservationPrior onion_prior(const OnionSetup& setup, const OnionExperimentOptions& o) {
+  ObservationPrior prior;
+  prior.num_symbols = perception::kNumSymbols;
+  prior.subject_alpha = setup.subject_alpha;
+  use_alpha_update(prior, o.update);
+  prior.c = o.c;
+  prior.num_confounders = perception::kNumSources - 1;
+  prior.confounder_alpha = Eigen::MatrixXd::Ones(prior.num_confounders, prior.num_symbols);
+  return prior;
+}
+
 std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& o) {
   const OnionSetup setup = onion_setup(o);
   const Mdp& mdp = setup.mdp;
-  const SceneConfig& scene = o.scene;
   const int most = *std::max_element(o.trajectories.begin(), o.trajectories.end());
   const size_t per_run = o.trajectories.size() * o.methods.size();
   std::vector<OnionRun> results(static_cast<size_t>(o.runs) * per_run);
   std::atomic<int> done{0};
   const int total = static_cast<int>(results.size());
   parallel_for(o.runs, o.threads, [&](int run) {
-    DemonstrationOptions options;
-    options.sorts = most;
-    options.start_time = 1000.0 * run;  // the confounders' clock: each run sees other moments
-    OnionDemonstration demo =
-        demonstrate(mdp, scene, options, Rng(o.seed).split(static_cast<std::uint64_t>(run)).next_u64());
-    if (o.eta_power != 1.0) {
-      for (ObservedTrajectory& t : demo.observed) t.eta = miscalibrated(t.eta, o.eta_power);
-    }
+    const OnionDemonstration demo = onion_run_demonstration(o, mdp, run, most);
     for (size_t i = 0; i < o.trajectories.size(); ++i) {
       const int n = o.trajectories[i];
       for (size_t m = 0; m < o.methods.size(); ++m) {

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "app/learn.hpp"
-#include "experiments/random_tasks_experiment.hpp"
+#include "experiments/judged_tasks.hpp"
 #include "experiments/summary.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
@@ -16,16 +16,15 @@ namespace {
 
 // The task learned while its demonstrations arrive, as hbirl learn --anytime
 // --posterior-samples does, one thread: the confidence and ILE after each.
-void learn_while_watching(const RandomTask& task, const StoppingOptions& o, StoppingRun& r) {
+void learn_while_watching(const JudgedTask& task, const StoppingOptions& o, StoppingRun& r) {
   app::LearnSettings settings;
   settings.em.threads = 1;
-  settings.em.seed = task.seed * 1000003ull + static_cast<std::uint64_t>(task.draw);
+  settings.em.seed = r.seed * 1000003ull + static_cast<std::uint64_t>(r.draw);
   settings.posterior.samples = o.samples;
-  app::learn_anytime(
-      task.mdp, task.observed.trajectories, task.prior, settings, {}, [&](int, const app::Learned& learned) {
-        r.confidence.push_back(learned.confidence->near_optimal);
-        r.ile_relative.push_back(inverse_learning_error(task.mdp, task.true_weights, learned.em.theta).relative());
-      });
+  app::learn_anytime(task.mdp, task.observed, task.prior, settings, {}, [&](int, const app::Learned& learned) {
+    r.confidence.push_back(learned.confidence->near_optimal);
+    r.ile_relative.push_back(inverse_learning_error(task.mdp, task.true_weights, learned.em.theta).relative());
+  });
 }
 
 // Where the rule at level p stops a run: the number of demonstrations (0: never).
@@ -56,12 +55,9 @@ std::vector<const StoppingRun*> usable(const std::vector<StoppingRun>& runs) {
 }  // namespace
 
 std::vector<StoppingRun> run_stopping(const StoppingOptions& o) {
-  if (o.tasks < 1) throw InputError("tasks", "need at least one task");
-  std::vector<std::uint64_t> seeds;
-  for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
-  return on_random_data_sets<StoppingRun>(
-      seeds, 1, 1, o.threads, o.progress,
-      [&](const RandomTask& task, size_t, StoppingRun& run) { learn_while_watching(task, o, run); });
+  return on_judged_tasks<StoppingRun>(
+      {o.tasks_from, o.tasks, o.first_seed, 1}, 1, o.threads, o.progress,
+      [&](const JudgedTask& task, size_t, StoppingRun& run) { learn_while_watching(task, o, run); });
 }
 
 std::string stopping_runs_csv(const std::vector<StoppingRun>& runs) {
@@ -78,6 +74,45 @@ std::string stopping_runs_csv(const std::vector<StoppingRun>& runs) {
   return out.str();
 }
 
+std::vector<StoppingRun> stopping_runs_from_csv(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line;
+  if (!std::getline(in, line) || line + "\n" != stopping_runs_csv({})) {
+    throw InputError("runs CSV", "line 1: not a stopping_runs.csv header");
+  }
+  std::vector<StoppingRun> runs;
+  for (int number = 2; std::getline(in, line); ++number) {
+    std::vector<std::string> f;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
+    if (!line.empty() && line.back() == ',') f.emplace_back();
+    const std::string where = "line " + std::to_string(number) + ": ";
+    if (f.size() != 7) throw InputError("runs CSV", where + std::to_string(f.size()) + " fields, expected 7");
+    try {
+      const std::uint64_t seed = std::stoull(f[0]);
+      const int draw = std::stoi(f[1]);
+      if (runs.empty() || runs.back().seed != seed || runs.back().draw != draw) {
+        runs.emplace_back();
+        runs.back().seed = seed;
+        runs.back().draw = draw;
+      }
+      StoppingRun& r = runs.back();
+      if (f[2].empty()) {  // a task that failed
+        r.error = f[6];
+        continue;
+      }
+      if (std::stoi(f[2]) != static_cast<int>(r.confidence.size()) + 1) {
+        throw InputError("runs CSV", where + "the estimates of a task must come in order 1, 2, ...");
+      }
+      r.confidence.push_back(std::stod(f[3]));
+      r.ile_relative.push_back(std::stod(f[4]));
+    } catch (const std::logic_error&) {
+      throw InputError("runs CSV", where + "a field is not a number");
+    }
+  }
+  return runs;
+}
+
 std::string stopping_summary(const std::vector<StoppingRun>& runs, const StoppingOptions& o,
                              const std::string& footer) {
   const std::vector<const StoppingRun*> ok = usable(runs);
@@ -85,7 +120,8 @@ std::string stopping_summary(const std::vector<StoppingRun>& runs, const Stoppin
   for (const StoppingRun* r : ok) right_at_end += right_at(*r, static_cast<int>(r->confidence.size())) ? 1 : 0;
   std::ostringstream out;
   out << "# Knowing when it has seen enough\n\n"
-      << "Random tasks learned from their observations while the demonstrations arrive (`hbirl learn --anytime "
+      << judged_task_label(o.tasks_from)
+      << ", learned from their observations while the demonstrations arrive (`hbirl learn --anytime "
          "--posterior-samples "
       << o.samples << "`); the rule stops once " << o.stop_after
       << " estimates in a row have a confidence >= p. Right: the policy within 5% of the optimal value.\n\n"
@@ -160,13 +196,14 @@ std::string draw_stopping_figure(const std::vector<StoppingRun>& runs, const Sto
   }
   std::ostringstream plot;
   plot << "set multiplot layout 2,1\nset grid\nset key bottom right\nset xlabel 'demonstrations seen'\n"
-       << "set yrange [0:1.05]\nset title 'Random tasks while they are watched: share right and mean confidence'\n"
+       << "set yrange [0:1.05]\nset title "
+       << gnuplot_quoted(judged_task_label(o.tasks_from) + " while watched: share right and mean confidence") << "\n"
        << "plot $curve using 1:2 with linespoints lw 2 pt 7 lc rgb '#1b9e77' title 'share right (tasks with >= n "
           "demonstrations)', "
        << "$curve using 1:3 with linespoints lw 2 pt 5 lc rgb '#7570b3' title 'mean confidence'\n"
        << "set title 'Where the rule stopped (" << o.stop_after
        << " in a row): demonstrations at the stop'\nset ylabel 'tasks'\nset yrange [0:*]\nset style fill solid 0.6\n"
-       << "set boxwidth 0.4\nplot ";
+       << "set boxwidth 0.4\nset key top right\nplot ";
   const char* colours[] = {"#d95f02", "#e7298a", "#66a61e"};
   for (size_t l = 0; l < o.levels.size(); ++l) {
     char title[64];

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "app/learn.hpp"
+#include "learner/input_error.hpp"
 #include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
@@ -43,6 +44,14 @@ TEST(StoppingExperiment, AnEstimatePerDemonstration) {
   const std::string csv = stopping_runs_csv(runs);
   EXPECT_EQ(static_cast<size_t>(std::count(csv.begin(), csv.end(), '\n')),
             1 + runs[0].confidence.size() + runs[1].confidence.size());
+  const std::vector<StoppingRun> back = stopping_runs_from_csv(csv);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].seed, runs[1].seed);
+  ASSERT_EQ(back[1].confidence.size(), runs[1].confidence.size());
+  EXPECT_NEAR(back[1].confidence.back(), runs[1].confidence.back(), 1e-9);
+  EXPECT_NEAR(back[1].ile_relative.front(), runs[1].ile_relative.front(), 1e-9);
+  EXPECT_THROW(stopping_runs_from_csv("seed,draw\n"), InputError);
+  EXPECT_THROW(stopping_runs_from_csv(stopping_runs_csv({}) + "1,0,2,0.5,0.1,0,\n"), InputError);  // 2 before 1
 }
 
 }  // namespace

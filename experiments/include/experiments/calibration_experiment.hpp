@@ -1,7 +1,7 @@
 #pragma once
 // Is hbirl's confidence a promise? (`hbirl experiment calibration`, docs/results/calibration.)
-// Random tasks (sim_driver/file/random_task.hpp), each data set learned as `hbirl learn`
-// learns it (app::learn, from the observations and from the true trajectories) with
+// Random tasks (sim_driver/file/random_task.hpp) or a figure's runs (judged_tasks.hpp), each data set learned as `hbirl
+// learn` learns it (app::learn, from the observations and from the true trajectories) with
 // --posterior-samples; the confidence -- the posterior probability that the learned policy
 // is within 5% of the optimal value -- against whether it is (relative ILE <= 0.05 under
 // the true reward). Scored by the expected calibration error (ECE, 10 equal-width bins),
@@ -24,9 +24,11 @@ struct CalibrationOptions {
   int samples = kConfidenceDraws;                             // posterior draws per run
   double prior_scale = RewardPosteriorOptions{}.prior_scale;  // hbirl learn's default; 0: chosen by the evidence
   std::vector<std::string> data = {"observations", "truth"};
-  // "random" (random tasks) or "gridworld": the Gridworld figure's runs (paper §Experiments
-  // A: 5x5, 20 demonstrations of 10 steps, 40 observations a step, plausible eta), task t
-  // with |E| = 0, 1, 3, ..., 15 in turn, its run t of the seed `first_seed` ("draw" is |E|).
+  // Learn from the first n demonstrations of each data set, for each n here (a run each);
+  // empty: from every demonstration (a run's `demonstrations` is then 0).
+  std::vector<int> demonstrations;
+  // Where the tasks come from: random, gridworld or onion (judged_tasks.hpp; a figure's run
+  // is one data set, with the seed `first_seed`).
   std::string tasks_from = "random";
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads
@@ -35,7 +37,8 @@ struct CalibrationOptions {
 struct CalibrationRun {
   std::uint64_t seed = 0;
   int draw = 0;
-  std::string data;  // "observations" or "truth"
+  int demonstrations = 0;  // learned from the first this many (0: every one)
+  std::string data;        // "observations" or "truth"
   double confidence = 0.0;
   double probability_optimal = 0.0;
   double expected_ile_relative = 0.0;

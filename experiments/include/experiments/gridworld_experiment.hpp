@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/gridworld_scenario.hpp"
 #include "learner/observations.hpp"
 
 namespace hbirl {
@@ -71,6 +72,16 @@ struct GridworldRun {
 };
 
 std::vector<GridworldRun> run_gridworld_experiment(const GridworldExperimentOptions& options);
+
+// What a method of the figure learns from in run `run` of the seed `seed` with `confounders`
+// elements: the scenario's observations with the method's eta, and its observation prior
+// (the observation-model update and c left at their defaults).
+struct GridworldMethodData {
+  GridworldObservations observations;
+  ObservationPrior prior;
+};
+GridworldMethodData gridworld_method_data(const GridworldScenario& s, GridworldMethod method, std::uint64_t seed,
+                                          int run, int confounders);
 
 std::string gridworld_runs_csv(const std::vector<GridworldRun>& runs);
 

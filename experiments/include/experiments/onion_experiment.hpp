@@ -20,7 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "experiments/onion_data.hpp"
 #include "learner/observations.hpp"
+#include "sim_driver/onion/onion.hpp"
 #include "sim_driver/onion/scene.hpp"
 
 namespace hbirl::onion {
@@ -67,6 +69,21 @@ struct OnionRun {
 };
 
 std::vector<OnionRun> run_onion_experiment(const OnionExperimentOptions& options);
+
+// What every run learns with: the MDP, and the subject prior from a controlled run of
+// options.controlled_sorts sorts (its alpha, and its mean O for ML Trajectories).
+struct OnionSetup {
+  Mdp mdp = make_onion_mdp();
+  Eigen::MatrixXd subject_alpha;
+  Eigen::MatrixXd subject_o;
+};
+OnionSetup onion_setup(const OnionExperimentOptions& options);
+// Run `run`'s demonstration: `sorts` sorts rendered, perceived and labelled in options.scene
+// (eta miscalibrated by options.eta_power); the figure's point at n learns from its first n.
+OnionDemonstration onion_run_demonstration(const OnionExperimentOptions& options, const Mdp& mdp, int run, int sorts);
+// The partially-controlled model's prior (Plausible and Uniform eta): the subject's from the
+// controlled run, the three confounding elements' flat.
+ObservationPrior onion_prior(const OnionSetup& setup, const OnionExperimentOptions& options);
 // Each row of eta raised to `power` and renormalised (OnionExperimentOptions::eta_power).
 RowMatrix miscalibrated(const RowMatrix& eta, double power);
 std::string onion_runs_csv(const std::vector<OnionRun>& runs);

@@ -14,16 +14,12 @@
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
 // policy is optimal under the true reward (ILE 0 to 1e-8 of the value scale).
-#include <atomic>
 #include <cstdint>
 #include <functional>
-#include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "experiments/summary.hpp"
-#include "learner/parallel.hpp"
+#include "experiments/data_sets.hpp"
 #include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
@@ -73,40 +69,16 @@ struct RandomTaskRun {
   std::string error;
 };
 
-// `variants` runs on each data set (task seed, draw) of random tasks, the data sets in
-// parallel: runs[(i * variants) + v] is data set i's run v, its seed and draw set and
-// learned by `learn(task, v, run)` (record_run: timed, an error kept). A task that cannot
-// be made fails its runs, not the others'.
+// `variants` runs on each data set (task seed, draw) of random tasks (on_data_sets).
 template <class Run, class Learn>
 std::vector<Run> on_random_data_sets(const std::vector<std::uint64_t>& seeds, int draws, size_t variants, int threads,
                                      const std::function<void(int, int)>& progress, const Learn& learn) {
-  const int items = static_cast<int>(seeds.size()) * draws;
-  std::vector<Run> runs(static_cast<size_t>(items) * variants);
-  std::atomic<int> done{0};
-  const int total = static_cast<int>(runs.size());
-  parallel_for(items, threads, [&](int i) {
-    const std::uint64_t seed = seeds[static_cast<size_t>(i / draws)];
-    const int draw = i % draws;
-    std::optional<RandomTask> task;
-    std::string task_error;
-    try {
-      task = make_random_task(seed, draw);
-    } catch (const std::exception& e) {
-      task_error = e.what();
-    }
-    for (size_t v = 0; v < variants; ++v) {
-      Run& r = runs[static_cast<size_t>(i) * variants + v];
-      r.seed = seed;
-      r.draw = draw;
-      record_run(r, [&](Run& run) {
-        if (!task) throw std::runtime_error("no task: " + task_error);
-        learn(*task, v, run);
-      });
-      const int finished = ++done;
-      if (progress) progress(finished, total);
-    }
-  });
-  return runs;
+  std::vector<DataSetId> ids;
+  for (std::uint64_t seed : seeds) {
+    for (int d = 0; d < draws; ++d) ids.push_back({seed, d});
+  }
+  return on_data_sets<Run>(
+      ids, variants, threads, progress, [](const DataSetId& id) { return make_random_task(id.seed, id.draw); }, learn);
 }
 
 std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& options);

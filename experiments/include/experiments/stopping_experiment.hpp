@@ -1,10 +1,10 @@
 #pragma once
 // Knowing when it has seen enough, measured (`hbirl experiment stopping`,
-// docs/results/stopping): random tasks learned while their demonstrations arrive
-// (app::learn_anytime, with the posterior's confidence after each), then the stop rule
-// (app::StopRule: k estimates in a row with confidence >= p) applied to the sequence --
-// after how many demonstrations it stops, and whether the policy it stops with is right
-// (within 5% of the optimal value), against the policy learned from every demonstration.
+// docs/results/stopping): tasks (random, or a figure's runs: judged_tasks.hpp) learned while their demonstrations
+// arrive (app::learn_anytime, with the posterior's confidence after each), then the stop rule (app::StopRule: k
+// estimates in a row with confidence >= p) applied to the sequence -- after how many demonstrations it stops, and
+// whether the policy it stops with is right (within 5% of the optimal value), against the policy learned from every
+// demonstration.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -17,8 +17,9 @@ namespace hbirl {
 
 struct StoppingOptions {
   int tasks = 60;
-  std::uint64_t first_seed = 8001;  // not a seed anything was tuned on
-  int samples = kConfidenceDraws;   // posterior draws per estimate
+  std::uint64_t first_seed = 8001;     // not a seed anything was tuned on
+  std::string tasks_from = "random";   // random, gridworld or onion (judged_tasks.hpp)
+  int samples = kLiveConfidenceDraws;  // posterior draws per estimate, as the live optimiser's
   std::vector<double> levels = {0.9, 0.95};
   int stop_after = app::StopRule::kDefaultAfter;
   int threads = 0;
@@ -39,6 +40,8 @@ std::vector<StoppingRun> run_stopping(const StoppingOptions& options);
 
 // One row per estimate: seed, draw, demonstrations, confidence, ile_relative, right.
 std::string stopping_runs_csv(const std::vector<StoppingRun>& runs);
+// The runs back from that CSV; InputError naming the line for anything else.
+std::vector<StoppingRun> stopping_runs_from_csv(const std::string& csv);
 
 // The summary page (markdown): per level p, how many tasks the rule stopped, after how many
 // demonstrations (median and quartiles, and the share of the task's demonstrations), how
