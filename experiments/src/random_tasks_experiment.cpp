@@ -55,6 +55,28 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
   return r;
 }
 
+// The oracles' data (issue 33): what the simulator used, nothing learned -- the true
+// subject O and element O's as the prior's fixed means, every observation's eta the
+// simulator's source mixture (the subject with probability subject_share, else an element
+// chosen evenly) -- and with `end`, the terminal state each trajectory entered.
+std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task, bool end) {
+  ObservationPrior prior = task.prior;
+  prior.subject_alpha = task.subject_o;  // its Dirichlet mean is the true O
+  prior.confounder_alpha = task.confounder_o;
+  prior.learn = false;
+  prior.learn_eta = false;
+  const int E = task.num_confounders;
+  Eigen::RowVectorXd mixture(1 + E);
+  mixture[0] = task.subject_share;
+  for (int e = 0; e < E; ++e) mixture[1 + e] = (1.0 - task.subject_share) / E;
+  std::vector<ObservedTrajectory> observed = task.observed.trajectories;
+  for (size_t i = 0; i < observed.size(); ++i) {
+    for (Eigen::Index n = 0; n < observed[i].eta.rows(); ++n) observed[i].eta.row(n) = mixture;
+    if (end && observed[i].ends_in_terminal) observed[i].end_state = task.entered[i];
+  }
+  return {std::move(prior), std::move(observed)};
+}
+
 void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun& r) {
   // One observation-model refinement per E-step, interleaved with the M-steps (the paper
   // experiments' schedule), to hbirl learn's tolerances: the paper experiments' looser
@@ -68,6 +90,10 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   LearnResult learned;
   if (method.kind == "truth") {
     learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
+  } else if (method.kind == "oracle" || method.kind == "oracle_end") {
+    const auto [prior, observed] = oracle_data(task, method.kind == "oracle_end");
+    const ObservationEStep estep(task.mdp, observed, prior, {});
+    learned = learn_reward(task.mdp, estep, options);
   } else {
     ObservationPrior prior = task.prior;
     prior.learn = method.kind != "fixed";
@@ -189,6 +215,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"paper_c0.5", "paper", 0.5, 1},           {"paper_c0.1", "paper", 0.1, 1},
       {"posterior", "posterior", 0.1, 1},        {"posterior_c0.5", "posterior", 0.5, 1},
       {"posterior_c0.02", "posterior", 0.02, 1}, {"posterior_r4", "posterior", 0.1, 4},
+      {"oracle_sensor", "oracle", 0.1, 1},       {"oracle_sensor_end", "oracle_end", 0.1, 1},
   };
   return methods;
 }
@@ -380,6 +407,9 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "paper_c0.1");
   compare("posterior", "true_trajectories");
   compare("fixed_prior", "true_trajectories");
+  compare("posterior", "oracle_sensor");
+  compare("oracle_sensor", "oracle_sensor_end");
+  compare("oracle_sensor_end", "true_trajectories");
 }
 
 // Does the default's answer depend on c?
@@ -473,7 +503,8 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
 std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem) {
   // The main methods (the c and restart variants are in the summary's tables).
   std::vector<std::string> methods;
-  for (const std::string m : {"true_trajectories", "fixed_prior", "paper_c0.5", "paper_c0.1", "posterior"}) {
+  for (const std::string m : {"true_trajectories", "oracle_sensor_end", "oracle_sensor", "fixed_prior", "paper_c0.5",
+                              "paper_c0.1", "posterior"}) {
     if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; }))
       methods.push_back(m);
   }

@@ -291,10 +291,11 @@ double ExactEngine::scaled_end(const ObservedTrajectory& trajectory) {
   const int S = mdp_.num_states;
   const int P = mdp_.num_pairs();
   // The last step's backward message: 1, or Pr(next state is terminal | r) when the
-  // trajectory is known to have ended by entering a terminal state.
+  // trajectory is known to have ended by entering a terminal state (the one seen, when it
+  // was: end_evidence).
   beta_hat_.resize(T, P);
   if (trajectory.ends_in_terminal) {
-    for (int s = 0; s < S; ++s) scratch_[s] = mdp_.is_terminal(s) ? 1.0 : 0.0;
+    scratch_.head(S) = end_evidence(mdp_, trajectory);
     beta_hat_.row(T - 1).noalias() = (mdp_.transitions * scratch_).transpose();
   } else {
     beta_hat_.row(T - 1).setOnes();
@@ -370,7 +371,8 @@ double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTraject
   // is known to have ended by entering a terminal state.
   log_beta_.resize(T, P);
   if (trajectory.ends_in_terminal) {
-    for (int s = 0; s < S; ++s) scratch_[s] = mdp_.is_terminal(s) ? 0.0 : kNegInf;
+    const Eigen::VectorXd end = end_evidence(mdp_, trajectory);
+    for (int s = 0; s < S; ++s) scratch_[s] = end[s] > 0.0 ? std::log(end[s]) : kNegInf;
     for (int r = 0; r < P; ++r) log_beta_(T - 1, r) = log_sum_exp_row(log_transitions_, r, scratch_.data());
   } else {
     log_beta_.row(T - 1).setZero();

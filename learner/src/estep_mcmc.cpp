@@ -21,7 +21,13 @@ bool accept(double log_ratio, Rng& rng) {
 class Chain {
  public:
   Chain(const Mdp& mdp, const SoftSolution& policy, const ObservationModel& model, const ObservedTrajectory& tr)
-      : mdp_(mdp), policy_(policy), model_(model), tr_(tr), T_(tr.length()), Z_(1 + model.num_confounders()) {
+      : mdp_(mdp),
+        policy_(policy),
+        model_(model),
+        tr_(tr),
+        end_(end_evidence(mdp, tr)),
+        T_(tr.length()),
+        Z_(1 + model.num_confounders()) {
     s_.assign(static_cast<size_t>(T_), 0);
     a_.assign(static_cast<size_t>(T_), 0);
     copies_.resize(static_cast<size_t>(tr.num_observations()));
@@ -79,11 +85,10 @@ class Chain {
  private:
   double log_transition(int r, int next) const { return safe_log(mdp_.transitions.coeff(r, next)); }
 
+  // log of what the end says given the last pair r: sum_s T(s | r) Pr(end | s) (end_evidence).
   double log_exit(int r) const {
     double p = 0.0;
-    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) {
-      if (mdp_.is_terminal(static_cast<int>(it.col()))) p += it.value();
-    }
+    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) p += it.value() * end_[it.col()];
     return safe_log(p);
   }
 
@@ -215,6 +220,7 @@ class Chain {
   const SoftSolution& policy_;
   const ObservationModel& model_;
   const ObservedTrajectory& tr_;
+  const Eigen::VectorXd end_;  // end_evidence
   int T_;
   int Z_;
   std::vector<int> s_;

@@ -31,6 +31,14 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
   std::vector<char> reach(static_cast<size_t>(S), 0), next(static_cast<size_t>(S), 0);
   for (int s = 0; s < S; ++s) reach[static_cast<size_t>(s)] = mdp.start[s] > 0.0;
   std::vector<char> alive(static_cast<size_t>(mdp.num_pairs()), 0);
+  if (t.end_state >= 0 && (!t.ends_in_terminal || t.end_state >= S || !mdp.is_terminal(t.end_state))) {
+    return ImpossibleObservation{
+        index, t.length() - 1, -1,
+        "end_state " + std::to_string(t.end_state) +
+            (t.ends_in_terminal ? " is not a terminal state"
+                                : " is set, but the trajectory does not end in a terminal state")};
+  }
+  const Eigen::VectorXd end = end_evidence(mdp, t);
   for (int step = 0; step < t.length(); ++step) {
     bool any = false;
     for (int s = 0; s < S; ++s) {
@@ -75,12 +83,15 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
       for (SparseRowMatrix::InnerIterator it(mdp.transitions, r); it; ++it) {
         if (it.value() <= 0.0) continue;
         next[static_cast<size_t>(it.col())] = 1;
-        ends = ends || mdp.is_terminal(static_cast<int>(it.col()));
+        ends = ends || (mdp.is_terminal(static_cast<int>(it.col())) && end[it.col()] > 0.0);
       }
     }
     if (last && t.ends_in_terminal && !ends) {
       return ImpossibleObservation{
-          index, step, -1, "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
+          index, step, -1,
+          t.end_state >= 0 ? "the trajectory ends in terminal state " + std::to_string(t.end_state) +
+                                 ", but no state-action it can be in leads to it"
+                           : "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
     }
     reach.swap(next);
   }

@@ -26,12 +26,27 @@ std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories) {
     h.add(static_cast<std::uint64_t>(t.weights.size()));
     h.add(t.weights.data(), t.weights.size() * sizeof(double));
     h.add(static_cast<unsigned char>(t.ends_in_terminal));
+    if (t.end_state >= 0) h.add(static_cast<std::int64_t>(t.end_state));  // digests without it unchanged
     if (!t.contexts.empty()) {
       h.add(static_cast<std::uint64_t>(t.contexts.size()));
       h.add(t.contexts.data(), t.contexts.size() * sizeof(int));
     }
   }
   return h.value();
+}
+
+Eigen::VectorXd end_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory) {
+  if (!trajectory.ends_in_terminal) return Eigen::VectorXd::Ones(mdp.num_states);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(mdp.num_states);
+  if (trajectory.end_state >= 0) {
+    if (trajectory.end_state >= mdp.num_states || !mdp.is_terminal(trajectory.end_state)) {
+      throw InputError("end_state", std::to_string(trajectory.end_state) + " is not a terminal state");
+    }
+    out[trajectory.end_state] = 1.0;
+    return out;
+  }
+  for (int s = 0; s < mdp.num_states; ++s) out[s] = mdp.is_terminal(s) ? 1.0 : 0.0;
+  return out;
 }
 
 std::string normalise_eta(double* eta, int n, double tolerance) {
@@ -51,6 +66,7 @@ std::string normalise_eta(double* eta, int n, double tolerance) {
 ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajectory, std::vector<int>* merged_of) {
   ObservedTrajectory out;
   out.ends_in_terminal = trajectory.ends_in_terminal;
+  out.end_state = trajectory.end_state;
   const Eigen::Index sources = trajectory.eta.cols();
   std::vector<int> rows;
   std::vector<double> weights;

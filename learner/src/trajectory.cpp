@@ -3,8 +3,9 @@
 namespace hbirl {
 
 Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
-                             bool* entered_terminal) {
+                             bool* entered_terminal, int* entered_state) {
   if (entered_terminal) *entered_terminal = false;
+  if (entered_state) *entered_state = -1;
   Trajectory trajectory;
   trajectory.reserve(static_cast<size_t>(std::max(length, 0)));
   const int A = mdp.num_actions;
@@ -20,6 +21,7 @@ Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int 
     s = mdp.transitions.innerIndexPtr()[j];
     if (mdp.is_terminal(s)) {
       if (entered_terminal) *entered_terminal = true;
+      if (entered_state) *entered_state = s;
       break;
     }
   }

@@ -56,6 +56,9 @@ std::uint64_t numerics_fingerprint() {
 
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
                                const std::string& worker) {
+  // trajectory_t has no field for the terminal state seen yet: a worker would learn from
+  // less than the data say, so such data are not sent (issue 33).
+  if (t.end_state >= 0) throw InputError("end_state", "the bus cannot carry the terminal state seen yet");
   hbirl::trajectory_t m{};
   m.utime = 0;  // a data set, not a moment of the demonstration
   m.block_digest = static_cast<std::int64_t>(block_digest);

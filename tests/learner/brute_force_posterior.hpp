@@ -52,7 +52,8 @@ inline BruteForce brute_force(const Mdp& mdp, const SoftSolution& policy, const 
     if (prior > 0.0 && tr.ends_in_terminal) {
       double exit = 0.0;
       for (int s2 = 0; s2 < mdp.num_states; ++s2) {
-        if (mdp.is_terminal(s2)) exit += mdp.transitions.coeff(pairs[static_cast<size_t>(T) - 1], s2);
+        if (mdp.is_terminal(s2) && (tr.end_state < 0 || s2 == tr.end_state))
+          exit += mdp.transitions.coeff(pairs[static_cast<size_t>(T) - 1], s2);
       }
       prior *= exit;
     }

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <array>
 #include <cmath>
 
@@ -10,6 +12,42 @@
 
 namespace hbirl {
 namespace {
+
+// The terminal state a trajectory entered, when seen (ObservedTrajectory::end_state):
+// the posterior conditions on entering that one, as brute-force enumeration says, and the
+// likelihoods of the two ends add up to that of an unseen end.
+TEST(ExactEngine, SeenEndStateEqualsBruteForceEnumeration) {
+  Rng rng(4242);
+  int compared = 0, impossible = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    ExactEngine engine(p.mdp);
+    const double unseen = engine.posterior(p.policy, p.model, p.trajectory).log_likelihood;
+    double sum = 0.0;
+    for (int end = 2; end <= 3; ++end) {
+      p.trajectory.end_state = end;
+      const testing::BruteForce truth = testing::brute_force(p.mdp, p.policy, p.model, p.trajectory);
+      const TrajectoryPosterior post = engine.posterior(p.policy, p.model, p.trajectory);
+      if (truth.likelihood == 0.0) {
+        EXPECT_EQ(post.log_likelihood, -std::numeric_limits<double>::infinity()) << "trial " << trial;
+        ++impossible;
+        continue;
+      }
+      ++compared;
+      sum += truth.likelihood;
+      EXPECT_NEAR(post.log_likelihood, std::log(truth.likelihood), 1e-9) << "trial " << trial << " end " << end;
+      EXPECT_LT((post.marginals - truth.marginals).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+      if (p.trajectory.num_observations() > 0) {
+        EXPECT_LT((post.sources - truth.sources).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+      }
+    }
+    if (sum > 0.0) {
+      EXPECT_NEAR(std::log(sum), unseen, 1e-9) << "trial " << trial;
+    }
+  }
+  EXPECT_GE(compared, 40);  // (an end no last pair can reach is rare here: `impossible` counts them)
+  EXPECT_LT(impossible, 40);
+}
 
 TEST(ExactEngine, EqualsBruteForceEnumeration) {
   Rng rng(2024);

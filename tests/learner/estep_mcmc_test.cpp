@@ -68,6 +68,25 @@ TEST(McmcEngine, AgreesWithExactOnRandomTinyProblems) {
   EXPECT_GE(ending, 1);
 }
 
+// With the terminal state entered seen (end_state), the paper's MCMC agrees with the exact
+// engine too.
+TEST(McmcEngine, AgreesWithExactWhenTheEndStateIsSeen) {
+  Rng rng(99);
+  McmcOptions options = sweeps(20000, 1000, 2);
+  options.block = McmcOptions::Block::kAlways;
+  int compared = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    p.trajectory.end_state = 2 + trial % 2;
+    if (!possible(p)) continue;
+    const Agreement a = compare(p, options, 300 + static_cast<std::uint64_t>(trial));
+    EXPECT_LT(a.marginals, kTolerance) << "trial " << trial;
+    EXPECT_LT(a.sources, kTolerance) << "trial " << trial;
+    ++compared;
+  }
+  EXPECT_GE(compared, 5);
+}
+
 // The paper's single-site updates alone (no block move), where they are irreducible:
 // every state reachable from every (s, a).
 TEST(McmcEngine, SingleSiteUpdatesAloneAgreeOnDenseTransitions) {

@@ -29,7 +29,7 @@ Eigen::MatrixXd sparse_alpha(int rows, int symbols, Rng& rng) {
 // states, impossible actions, deterministic moves, zeros in alpha and in eta.
 TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
   Rng rng(17);
-  int impossible = 0, possible = 0;
+  int impossible = 0, possible = 0, seen_ends = 0;
   for (int trial = 0; trial < 400; ++trial) {
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = std::min(o.states, 4);
@@ -61,6 +61,8 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
     t.eta =
         Eigen::Map<const RowMatrix>(eta.data(), static_cast<Eigen::Index>(t.symbols.size()), 1 + prior.num_confounders);
     t.ends_in_terminal = o.terminal > 0 && rng.uniform() < 0.5;
+    // Now and then the terminal state entered was seen: one of them (the last o.terminal states).
+    if (t.ends_in_terminal && rng.uniform() < 0.5) t.end_state = o.states - 1 - rng.uniform_int(o.terminal);
     ObservationModel model;
     model.subject = prior.subject_alpha.array().colwise() / prior.subject_alpha.rowwise().sum().array();
     model.confounders = prior.confounder_alpha;
@@ -72,10 +74,39 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
     const auto found = first_impossible_observation(mdp, {t}, prior);
     EXPECT_EQ(found.has_value(), zero) << "trial " << trial << (found ? ": " + found->why : "");
     (zero ? impossible : possible) += 1;
+    seen_ends += t.end_state >= 0;
   }
   // Both kinds were met often enough for the agreement to mean something.
+  EXPECT_GT(seen_ends, 20);
   EXPECT_GT(impossible, 40);
   EXPECT_GT(possible, 40);
+}
+
+// An end_state that is not a terminal state, or on a trajectory that did not end in one,
+// is named, not learned from.
+TEST(ObservationSupport, NamesAnEndStateThatCannotBe) {
+  Rng rng(5);
+  testing::RandomMdpOptions o;
+  o.states = 4;
+  o.terminal = 1;
+  const Mdp mdp = random_mdp(o, rng);
+  ObservationPrior prior;
+  prior.num_symbols = 2;
+  prior.subject_alpha = Eigen::MatrixXd::Ones(mdp.num_pairs(), 2);
+  prior.confounder_alpha = Eigen::MatrixXd::Zero(0, 2);
+  ObservedTrajectory t;
+  t.step_begin = {0, 0};
+  t.eta = RowMatrix(0, 1);
+  t.ends_in_terminal = true;
+  t.end_state = 0;  // not terminal
+  auto found = first_impossible_observation(mdp, {t}, prior);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_NE(found->why.find("end_state 0 is not a terminal state"), std::string::npos) << found->why;
+  t.end_state = 3;
+  t.ends_in_terminal = false;
+  found = first_impossible_observation(mdp, {t}, prior);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_NE(found->why.find("does not end in a terminal state"), std::string::npos) << found->why;
 }
 
 }  // namespace

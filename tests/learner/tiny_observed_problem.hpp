@@ -65,4 +65,22 @@ inline TinyProblem tiny_problem(int trial, Rng& rng, bool dense = false) {
   return p;
 }
 
+// A tiny problem whose MDP has two terminal states (states 2 and 3: a goal and a trap,
+// say), every state reaching both or one of them, and whose trajectory ends by entering
+// one (its end_state left unseen, -1).
+inline TinyProblem two_exits(int trial, Rng& rng) {
+  TinyProblem p = tiny_problem(trial, rng);  // its observations and elements
+  RandomMdpOptions o;
+  o.states = 4;
+  o.actions = 2;
+  o.features = 2;
+  o.successors = 3;
+  o.terminal = 2;
+  p.mdp = random_mdp(o, rng);
+  p.policy = soft_value_iteration(p.mdp, p.mdp.reward(random_vector(2, rng, 2.0)));
+  p.model.subject = random_distributions(p.mdp.num_pairs(), static_cast<int>(p.model.subject.cols()), rng);
+  p.trajectory.ends_in_terminal = true;
+  return p;
+}
+
 }  // namespace hbirl::testing

@@ -10,6 +10,12 @@
 //   posterior_c0.5, posterior_c0.02  the same with c = 0.5, 0.02 (the paper's step size,
 //                      which the posterior update does not use: the answer must not change)
 //   posterior_r4       the default with 4 restarts instead of 1 (do restarts change the answer?)
+//   oracle_sensor      what the simulator used, nothing learned: the true subject O and element
+//                      O's, every observation's eta the simulator's source mixture -- the
+//                      best learning from observations could reach with this model
+//   oracle_sensor_end  the same, also told the terminal state each trajectory entered (a goal
+//                      or a trap): the part of the gap to true_trajectories that a sensor
+//                      seeing how a trajectory ended would close
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -26,7 +32,7 @@ namespace hbirl {
 
 struct RandomTaskMethod {
   std::string key;   // as above
-  std::string kind;  // "truth", "fixed", "paper", "posterior"
+  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_end"
   double c = 0.1;
   int restarts = 1;
 };

@@ -10,6 +10,8 @@
 #include <span>
 #include <vector>
 
+#include "learner/mdp.hpp"
+
 namespace hbirl {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -29,6 +31,11 @@ struct ObservedTrajectory {
   // The trajectory ended because its last action led into a terminal state (rather than
   // being cut off): the posterior then conditions on that.
   bool ends_in_terminal = false;
+  // Which terminal state the last action entered, when the sensor saw it (ends_in_terminal
+  // only; a goal and a trap, say, then differ): the posterior conditions on entering that
+  // one. -1: not seen (only that it entered one). Not carried by problem files or the bus
+  // yet: the random-task experiment's oracle sets it (issue 33).
+  int end_state = -1;
 
   int length() const { return static_cast<int>(step_begin.size()) - 1; }
   int num_observations() const { return static_cast<int>(symbols.size()); }
@@ -38,6 +45,12 @@ struct ObservedTrajectory {
   double weight(int n) const { return weights.empty() ? 1.0 : weights[static_cast<size_t>(n)]; }
   int context(int n) const { return contexts.empty() ? -1 : contexts[static_cast<size_t>(n)]; }
 };
+
+// What a trajectory's end says of the state s its last action entered, Pr(end | s) for
+// every state: 1 for all when it may have been cut off, for the terminal states when it
+// ended in one, for end_state alone when that was seen (else 0). The last step's backward
+// message is sum_s T(s | s_T, a_T) times this.
+Eigen::VectorXd end_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory);
 
 // A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta and weight, bit for
 // bit. Two processes with the same digest hold the same data (services/ compares them).

@@ -17,9 +17,10 @@ using Trajectory = std::vector<StateAction>;
 
 // Samples up to `length` steps from the start distribution under `policy` (one
 // probability per (s, a) pair). Stops early when the next state is terminal; then
-// *entered_terminal (when given) is set true, else false.
+// *entered_terminal (when given) is set true, else false, and *entered_state (when given)
+// to that state, else -1.
 Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
-                             bool* entered_terminal = nullptr);
+                             bool* entered_terminal = nullptr, int* entered_state = nullptr);
 
 // N(s,a): how often each pair is visited, one entry per pair.
 Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories);

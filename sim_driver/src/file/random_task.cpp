@@ -321,8 +321,10 @@ RandomTask make_random_task(std::uint64_t seed, int draw, const RandomTaskOverri
   std::vector<char> ended;
   for (int i = 0; i < demonstrations; ++i) {
     bool terminal = false;
-    task.demonstrations.push_back(sample_trajectory(task.mdp, expert.policy, task.length, data, &terminal));
+    int entered = -1;
+    task.demonstrations.push_back(sample_trajectory(task.mdp, expert.policy, task.length, data, &terminal, &entered));
     ended.push_back(terminal ? 1 : 0);
+    task.entered.push_back(entered);
   }
   observe(task, ended, data);
   Rng eta_rng = data.split(1);

@@ -71,6 +71,7 @@ struct RandomTask {
   Eigen::MatrixXd confounder_o;  // E x symbols, the truth
 
   std::vector<Trajectory> demonstrations;  // the truth
+  std::vector<int> entered;                // per demonstration, the terminal state it entered (-1: cut off)
   GridworldObservations observed;          // what the sensor saw, true sources kept
   std::vector<Trajectory> controlled;      // the controlled run
   ObservationPrior prior;                  // subject from the controlled run, elements flat

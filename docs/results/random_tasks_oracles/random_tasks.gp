@@ -1,0 +1,78 @@
+# Written by hbirl; run `gnuplot /tmp/rt60/random_tasks.gp` to redraw.
+$optimal << EOD
+"all" 48.3333 36.175 60.6922 31.6667 21.3059 44.2338 31.6667 21.3059 44.2338 25 15.7765 37.2321 26.6667 17.1326 39.0087
+"|E| = 0" 50 21.5216 78.4784 37.5 13.6844 69.4258 25 7.14792 59.0725 12.5 2.24175 47.0888 12.5 2.24175 47.0888
+"|E| 1-3" 50 29.031 70.969 33.3333 16.2788 56.2505 38.8889 20.3052 61.381 33.3333 16.2788 56.2505 38.8889 20.3052 61.381
+"|E| 4-7" 47.0588 31.4515 63.2633 29.4118 16.8346 46.1689 29.4118 16.8346 46.1689 23.5294 12.437 39.9961 23.5294 12.437 39.9961
+"occluded < 10%" 42.8571 24.47 63.4534 42.8571 24.47 63.4534 42.8571 24.47 63.4534 28.5714 13.8139 49.9564 33.3333 17.1948 54.6265
+"occluded 10-20%" 73.3333 48.0496 89.1025 33.3333 15.1763 58.2865 33.3333 15.1763 58.2865 20 7.04755 45.1854 26.6667 10.8975 51.9504
+"occluded 20-30%" 37.5 21.1594 57.29 20.8333 9.24483 40.4705 20.8333 9.24483 40.4705 25 11.9994 44.8994 20.8333 9.24483 40.4705
+"informativeness < 0.53" 50 26.7992 73.2008 28.5714 11.7214 54.6491 28.5714 11.7214 54.6491 14.2857 4.00939 39.9414 21.4286 7.57139 47.5892
+"informativeness 0.53-0.77" 38.4615 22.4286 57.4651 26.9231 13.7044 46.083 26.9231 13.7044 46.083 26.9231 13.7044 46.083 26.9231 13.7044 46.083
+"informativeness > 0.77" 60 38.6582 78.1193 40 21.8807 61.3418 40 21.8807 61.3418 30 14.5477 51.8973 30 14.5477 51.8973
+"plausible eta" 44.1176 28.8835 60.5461 29.4118 16.8346 46.1689 29.4118 16.8346 46.1689 29.4118 16.8346 46.1689 23.5294 12.437 39.9961
+"uniform eta" 53.8462 35.4579 71.2441 34.6154 19.4122 53.7794 34.6154 19.4122 53.7794 19.2308 8.50706 37.8763 30.7692 16.5013 49.9883
+"grid" 41.3793 25.5132 59.2622 27.5862 14.6988 45.7171 34.4828 19.9407 52.6549 17.2414 7.59786 34.5484 24.1379 12.2184 42.1076
+"graph" 54.8387 37.7722 70.8383 35.4839 21.1167 53.052 29.0323 16.0958 46.5923 32.2581 18.5694 49.859 29.0323 16.0958 46.5923
+"with a trap" 48.7179 33.8652 63.8006 30.7692 18.5659 46.4213 28.2051 16.5435 43.7753 17.9487 8.97727 32.668 20.5128 10.7797 35.534
+EOD
+$near << EOD
+"all" 88.3333 77.8212 94.2323 76.6667 64.5637 85.5604 65 52.3626 75.8322 56.6667 44.1034 68.4276 61.6667 49.0176 72.9117
+"|E| = 0" 100 67.5592 100 87.5 52.9112 97.7583 87.5 52.9112 97.7583 25 7.14792 59.0725 37.5 13.6844 69.4258
+"|E| 1-3" 88.8889 67.2002 96.898 83.3333 60.778 94.1634 77.7778 54.7854 90.9991 61.1111 38.619 79.6948 66.6667 43.7495 83.7212
+"|E| 4-7" 85.2941 69.8719 93.5506 70.5882 53.8311 83.1654 52.9412 36.7367 68.5485 61.7647 45.041 76.0998 64.7059 47.914 78.5121
+"occluded < 10%" 90.4762 71.0859 97.3481 95.2381 77.3306 99.1544 95.2381 77.3306 99.1544 61.9048 40.8787 79.249 71.4286 50.0436 86.1861
+"occluded 10-20%" 86.6667 62.118 96.2639 66.6667 41.7135 84.8237 60 35.7468 80.1755 40 19.8245 64.2532 46.6667 24.8095 69.883
+"occluded 20-30%" 87.5 68.9961 95.6557 66.6667 46.7063 82.0278 41.6667 24.4676 61.1653 62.5 42.71 78.8406 62.5 42.71 78.8406
+"informativeness < 0.53" 85.7143 60.0586 95.9906 85.7143 60.0586 95.9906 57.1429 32.5906 78.6192 35.7143 16.3447 61.2356 42.8571 21.3808 67.4094
+"informativeness 0.53-0.77" 88.4615 71.0241 95.9968 61.5385 42.5349 77.5714 53.8462 35.4579 71.2441 73.0769 53.917 86.2956 76.9231 57.9484 88.9662
+"informativeness > 0.77" 90 69.8966 97.2134 90 69.8966 97.2134 85 63.9581 94.7631 50 29.9298 70.0702 55 34.2085 74.1802
+"plausible eta" 82.3529 66.4863 91.651 64.7059 47.914 78.5121 55.8824 39.4539 71.1165 58.8235 42.2216 73.634 61.7647 45.041 76.0998
+"uniform eta" 96.1538 81.1072 99.3178 92.3077 75.8584 97.8645 76.9231 57.9484 88.9662 53.8462 35.4579 71.2441 61.5385 42.5349 77.5714
+"grid" 79.3103 61.6099 90.1539 75.8621 57.8924 87.7816 72.4138 54.2829 85.3012 58.6207 40.7378 74.4868 62.069 44.0025 77.312
+"graph" 96.7742 83.8059 99.4283 77.4194 60.1876 88.6049 58.0645 40.7663 73.5845 54.8387 37.7722 70.8383 61.2903 43.8241 76.2669
+"with a trap" 82.0513 67.332 91.0227 76.9231 61.6637 87.3542 61.5385 45.8991 75.1086 48.7179 33.8652 63.8006 53.8462 38.5694 68.4331
+EOD
+set style data histograms
+set style histogram errorbars gap 2 lw 1
+set style fill solid 0.85 border -1
+set boxwidth 0.9
+set xtics rotate by -30 left
+set grid ytics
+set key outside right top
+set yrange [0:105]
+set ylabel '% of runs'
+set bmargin 7
+set terminal pngcairo size 1400,1100 noenhanced font 'sans,11'
+set output '/tmp/rt60/random_tasks.png'
+set multiplot layout 2,1
+set title 'Random tasks: runs whose learned policy is optimal (ILE 0; 95% Wilson interval)'
+plot $optimal using 2:3:4:xtic(1) title 'true_trajectories' lc rgb '#1b9e77', \
+     $optimal using 5:6:7 title 'oracle_sensor_end' lc rgb '#d95f02', \
+     $optimal using 8:9:10 title 'oracle_sensor' lc rgb '#7570b3', \
+     $optimal using 11:12:13 title 'fixed_prior' lc rgb '#e7298a', \
+     $optimal using 14:15:16 title 'posterior' lc rgb '#66a61e'
+set title 'Runs within 5% of the optimal value (ILE <= 0.05 ||V*||_1)'
+plot $near using 2:3:4:xtic(1) title 'true_trajectories' lc rgb '#1b9e77', \
+     $near using 5:6:7 title 'oracle_sensor_end' lc rgb '#d95f02', \
+     $near using 8:9:10 title 'oracle_sensor' lc rgb '#7570b3', \
+     $near using 11:12:13 title 'fixed_prior' lc rgb '#e7298a', \
+     $near using 14:15:16 title 'posterior' lc rgb '#66a61e'
+unset multiplot
+set terminal svg size 1400,1100 noenhanced font 'sans,11' background rgb 'white'
+set output '/tmp/rt60/random_tasks.svg'
+set multiplot layout 2,1
+set title 'Random tasks: runs whose learned policy is optimal (ILE 0; 95% Wilson interval)'
+plot $optimal using 2:3:4:xtic(1) title 'true_trajectories' lc rgb '#1b9e77', \
+     $optimal using 5:6:7 title 'oracle_sensor_end' lc rgb '#d95f02', \
+     $optimal using 8:9:10 title 'oracle_sensor' lc rgb '#7570b3', \
+     $optimal using 11:12:13 title 'fixed_prior' lc rgb '#e7298a', \
+     $optimal using 14:15:16 title 'posterior' lc rgb '#66a61e'
+set title 'Runs within 5% of the optimal value (ILE <= 0.05 ||V*||_1)'
+plot $near using 2:3:4:xtic(1) title 'true_trajectories' lc rgb '#1b9e77', \
+     $near using 5:6:7 title 'oracle_sensor_end' lc rgb '#d95f02', \
+     $near using 8:9:10 title 'oracle_sensor' lc rgb '#7570b3', \
+     $near using 11:12:13 title 'fixed_prior' lc rgb '#e7298a', \
+     $near using 14:15:16 title 'posterior' lc rgb '#66a61e'
+unset multiplot
+unset output
