@@ -58,8 +58,8 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
 // The oracles' data (issue 33): what the simulator used, nothing learned -- the true
 // subject O and element O's as the prior's fixed means, every observation's eta the
 // simulator's source mixture (the subject with probability subject_share, else an element
-// chosen evenly) -- and with `end`, the terminal state each trajectory entered.
-std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task, bool end) {
+// chosen evenly).
+std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task) {
   ObservationPrior prior = task.prior;
   prior.subject_alpha = task.subject_o;  // its Dirichlet mean is the true O
   prior.confounder_alpha = task.confounder_o;
@@ -72,9 +72,16 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
   std::vector<ObservedTrajectory> observed = task.observed.trajectories;
   for (size_t i = 0; i < observed.size(); ++i) {
     for (Eigen::Index n = 0; n < observed[i].eta.rows(); ++n) observed[i].eta.row(n) = mixture;
-    if (end && observed[i].ends_in_terminal) observed[i].end_state = task.entered[i];
   }
   return {std::move(prior), std::move(observed)};
+}
+
+// What a sensor that sees which terminal state each trajectory entered adds to `observed`.
+std::vector<ObservedTrajectory> seeing_the_end(const RandomTask& task, std::vector<ObservedTrajectory> observed) {
+  for (size_t i = 0; i < observed.size(); ++i) {
+    if (observed[i].ends_in_terminal) observed[i].end_state = task.entered[i];
+  }
+  return observed;
 }
 
 void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun& r) {
@@ -90,9 +97,9 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   LearnResult learned;
   if (method.kind == "truth") {
     learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
-  } else if (method.kind == "oracle" || method.kind == "oracle_end") {
-    const auto [prior, observed] = oracle_data(task, method.kind == "oracle_end");
-    const ObservationEStep estep(task.mdp, observed, prior, {});
+  } else if (method.kind == "oracle") {
+    const auto [prior, observed] = oracle_data(task);
+    const ObservationEStep estep(task.mdp, method.sees_end ? seeing_the_end(task, observed) : observed, prior, {});
     learned = learn_reward(task.mdp, estep, options);
   } else {
     ObservationPrior prior = task.prior;
@@ -101,7 +108,9 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     prior.c = method.c;
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = 1;
-    const ObservationEStep estep(task.mdp, task.observed.trajectories, prior, estep_options);
+    const ObservationEStep estep(
+        task.mdp, method.sees_end ? seeing_the_end(task, task.observed.trajectories) : task.observed.trajectories,
+        prior, estep_options);
     learned = learn_reward(task.mdp, estep, options);
   }
   const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
@@ -211,11 +220,17 @@ std::string percent(double x) {
 
 const std::vector<RandomTaskMethod>& all_random_task_methods() {
   static const std::vector<RandomTaskMethod> methods = {
-      {"true_trajectories", "truth", 0.1, 1},    {"fixed_prior", "fixed", 0.1, 1},
-      {"paper_c0.5", "paper", 0.5, 1},           {"paper_c0.1", "paper", 0.1, 1},
-      {"posterior", "posterior", 0.1, 1},        {"posterior_c0.5", "posterior", 0.5, 1},
-      {"posterior_c0.02", "posterior", 0.02, 1}, {"posterior_r4", "posterior", 0.1, 4},
-      {"oracle_sensor", "oracle", 0.1, 1},       {"oracle_sensor_end", "oracle_end", 0.1, 1},
+      {"true_trajectories", "truth", 0.1, 1},
+      {"fixed_prior", "fixed", 0.1, 1},
+      {"paper_c0.5", "paper", 0.5, 1},
+      {"paper_c0.1", "paper", 0.1, 1},
+      {"posterior", "posterior", 0.1, 1},
+      {"posterior_c0.5", "posterior", 0.5, 1},
+      {"posterior_c0.02", "posterior", 0.02, 1},
+      {"posterior_r4", "posterior", 0.1, 4},
+      {"oracle_sensor", "oracle", 0.1, 1},
+      {"oracle_sensor_end", "oracle", 0.1, 1, true},
+      {"posterior_end", "posterior", 0.1, 1, true},
   };
   return methods;
 }
@@ -409,6 +424,8 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("fixed_prior", "true_trajectories");
   compare("posterior", "oracle_sensor");
   compare("oracle_sensor", "oracle_sensor_end");
+  compare("posterior", "posterior_end");
+  compare("posterior_end", "oracle_sensor_end");
   compare("oracle_sensor_end", "true_trajectories");
 }
 
@@ -503,8 +520,8 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
 std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem) {
   // The main methods (the c and restart variants are in the summary's tables).
   std::vector<std::string> methods;
-  for (const std::string m : {"true_trajectories", "oracle_sensor_end", "oracle_sensor", "fixed_prior", "paper_c0.5",
-                              "paper_c0.1", "posterior"}) {
+  for (const std::string m : {"true_trajectories", "oracle_sensor_end", "posterior_end", "oracle_sensor", "fixed_prior",
+                              "paper_c0.5", "paper_c0.1", "posterior"}) {
     if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; }))
       methods.push_back(m);
   }

@@ -16,6 +16,9 @@
 //   oracle_sensor_end  the same, also told the terminal state each trajectory entered (a goal
 //                      or a trap): the part of the gap to true_trajectories that a sensor
 //                      seeing how a trajectory ended would close
+//   posterior_end      the default, with a sensor that sees which terminal state each
+//                      trajectory entered (ObservedTrajectory::end_state): what such a
+//                      sensor buys the learner as it is
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -32,9 +35,10 @@ namespace hbirl {
 
 struct RandomTaskMethod {
   std::string key;   // as above
-  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_end"
+  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle"
   double c = 0.1;
   int restarts = 1;
+  bool sees_end = false;  // the sensor also saw which terminal state each trajectory entered
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();
