@@ -367,6 +367,7 @@ int run_random_tasks_command(RandomTasksArgs& args) {
 
 struct CalibrationArgs {
   std::string out = "results";
+  bool first_seed_given = false;  // else a figure's runs are the figure's own (figure_seed)
   std::string data = "observations,truth";
   std::string demonstrations;  // comma-separated n, or empty: every demonstration
   std::string runs_csv;        // summarise these runs instead of running
@@ -398,6 +399,7 @@ std::vector<int> parse_demonstrations(const std::string& text) {
 
 int run_calibration_command(CalibrationArgs& args) {
   CalibrationOptions& o = args.options;
+  if (!args.first_seed_given && figure_seed(o.tasks_from)) o.first_seed = *figure_seed(o.tasks_from);
   o.data = parse_calibration_data(args.data);
   o.demonstrations = parse_demonstrations(args.demonstrations);
   make_folder(args.out);
@@ -411,8 +413,8 @@ int run_calibration_command(CalibrationArgs& args) {
     const auto [ran, seconds] = run_with_progress("learning runs", o, run_calibration);
     runs = ran;
     write_file(dir / "calibration_runs.csv", calibration_runs_csv(runs));
-    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " (seeds " << o.first_seed << "-"
-           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ")";
+    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " ("
+           << judged_task_span({o.tasks_from, o.tasks, o.first_seed, o.draws}) << ")";
     if (o.tasks_from == "random") footer << " x " << o.draws << " data sets";
     if (!o.demonstrations.empty())
       footer << ", each learned from its first " << args.demonstrations << " demonstrations";
@@ -441,6 +443,7 @@ int run_calibration_command(CalibrationArgs& args) {
 
 struct StoppingArgs {
   std::string out = "results";
+  bool first_seed_given = false;
   std::string levels = "0.9,0.95";
   std::string runs_csv;  // summarise these runs instead of running
   StoppingOptions options;
@@ -467,6 +470,7 @@ std::vector<double> parse_levels(const std::string& text) {
 
 int run_stopping_command(StoppingArgs& args) {
   StoppingOptions& o = args.options;
+  if (!args.first_seed_given && figure_seed(o.tasks_from)) o.first_seed = *figure_seed(o.tasks_from);
   o.levels = parse_levels(args.levels);
   if (o.stop_after < 1) throw InputError("--stop-after", "must be at least 1");
   make_folder(args.out);
@@ -481,8 +485,8 @@ int run_stopping_command(StoppingArgs& args) {
     const auto [ran, seconds] = run_with_progress("tasks", o, run_stopping);
     runs = ran;
     write_file(dir / "stopping_runs.csv", stopping_runs_csv(runs));
-    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " (seeds " << o.first_seed << "-"
-           << o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1 << ", one data set each), " << o.samples
+    footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " ("
+           << judged_task_span({o.tasks_from, o.tasks, o.first_seed, 1}) << ", one data set each), " << o.samples
            << " posterior draws per estimate; " << static_cast<long>(seconds + 0.5) << " s on "
            << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
     if (o.tasks_from == "random") {
@@ -724,13 +728,22 @@ CLI::App* add_onion_experiment(CLI::App* cmd, OnionExperimentArgs& args) {
   return onion_cmd;
 }
 
+// The random-task experiment's method keys, comma-separated (all_random_task_methods).
+std::string random_task_method_keys() {
+  std::string keys;
+  for (const RandomTaskMethod& m : all_random_task_methods()) keys += (keys.empty() ? "" : ", ") + m.key;
+  return keys;
+}
+
 // experiment random-tasks: hbirl on random tasks.
 CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
   CLI::App* tasks_cmd = cmd->add_subcommand(
       "random-tasks",
       "hbirl on random tasks nobody tuned it for (hbirl generate random-task): each task learned from its\n"
       "true trajectories, with O fixed at the controlled run's prior, with the paper's update (c = 0.5, 0.1) and\n"
-      "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts). Writes random_tasks_runs.csv (one row\n"
+      "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts); and the information limit's oracles\n"
+      "(the true O's and the simulator's source mixture, nothing learned; also told which terminal state each\n"
+      "trajectory entered), and the default with a sensor that sees that. Writes random_tasks_runs.csv (one row\n"
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
       "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");
@@ -742,10 +755,7 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   tasks_cmd->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
-  tasks_cmd
-      ->add_option("--methods", args.methods,
-                   "Comma-separated: true_trajectories, fixed_prior, paper_c0.5, paper_c0.1, posterior, "
-                   "posterior_c0.5, posterior_c0.02, posterior_r4; or all")
+  tasks_cmd->add_option("--methods", args.methods, "Comma-separated: " + random_task_method_keys() + "; or all")
       ->capture_default_str();
   tasks_cmd->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
       ->check(CLI::Range(0, 4096))
@@ -771,16 +781,19 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
   CLI::App* c = cmd->add_subcommand(
       "calibration",
       "Is the confidence calibrated? Random tasks (seeds from --first-seed: not those the posterior's defaults\n"
-      "were looked at on) or a figure's runs (--tasks-from), each data set learned as hbirl learn --posterior-samples "
-      "learns it, from the observations\n"
-      "and from the true trajectories; the confidence (the posterior probability that the learned policy is within\n"
-      "5% of the optimal value) against whether it is. Writes calibration_runs.csv, calibration_summary.md (AUROC,\n"
-      "expected calibration error, Brier score, share right among confidence >= 0.9, the reliability table) and\n"
-      "calibration.png/.svg (the reliability diagram) to --out. The numbers do not depend on --threads.");
+      "were looked at on) or a figure's runs (--tasks-from), each data set learned as hbirl learn\n"
+      "--posterior-samples learns it, from the observations and from the true trajectories; the confidence (the\n"
+      "posterior probability that the learned policy is within 5% of the optimal value) against whether it is.\n"
+      "Writes calibration_runs.csv, calibration_summary.md (AUROC, expected calibration error, Brier score, share\n"
+      "right among confidence >= 0.9, the reliability table) and calibration.png/.svg (the reliability diagram) to\n"
+      "--out. The numbers do not depend on --threads.");
   c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
   c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
   c->add_option("--draws", args.options.draws, "Data sets per task")->check(CLI::Range(1, 1000))->capture_default_str();
-  c->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
+  c->add_option("--first-seed", args.options.first_seed,
+                "Seed of the first task (with --tasks-from gridworld or onion: the figure's seed, by default its own)")
+      ->each([&args](const std::string&) { args.first_seed_given = true; })
+      ->capture_default_str();
   c->add_option("--samples", args.options.samples, "Posterior draws per run (--posterior-samples)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
@@ -805,15 +818,18 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
 CLI::App* add_stopping_experiment(CLI::App* cmd, StoppingArgs& args) {
   CLI::App* c = cmd->add_subcommand(
       "stopping",
-      "Knowing when it has seen enough: random tasks (or a figure's runs, --tasks-from) learned while their "
-      "demonstrations arrive (hbirl learn\n"
-      "--anytime --posterior-samples), then the stop rule (--stop-after estimates in a row with confidence >= p)\n"
+      "Knowing when it has seen enough: random tasks (or a figure's runs, --tasks-from) learned while their\n"
+      "demonstrations arrive (hbirl learn --anytime --posterior-samples), then the stop rule (--stop-after\n"
+      "estimates in a row with confidence >= p)\n"
       "for each level p: after how many demonstrations it stops and how often the policy it stops with is right,\n"
       "against every demonstration. Writes stopping_runs.csv (one row per estimate), stopping_summary.md and\n"
       "stopping.png/.svg to --out. The numbers do not depend on --threads.");
   c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
   c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
-  c->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
+  c->add_option("--first-seed", args.options.first_seed,
+                "Seed of the first task (with --tasks-from gridworld or onion: the figure's seed, by default its own)")
+      ->each([&args](const std::string&) { args.first_seed_given = true; })
+      ->capture_default_str();
   c->add_option("--samples", args.options.samples, "Posterior draws per estimate")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();

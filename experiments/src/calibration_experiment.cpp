@@ -101,16 +101,40 @@ double auroc(const std::vector<double>& p, const std::vector<bool>& y) {
   return right_total > 0.0 && wrong_total > 0.0 ? pairs_right / (right_total * wrong_total) : 0.5;
 }
 
+// The learned-from prefix lengths in `runs`, in order (one entry, 0, when every run learned from all).
+std::vector<int> prefixes_in(const std::vector<CalibrationRun>& runs) {
+  std::vector<int> out;
+  for (const CalibrationRun& r : runs) {
+    if (std::find(out.begin(), out.end(), r.demonstrations) == out.end()) out.push_back(r.demonstrations);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void write_score_row(std::ostream& out, const std::string& label, const CalibrationScore& s) {
+  char buf[300];
+  std::snprintf(buf, sizeof buf, "| %s | %d | %d (%.1f%%) | %.3f | %.3f | %.3f | %.3f | %d of %d (%.1f%%) |\n",
+                label.c_str(), s.runs, s.right, 100.0 * s.right / std::max(1, s.runs), s.mean_confidence, s.auroc,
+                s.ece, s.brier, s.confident_right, s.confident, 100.0 * s.confident_right / std::max(1, s.confident));
+  out << buf;
+}
+
+// Per data, and per prefix length when the runs learned from several (--demonstrations).
 void write_score_table(std::ostream& out, const std::vector<CalibrationRun>& runs) {
   out << "| data | runs | right | mean confidence | AUROC | ECE | Brier | confidence >= 0.9: right |\n"
       << "|---|---|---|---|---|---|---|---|\n";
+  const std::vector<int> prefixes = prefixes_in(runs);
   for (const std::string& d : data_in(runs)) {
-    const CalibrationScore s = score_of(runs_of(runs, d));
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "| %s | %d | %d (%.1f%%) | %.3f | %.3f | %.3f | %.3f | %d of %d (%.1f%%) |\n",
-                  d.c_str(), s.runs, s.right, 100.0 * s.right / std::max(1, s.runs), s.mean_confidence, s.auroc, s.ece,
-                  s.brier, s.confident_right, s.confident, 100.0 * s.confident_right / std::max(1, s.confident));
-    out << buf;
+    const std::vector<const CalibrationRun*> of_d = runs_of(runs, d);
+    write_score_row(out, prefixes.size() > 1 ? d + ", all" : d, score_of(of_d));
+    if (prefixes.size() < 2) continue;
+    for (int n : prefixes) {
+      std::vector<const CalibrationRun*> of_n;
+      for (const CalibrationRun* r : of_d) {
+        if (r->demonstrations == n) of_n.push_back(r);
+      }
+      write_score_row(out, d + ", the first " + std::to_string(n), score_of(of_n));
+    }
   }
 }
 

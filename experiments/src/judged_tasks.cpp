@@ -69,13 +69,15 @@ JudgedTask onion_judged_task(const JudgedTaskOptions& o, const onion::OnionSetup
 struct Source {
   const char* name;
   const char* label;  // what a summary calls the tasks
+  int figure_runs;    // the figure's own number of runs (0: not a figure)
+  std::uint64_t figure_seed;
   std::vector<int> (*draws_of)(const JudgedTaskOptions&, int t);
   void (*share)(const JudgedTaskOptions&, JudgedTaskMaker::Shared&);
   JudgedTask (*make)(const JudgedTaskOptions&, const JudgedTaskMaker::Shared&, const DataSetId&);
 };
 
 const Source kSources[] = {
-    {"random", "Random tasks",
+    {"random", "Random tasks", 0, 0,
      [](const JudgedTaskOptions& o, int) {
        std::vector<int> draws(static_cast<size_t>(o.draws));
        for (int d = 0; d < o.draws; ++d) draws[static_cast<size_t>(d)] = d;
@@ -86,6 +88,7 @@ const Source kSources[] = {
        return random_judged_task(id);
      }},
     {"gridworld", "The Gridworld figure's runs (|E| = 0, 1, 3, ..., 15 in turn, plausible eta)",
+     GridworldExperimentOptions{}.runs, GridworldExperimentOptions{}.seed,
      [](const JudgedTaskOptions&, int t) {
        const std::vector<int>& all = gridworld_confounders();
        return std::vector<int>{all[static_cast<size_t>(t) % all.size()]};
@@ -95,6 +98,7 @@ const Source kSources[] = {
        return gridworld_judged_task(o, id);
      }},
     {"onion", "The onion figure's runs (10 sorts from frames, the labeller's eta)",
+     onion::OnionExperimentOptions{}.runs, onion::OnionExperimentOptions{}.seed,
      [](const JudgedTaskOptions&, int) { return std::vector<int>{0}; },
      [](const JudgedTaskOptions& o, JudgedTaskMaker::Shared& shared) {
        shared.onion = onion::onion_setup(onion_figure_options(o));
@@ -126,6 +130,24 @@ std::string judged_task_label(const std::string& source) {
   JudgedTaskOptions o;
   o.source = source;
   return source_of(o).label;
+}
+
+std::optional<std::uint64_t> figure_seed(const std::string& source) {
+  JudgedTaskOptions o;
+  o.source = source;
+  const Source& s = source_of(o);
+  if (s.figure_runs == 0) return std::nullopt;
+  return s.figure_seed;
+}
+
+std::string judged_task_span(const JudgedTaskOptions& o) {
+  const Source& s = source_of(o);
+  if (s.figure_runs == 0) {
+    return "seeds " + std::to_string(o.first_seed) + "-" +
+           std::to_string(o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1);
+  }
+  return "runs 0-" + std::to_string(o.tasks - 1) + " of the seed " + std::to_string(o.first_seed) +
+         " (task t is run t; the figure has " + std::to_string(s.figure_runs) + ")";
 }
 
 std::vector<DataSetId> judged_data_sets(const JudgedTaskOptions& o) {

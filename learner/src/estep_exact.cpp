@@ -368,7 +368,7 @@ double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTraject
   // Backward: log beta_t(r) = logsumexp_s' [log T(s'|r) + log g_{t+1}(s')],
   //           log g(s') = logsumexp_a' [log pi(a'|s') + log e(s',a') + log beta(s',a')].
   // At the last step beta is 1, or Pr(next state is terminal | r) when the trajectory
-  // is known to have ended by entering a terminal state.
+  // is known to have ended by entering a terminal state (the one seen: end_evidence).
   log_beta_.resize(T, P);
   if (trajectory.ends_in_terminal) {
     const Eigen::VectorXd end = end_evidence(mdp_, trajectory);

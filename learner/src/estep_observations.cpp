@@ -34,8 +34,21 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
     if (t.num_observations() > 0 && t.eta.cols() != 1 + prior_.num_confounders) {
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
     }
+    if (t.end_state >= 0 && (!t.ends_in_terminal || t.end_state >= mdp.num_states || !mdp.is_terminal(t.end_state))) {
+      throw InputError("demonstration[" + std::to_string(i) + "].end_state",
+                       std::to_string(t.end_state) + " is not a terminal state the trajectory ended in");
+    }
   }
-  if (options_.executor) input_digest_ = dataset_digest(trajectories_);
+  if (options_.executor) {
+    // The bus cannot carry end_state yet (estep_wire.cpp): refuse here, before any block is sent.
+    for (size_t i = 0; i < trajectories_.size(); ++i) {
+      if (trajectories_[i].end_state >= 0) {
+        throw InputError("demonstration[" + std::to_string(i) + "].end_state",
+                         "the E-step service cannot carry the terminal state seen yet");
+      }
+    }
+    input_digest_ = dataset_digest(trajectories_);
+  }
   if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();

@@ -814,6 +814,8 @@ OrderedJson trajectory_to_json(const DemonstratedTrajectory& trajectory, bool ha
   if (trajectory.controlled) item["controlled"] = true;
   if (trajectory.steps) {
     const ObservedTrajectory& o = *trajectory.steps;
+    // Problem files cannot say which terminal state was seen yet (issue 33): not silently less.
+    if (o.end_state >= 0) throw InputError("end_state", "problem files cannot carry the terminal state seen yet");
     J steps = J::array();
     for (int t = 0; t < o.length(); ++t) {
       J observations = J::array();

@@ -202,6 +202,7 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
   long long first_step = 0;
   for (size_t i = 0; i < trajectories.size(); ++i) {
     const ObservedTrajectory& t = trajectories[i];
+    if (t.end_state >= 0) throw InputError("end_state", "the flat form cannot carry the terminal state seen yet");
     le(static_cast<py::ssize_t>(i)) = t.length();
     terminal.push_back(t.ends_in_terminal);
     for (int s = 0; s < t.length(); ++s) {

@@ -116,7 +116,8 @@ double reference_lse(const std::vector<double>& x) {
 
 // A plain log-space forward-backward straight from the definitions, every sum its own
 // log-sum-exp: the log emissions, log alpha, log beta (with a terminal exit at the end
-// when the trajectory is known to have ended) and the log-likelihood.
+// when the trajectory is known to have ended, into end_state when that was seen) and the
+// log-likelihood.
 struct Reference {
   std::vector<std::vector<double>> log_emission, la, lb;
   double log_likelihood = -INFINITY;
@@ -163,7 +164,7 @@ Reference reference_posterior(const Mdp& mdp, const SoftSolution& policy, const 
     for (int r = 0; r < P; ++r) {
       std::vector<double> out;
       for (int s2 = 0; s2 < mdp.num_states; ++s2) {
-        if (mdp.is_terminal(s2)) out.push_back(log_t(r, s2));
+        if (mdp.is_terminal(s2) && (tr.end_state < 0 || s2 == tr.end_state)) out.push_back(log_t(r, s2));
       }
       lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] = reference_lse(out);
     }
@@ -307,13 +308,13 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
 // -- it must agree with the plain log-space reference, impossible trajectories included.
 TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
   Rng rng(4242);
-  int scaled = 0, fallback = 0, impossible = 0;
-  for (int trial = 0; trial < 300; ++trial) {
+  int scaled = 0, fallback = 0, impossible = 0, seen_end_fallback = 0;
+  for (int trial = 0; trial < 400; ++trial) {
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = 3 + trial % 6;
     o.actions = 2 + trial % 3;
     o.successors = std::min(3, o.states);
-    o.terminal = trial % 2 == 0 ? 1 : 0;
+    o.terminal = trial % 2 == 0 ? (trial % 8 == 0 ? 2 : 1) : 0;
     Mdp mdp = testing::random_mdp(o, rng);
     for (int s = 0; s < mdp.num_states; ++s) {
       if (mdp.start[s] > 0.0 && rng.uniform() < 0.5) mdp.start[s] *= std::pow(10.0, -rng.uniform(0.0, 320.0));
@@ -347,10 +348,12 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
       for (int z = 0; z <= E; ++z) tr.eta(n, z) = z == 0 ? (E > 0 ? 0.9 : 1.0) : 0.1 / E;
     }
     tr.ends_in_terminal = o.terminal > 0 && trial % 4 == 0;
+    if (o.terminal == 2 && trial % 16 == 0) tr.end_state = o.states - 1 - rng.uniform_int(2);  // which one was seen
     const Reference ref = reference_posterior(mdp, policy, model, tr);
     ExactEngine engine(mdp);
     const TrajectoryPosterior post = engine.posterior(policy, model, tr);
     (engine.last_passes_scaled() ? scaled : fallback) += 1;
+    seen_end_fallback += tr.end_state >= 0 && !engine.last_passes_scaled() && ref.log_likelihood > -INFINITY;
     if (ref.log_likelihood == -INFINITY) {
       ++impossible;
       EXPECT_EQ(post.log_likelihood, -INFINITY) << "trial " << trial;
@@ -364,9 +367,10 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
         << "trial " << trial;
     expect_marginals(ref, post, trial);
   }
-  // Both kinds of passes were exercised.
+  // Both kinds of passes were exercised, the log-space ones with a seen end too.
   EXPECT_GE(scaled, 50);
   EXPECT_GE(fallback, 10);
+  EXPECT_GE(seen_end_fallback, 1);
   RecordProperty("scaled", scaled);
   RecordProperty("fallback", fallback);
   RecordProperty("impossible", impossible);

@@ -74,17 +74,23 @@ TEST(McmcEngine, AgreesWithExactWhenTheEndStateIsSeen) {
   Rng rng(99);
   McmcOptions options = sweeps(20000, 1000, 2);
   options.block = McmcOptions::Block::kAlways;
-  int compared = 0;
+  int compared = 0, informative = 0;
   for (int trial = 0; trial < 8; ++trial) {
     testing::TinyProblem p = testing::two_exits(trial, rng);
+    const RowMatrix unseen = ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).marginals;
     p.trajectory.end_state = 2 + trial % 2;
     if (!possible(p)) continue;
+    // Where seeing the end moves the posterior by more than the tolerance, an engine that
+    // ignored it would fail.
+    const RowMatrix seen = ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).marginals;
+    informative += (seen - unseen).cwiseAbs().maxCoeff() > 2 * kTolerance;
     const Agreement a = compare(p, options, 300 + static_cast<std::uint64_t>(trial));
     EXPECT_LT(a.marginals, kTolerance) << "trial " << trial;
     EXPECT_LT(a.sources, kTolerance) << "trial " << trial;
     ++compared;
   }
   EXPECT_GE(compared, 5);
+  EXPECT_GE(informative, 2);
 }
 
 // The paper's single-site updates alone (no block move), where they are irreducible:

@@ -152,6 +152,46 @@ TEST(ObservationEStep, MergingIdenticalObservationsChangesNothing) {
   EXPECT_LT((a.alpha_dot.confounders - b.alpha_dot.confounders).cwiseAbs().maxCoeff(), 1e-10);
 }
 
+// The E-step keeps each trajectory's seen end through merging identical observations: its
+// statistics are the engine's with the end (which differ from the unseen end's where the
+// end says something); an end_state that is not terminal is named at construction.
+TEST(ObservationEStep, KeepsTheSeenEnd) {
+  Rng rng(6);
+  int differ = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    ObservationPrior prior;
+    prior.num_symbols = static_cast<int>(p.model.subject.cols());
+    prior.num_confounders = p.model.num_confounders();
+    prior.subject_alpha = p.model.subject;
+    prior.confounder_alpha = p.model.confounders;
+    prior.learn = false;
+    ExactEngine engine(p.mdp);
+    const double unseen = engine.posterior(p.policy, p.model, p.trajectory).log_likelihood;
+    p.trajectory.end_state = 2 + trial % 2;
+    const TrajectoryPosterior direct = engine.posterior(p.policy, p.model, p.trajectory);
+    if (!std::isfinite(direct.log_likelihood)) continue;
+    const ObservationEStep estep(p.mdp, {p.trajectory}, prior, {});
+    const EStepStatistics s = estep.statistics(p.policy, p.model, 1);
+    EXPECT_NEAR(s.log_likelihood, direct.log_likelihood, 1e-9) << "trial " << trial;
+    differ += std::abs(unseen - direct.log_likelihood) > 1e-3;
+  }
+  EXPECT_GE(differ, 5);
+  testing::TinyProblem p = testing::two_exits(0, rng);
+  ObservationPrior prior;
+  prior.num_symbols = static_cast<int>(p.model.subject.cols());
+  prior.num_confounders = p.model.num_confounders();
+  prior.subject_alpha = p.model.subject;
+  prior.confounder_alpha = p.model.confounders;
+  p.trajectory.end_state = 0;  // not terminal
+  try {
+    ObservationEStep(p.mdp, {p.trajectory}, prior, {});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "demonstration[0].end_state");
+  }
+}
+
 void expect_same_statistics(const EStepStatistics& a, const EStepStatistics& b, const std::string& what) {
   const double scale = std::max(1.0, std::abs(a.log_likelihood));
   EXPECT_NEAR(a.log_likelihood, b.log_likelihood, 1e-11 * scale) << what;

@@ -29,13 +29,18 @@ Eigen::MatrixXd sparse_alpha(int rows, int symbols, Rng& rng) {
 // states, impossible actions, deterministic moves, zeros in alpha and in eta.
 TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
   Rng rng(17);
-  int impossible = 0, possible = 0, seen_ends = 0;
+  int impossible = 0, possible = 0, seen_ends = 0, only_by_end = 0;
   for (int trial = 0; trial < 400; ++trial) {
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = std::min(o.states, 4);
     o.successors = std::min(o.successors, o.states);
     o.actions = std::min(o.actions, 2);
     o.terminal = std::min(o.terminal, o.states - 1);
+    if (trial % 5 == 3) {  // two terminal states, few successors: which one was entered matters
+      o.states = 4;
+      o.terminal = 2;
+      o.successors = 2;
+    }
     const Mdp mdp = random_mdp(o, rng);
     ObservationPrior prior;
     prior.num_symbols = 2 + trial % 2;
@@ -75,9 +80,15 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
     EXPECT_EQ(found.has_value(), zero) << "trial " << trial << (found ? ": " + found->why : "");
     (zero ? impossible : possible) += 1;
     seen_ends += t.end_state >= 0;
+    if (zero && t.end_state >= 0) {  // impossible only because of which terminal state was entered?
+      ObservedTrajectory unseen = t;
+      unseen.end_state = -1;
+      only_by_end += brute_force(mdp, policy, model, unseen).likelihood > 0.0;
+    }
   }
   // Both kinds were met often enough for the agreement to mean something.
   EXPECT_GT(seen_ends, 20);
+  EXPECT_GE(only_by_end, 1);
   EXPECT_GT(impossible, 40);
   EXPECT_GT(possible, 40);
 }

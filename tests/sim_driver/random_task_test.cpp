@@ -68,6 +68,15 @@ TEST(RandomTask, DrawsStayInTheirRanges) {
       if (static_cast<int>(t.demonstrations[i].size()) < t.length) {
         EXPECT_TRUE(o.ends_in_terminal);
       }
+      // The terminal state entered is recorded (the oracles' end), one the last step can reach;
+      // what the learner is given does not carry it.
+      EXPECT_EQ(t.entered[i] >= 0, o.ends_in_terminal);
+      if (t.entered[i] >= 0) {
+        EXPECT_TRUE(t.mdp.is_terminal(t.entered[i]));
+        const StateAction& last = t.demonstrations[i].back();
+        EXPECT_GT(t.mdp.transitions.coeff(t.mdp.pair(last.state, last.action), t.entered[i]), 0.0);
+      }
+      EXPECT_EQ(o.end_state, -1);
     }
     EXPECT_EQ(t.prior.subject_alpha.rows(), t.mdp.num_pairs());
     EXPECT_EQ(t.prior.confounder_alpha.rows(), t.num_confounders);

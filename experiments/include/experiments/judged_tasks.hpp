@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,11 @@ struct JudgedTaskOptions {
 const std::vector<std::string>& judged_task_sources();
 // What a summary calls a source's tasks ("Random tasks", "The Gridworld figure's runs ...").
 std::string judged_task_label(const std::string& source);
+// The figure's own seed for a figure's runs (its runs are those of that seed); none for random tasks.
+std::optional<std::uint64_t> figure_seed(const std::string& source);
+// Which tasks `options` names, for a footer: "seeds 5001-5200", or for a figure "runs 0-89
+// of the seed 1 (task t is run t; the figure has 65)".
+std::string judged_task_span(const JudgedTaskOptions& options);
 
 // The data sets of `options`, in order; InputError naming "tasks_from" for an unknown source.
 std::vector<DataSetId> judged_data_sets(const JudgedTaskOptions& options);

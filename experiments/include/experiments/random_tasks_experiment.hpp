@@ -13,9 +13,9 @@
 //   oracle_sensor      what the simulator used, nothing learned: the true subject O and element
 //                      O's, every observation's eta the simulator's source mixture -- the
 //                      best learning from observations could reach with this model
-//   oracle_sensor_end  the same, also told the terminal state each trajectory entered (a goal
-//                      or a trap): the part of the gap to true_trajectories that a sensor
-//                      seeing how a trajectory ended would close
+//   oracle_sensor_end  the same, also told which terminal state each trajectory entered when
+//                      it entered one (a goal or a trap): the part of the gap to
+//                      true_trajectories that a sensor seeing which would close
 //   posterior_end      the default, with a sensor that sees which terminal state each
 //                      trajectory entered (ObservedTrajectory::end_state): what such a
 //                      sensor buys the learner as it is

@@ -33,8 +33,9 @@ struct ObservedTrajectory {
   bool ends_in_terminal = false;
   // Which terminal state the last action entered, when the sensor saw it (ends_in_terminal
   // only; a goal and a trap, say, then differ): the posterior conditions on entering that
-  // one. -1: not seen (only that it entered one). Not carried by problem files or the bus
-  // yet: the random-task experiment's oracle sets it (issue 33).
+  // one. -1: not seen (only that it entered one). Not carried by problem files, the flat
+  // Python form or the bus yet (they refuse it): the random-task experiment's
+  // oracle_sensor_end and posterior_end set it (issue 33).
   int end_state = -1;
 
   int length() const { return static_cast<int>(step_begin.size()) - 1; }
