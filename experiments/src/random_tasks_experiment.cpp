@@ -546,14 +546,14 @@ std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, con
        << "set boxwidth 0.9\nset xtics rotate by -30 left\nset grid ytics\nset key outside right top\nset yrange "
           "[0:105]\n"
        << "set ylabel '% of runs'\nset bmargin 7\n";
-  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"};
+  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666"};
   auto panel = [&](const std::string& block, const std::string& title) {
     std::ostringstream plot;
     plot << "set title " << gnuplot_quoted(title) << "\nplot ";
     for (size_t m = 0; m < methods.size(); ++m) {
       if (m) plot << ", \\\n     ";
       plot << block << " using " << 2 + 3 * m << ":" << 3 + 3 * m << ":" << 4 + 3 * m << (m == 0 ? ":xtic(1)" : "")
-           << " title " << gnuplot_quoted(methods[m]) << " lc rgb '" << colours[m % 5] << "'";
+           << " title " << gnuplot_quoted(methods[m]) << " lc rgb '" << colours[m % 8] << "'";
     }
     return plot.str() + "\n";
   };
