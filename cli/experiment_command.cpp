@@ -365,6 +365,13 @@ int run_random_tasks_command(RandomTasksArgs& args) {
   return 0;
 }
 
+// A figure's runs are the figure's own unless --first-seed says otherwise.
+template <class Args>
+void use_figure_seed(Args& args) {
+  if (args.first_seed_given) return;
+  if (const auto seed = figure_seed(args.options.tasks_from)) args.options.first_seed = *seed;
+}
+
 struct CalibrationArgs {
   std::string out = "results";
   bool first_seed_given = false;  // else a figure's runs are the figure's own (figure_seed)
@@ -399,7 +406,7 @@ std::vector<int> parse_demonstrations(const std::string& text) {
 
 int run_calibration_command(CalibrationArgs& args) {
   CalibrationOptions& o = args.options;
-  if (!args.first_seed_given && figure_seed(o.tasks_from)) o.first_seed = *figure_seed(o.tasks_from);
+  use_figure_seed(args);
   o.data = parse_calibration_data(args.data);
   o.demonstrations = parse_demonstrations(args.demonstrations);
   make_folder(args.out);
@@ -415,7 +422,6 @@ int run_calibration_command(CalibrationArgs& args) {
     write_file(dir / "calibration_runs.csv", calibration_runs_csv(runs));
     footer << judged_task_label(o.tasks_from) << ": " << o.tasks << " ("
            << judged_task_span({o.tasks_from, o.tasks, o.first_seed, o.draws}) << ")";
-    if (o.tasks_from == "random") footer << " x " << o.draws << " data sets";
     if (!o.demonstrations.empty())
       footer << ", each learned from its first " << args.demonstrations << " demonstrations";
     footer << "; " << o.samples << " posterior draws, prior scale ";
@@ -427,9 +433,9 @@ int run_calibration_command(CalibrationArgs& args) {
     footer << "; " << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
            << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
   }
-  if (o.tasks_from == "random") {
-    footer << " Reproduce one: `hbirl generate random-task --seed S --draw D --out task.json`, then `hbirl learn "
-           << "--problem task.json --posterior-samples " << o.samples << "` (add `--from truth` for the true steps).";
+  if (const auto make = judged_task_problem_command(o.tasks_from)) {
+    footer << " Reproduce one: `" << *make << "`, then `hbirl learn --problem task.json --posterior-samples "
+           << o.samples << "` (add `--from truth` for the true steps).";
   }
   const std::string summary = calibration_summary(runs, footer.str());
   write_file(dir / "calibration_summary.md", summary);
@@ -470,7 +476,7 @@ std::vector<double> parse_levels(const std::string& text) {
 
 int run_stopping_command(StoppingArgs& args) {
   StoppingOptions& o = args.options;
-  if (!args.first_seed_given && figure_seed(o.tasks_from)) o.first_seed = *figure_seed(o.tasks_from);
+  use_figure_seed(args);
   o.levels = parse_levels(args.levels);
   if (o.stop_after < 1) throw InputError("--stop-after", "must be at least 1");
   make_folder(args.out);
@@ -489,10 +495,9 @@ int run_stopping_command(StoppingArgs& args) {
            << judged_task_span({o.tasks_from, o.tasks, o.first_seed, 1}) << ", one data set each), " << o.samples
            << " posterior draws per estimate; " << static_cast<long>(seconds + 0.5) << " s on "
            << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
-    if (o.tasks_from == "random") {
-      footer << " Reproduce one: `hbirl generate random-task --seed S --out task.json`, then `hbirl learn "
-                "--problem task.json --anytime --posterior-samples "
-             << o.samples << "`.";
+    if (const auto make = judged_task_problem_command(o.tasks_from)) {
+      footer << " Reproduce one: `" << *make << "`, then `hbirl learn --problem task.json --anytime "
+             << "--posterior-samples " << o.samples << "`.";
     }
   }
   const std::string summary = stopping_summary(runs, o, footer.str());
@@ -776,6 +781,22 @@ void add_tasks_from(CLI::App* c, std::string& tasks_from) {
       ->capture_default_str();
 }
 
+// What the experiments that judge the confidence share (judged_tasks.hpp): where the
+// tasks come from, how many, from which seed, on how many threads, written where.
+template <class Args>
+void add_judged_task_options(CLI::App* c, Args& args) {
+  c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
+  c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
+  c->add_option("--first-seed", args.options.first_seed,
+                "Seed of the first task (with --tasks-from gridworld or onion: the figure's seed, by default its own)")
+      ->each([&args](const std::string&) { args.first_seed_given = true; })
+      ->capture_default_str();
+  add_tasks_from(c, args.options.tasks_from);
+  c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+}
+
 // experiment calibration: is the posterior's confidence a promise?
 CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
   CLI::App* c = cmd->add_subcommand(
@@ -787,13 +808,8 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
       "Writes calibration_runs.csv, calibration_summary.md (AUROC, expected calibration error, Brier score, share\n"
       "right among confidence >= 0.9, the reliability table) and calibration.png/.svg (the reliability diagram) to\n"
       "--out. The numbers do not depend on --threads.");
-  c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
-  c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
+  add_judged_task_options(c, args);
   c->add_option("--draws", args.options.draws, "Data sets per task")->check(CLI::Range(1, 1000))->capture_default_str();
-  c->add_option("--first-seed", args.options.first_seed,
-                "Seed of the first task (with --tasks-from gridworld or onion: the figure's seed, by default its own)")
-      ->each([&args](const std::string&) { args.first_seed_given = true; })
-      ->capture_default_str();
   c->add_option("--samples", args.options.samples, "Posterior draws per run (--posterior-samples)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
@@ -802,13 +818,9 @@ CLI::App* add_calibration_experiment(CLI::App* cmd, CalibrationArgs& args) {
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   c->add_option("--data", args.data, "Comma-separated: observations, truth")->capture_default_str();
-  add_tasks_from(c, args.options.tasks_from);
   c->add_option("--demonstrations", args.demonstrations,
                 "Comma-separated n: learn each data set from its first n demonstrations, a run per n (e.g. 1,2,3\n"
                 "for the onion figure's first points); default: from every demonstration");
-  c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
-      ->check(CLI::Range(0, 4096))
-      ->capture_default_str();
   c->add_option("--summarise", args.runs_csv,
                 "Do not run: summarise and draw the runs of this calibration_runs.csv into --out");
   return c;
@@ -820,28 +832,19 @@ CLI::App* add_stopping_experiment(CLI::App* cmd, StoppingArgs& args) {
       "stopping",
       "Knowing when it has seen enough: random tasks (or a figure's runs, --tasks-from) learned while their\n"
       "demonstrations arrive (hbirl learn --anytime --posterior-samples), then the stop rule (--stop-after\n"
-      "estimates in a row with confidence >= p)\n"
-      "for each level p: after how many demonstrations it stops and how often the policy it stops with is right,\n"
-      "against every demonstration. Writes stopping_runs.csv (one row per estimate), stopping_summary.md and\n"
+      "estimates in a row with confidence >= p) for each level p: after how many demonstrations it stops and how\n"
+      "often the policy it stops with is right, against every demonstration. Writes stopping_runs.csv (one row per "
+      "estimate), stopping_summary.md and\n"
       "stopping.png/.svg to --out. The numbers do not depend on --threads.");
-  c->add_option("--out,-o", args.out, "Output folder")->capture_default_str();
-  c->add_option("--tasks", args.options.tasks, "Number of tasks")->check(CLI::Range(1, 1000000))->capture_default_str();
-  c->add_option("--first-seed", args.options.first_seed,
-                "Seed of the first task (with --tasks-from gridworld or onion: the figure's seed, by default its own)")
-      ->each([&args](const std::string&) { args.first_seed_given = true; })
-      ->capture_default_str();
+  add_judged_task_options(c, args);
   c->add_option("--samples", args.options.samples, "Posterior draws per estimate")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   c->add_option("--levels", args.levels, "Confidence levels p, comma-separated, each in (0, 1)")->capture_default_str();
-  add_tasks_from(c, args.options.tasks_from);
   c->add_option("--stop-after", args.options.stop_after, "Estimates in a row at or above p")->capture_default_str();
   c->add_option("--summarise", args.runs_csv,
                 "Do not run: summarise and draw the runs of this stopping_runs.csv into --out (with its --tasks-from\n"
                 "and --samples for the labels)");
-  c->add_option("--threads", args.options.threads, "Threads (0 = one per core)")
-      ->check(CLI::Range(0, 4096))
-      ->capture_default_str();
   return c;
 }
 

@@ -256,10 +256,7 @@ std::vector<CalibrationRun> calibration_runs_from_csv(const std::string& csv) {
   }
   std::vector<CalibrationRun> runs;
   for (int number = 2; std::getline(in, line); ++number) {
-    std::vector<std::string> f;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-    if (!line.empty() && line.back() == ',') f.emplace_back();
+    const std::vector<std::string> f = csv_cells(line);
     if (f.size() != 13) {
       throw InputError("runs CSV",
                        "line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, expected 13");

@@ -144,10 +144,18 @@ std::string judged_task_span(const JudgedTaskOptions& o) {
   const Source& s = source_of(o);
   if (s.figure_runs == 0) {
     return "seeds " + std::to_string(o.first_seed) + "-" +
-           std::to_string(o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1);
+           std::to_string(o.first_seed + static_cast<std::uint64_t>(o.tasks) - 1) +
+           (o.draws > 1 ? " x " + std::to_string(o.draws) + " data sets each" : "");
   }
   return "runs 0-" + std::to_string(o.tasks - 1) + " of the seed " + std::to_string(o.first_seed) +
          " (task t is run t; the figure has " + std::to_string(s.figure_runs) + ")";
+}
+
+std::optional<std::string> judged_task_problem_command(const std::string& source) {
+  JudgedTaskOptions o;
+  o.source = source;
+  if (source_of(o).figure_runs != 0) return std::nullopt;
+  return "hbirl generate random-task --seed S --draw D --out task.json";
 }
 
 std::vector<DataSetId> judged_data_sets(const JudgedTaskOptions& o) {

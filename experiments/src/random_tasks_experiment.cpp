@@ -296,19 +296,12 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
   std::istringstream in(csv);
   std::string line;
   if (!std::getline(in, line)) throw InputError("runs CSV", "is empty");
-  std::vector<std::string> header;
-  {
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) header.push_back(cell);
-  }
+  const std::vector<std::string> header = csv_cells(line);
   const std::string expected = random_task_runs_csv({});
   if (line + "\n" != expected) throw InputError("runs CSV", "line 1: not a random_tasks_runs.csv header");
   std::vector<RandomTaskRun> runs;
   for (int number = 2; std::getline(in, line); ++number) {
-    std::vector<std::string> f;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-    if (line.back() == ',') f.emplace_back();
+    const std::vector<std::string> f = csv_cells(line);
     if (f.size() != header.size()) {
       throw InputError("runs CSV", "line " + std::to_string(number) + ": " + std::to_string(f.size()) +
                                        " fields, expected " + std::to_string(header.size()));

@@ -82,10 +82,7 @@ std::vector<StoppingRun> stopping_runs_from_csv(const std::string& csv) {
   }
   std::vector<StoppingRun> runs;
   for (int number = 2; std::getline(in, line); ++number) {
-    std::vector<std::string> f;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-    if (!line.empty() && line.back() == ',') f.emplace_back();
+    const std::vector<std::string> f = csv_cells(line);
     const std::string where = "line " + std::to_string(number) + ": ";
     if (f.size() != 7) throw InputError("runs CSV", where + std::to_string(f.size()) + " fields, expected 7");
     try {

@@ -47,9 +47,12 @@ const std::vector<std::string>& judged_task_sources();
 std::string judged_task_label(const std::string& source);
 // The figure's own seed for a figure's runs (its runs are those of that seed); none for random tasks.
 std::optional<std::uint64_t> figure_seed(const std::string& source);
-// Which tasks `options` names, for a footer: "seeds 5001-5200", or for a figure "runs 0-89
-// of the seed 1 (task t is run t; the figure has 65)".
+// Which tasks `options` names, for a footer: "seeds 5001-5200 x 3 data sets each", or for a
+// figure "runs 0-89 of the seed 1 (task t is run t; the figure has 65)".
 std::string judged_task_span(const JudgedTaskOptions& options);
+// The command that writes a data set (seed S, draw D) as a problem file, for a footer's
+// "reproduce one"; none where there is no such command (a figure's runs).
+std::optional<std::string> judged_task_problem_command(const std::string& source);
 
 // The data sets of `options`, in order; InputError naming "tasks_from" for an unknown source.
 std::vector<DataSetId> judged_data_sets(const JudgedTaskOptions& options);

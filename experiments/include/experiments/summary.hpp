@@ -23,6 +23,8 @@ struct SummaryRow {
 // A free-text field (an error message) made safe for one CSV cell: commas become ';',
 // newlines spaces.
 std::string csv_text(std::string text);
+// The cells of one line of a runs CSV (a trailing comma ends with an empty cell).
+std::vector<std::string> csv_cells(const std::string& line);
 
 // The mean, standard deviation and 95% t-interval of `values` (method and x left empty).
 SummaryRow mean_and_ci(const std::vector<double>& values);

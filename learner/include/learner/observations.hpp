@@ -53,7 +53,7 @@ struct ObservedTrajectory {
 // message is sum_s T(s | s_T, a_T) times this.
 Eigen::VectorXd end_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory);
 
-// A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta and weight, bit for
+// A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta, weight and end, bit for
 // bit. Two processes with the same digest hold the same data (services/ compares them).
 std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories);
 
