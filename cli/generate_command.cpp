@@ -38,6 +38,7 @@ struct RandomTaskArgs {
   std::uint64_t seed = 1;
   int draw = 0;
   RandomTaskOverrides overrides;
+  bool end_sensor = false;
   std::string out;
 };
 
@@ -52,9 +53,11 @@ int run_random_task(const RandomTaskArgs& args) {
   problem.action_names = task.action_names;
   problem.feature_names = task.feature_names;
   problem.observation_model = task.prior;
+  if (args.end_sensor) problem.observation_model->end_alpha = task.end_alpha;
   for (size_t i = 0; i < task.demonstrations.size(); ++i) {
     DemonstratedTrajectory item;
     item.steps = task.observed.trajectories[i];
+    if (args.end_sensor && item.steps->ends_in_terminal) item.steps->end_symbols = task.end_reports[i];
     item.truth = task.demonstrations[i];
     item.ends_in_terminal = task.observed.trajectories[i].ends_in_terminal;
     problem.demonstration.push_back(std::move(item));
@@ -70,7 +73,11 @@ int run_random_task(const RandomTaskArgs& args) {
           << task.subject_share << ", " << eta_kind_name(task.eta) << " eta, " << task.per_step
           << " observations per step, " << task.occlusion << " of steps occluded; " << task.demonstrations.size()
           << " demonstrations of at most " << task.length << " steps; subject prior from a controlled run of "
-          << task.controlled.size() << " trajectories (symbol counts per (s, a) plus 1).";
+          << task.controlled.size() << " trajectories (symbol counts per (s, a) plus 1)";
+  if (args.end_sensor)
+    comment << "; an end sensor of accuracy " << task.end_accuracy << ", its prior from " << task.end_calibration
+            << " calibration reports per terminal state plus 1";
+  comment << ".";
   doc["comment"] = comment.str();
   const nlohmann::ordered_json body = problem_to_json(problem);
   doc.update(body);
@@ -155,6 +162,9 @@ CLI::App* add_random_task_generator(CLI::App* cmd, RandomTaskArgs& args) {
       ->check(CLI::Range(1, 100000));
   task->add_option("--eta", args.overrides.eta, "Fix eta: plausible or uniform")
       ->check(CLI::IsMember({"plausible", "uniform"}));
+  task->add_flag("--end-sensor", args.end_sensor,
+                 "Add the task's end sensor: 1-3 reports of the terminal state each demonstration entered "
+                 "(end_symbols) and its prior (observation_model.end_sensor)");
   task->add_option("--out,-o", args.out, "Write the problem file here instead of stdout");
   return task;
 }

@@ -112,7 +112,15 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
   nlohmann::ordered_json confounders = nlohmann::ordered_json::array();
   for (int e = 0; e < model.num_confounders(); ++e)
     confounders.push_back(to_vector(model.confounders.row(e).transpose()));
-  return {{"subject", subject}, {"confounders", confounders}};
+  nlohmann::ordered_json out = {{"subject", subject}, {"confounders", confounders}};
+  if (model.end.size() > 0) {  // the end sensor's O_end, per terminal state: [state, probabilities]
+    nlohmann::ordered_json end = nlohmann::ordered_json::array();
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (mdp.is_terminal(s)) end.push_back({s, to_vector(model.end.row(s).transpose())});
+    }
+    out["end_sensor"] = end;
+  }
+  return out;
 }
 
 // With true weights in the file: the ILE, its relative size and the policy agreement of theta.

@@ -76,10 +76,13 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
   return {std::move(prior), std::move(observed)};
 }
 
-// What a sensor that sees which terminal state each trajectory entered adds to `observed`.
-std::vector<ObservedTrajectory> seeing_the_end(const RandomTask& task, std::vector<ObservedTrajectory> observed) {
+// What was seen of each trajectory's end (RandomTaskMethod::End) added to `observed`.
+std::vector<ObservedTrajectory> seeing_the_end(const RandomTask& task, RandomTaskMethod::End end,
+                                               std::vector<ObservedTrajectory> observed) {
   for (size_t i = 0; i < observed.size(); ++i) {
-    if (observed[i].ends_in_terminal) observed[i].end_state = task.entered[i];
+    if (!observed[i].ends_in_terminal) continue;
+    if (end == RandomTaskMethod::End::kState) observed[i].end_state = task.entered[i];
+    if (end == RandomTaskMethod::End::kSensor) observed[i].end_symbols = task.end_reports[i];
   }
   return observed;
 }
@@ -98,19 +101,20 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   if (method.kind == "truth") {
     learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
   } else if (method.kind == "oracle") {
-    const auto [prior, observed] = oracle_data(task);
-    const ObservationEStep estep(task.mdp, method.sees_end ? seeing_the_end(task, observed) : observed, prior, {});
+    auto [prior, observed] = oracle_data(task);
+    if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_o;  // its mean is the truth
+    const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, observed), prior, {});
     learned = learn_reward(task.mdp, estep, options);
   } else {
     ObservationPrior prior = task.prior;
+    if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_alpha;
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
     prior.c = method.c;
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = 1;
-    const ObservationEStep estep(
-        task.mdp, method.sees_end ? seeing_the_end(task, task.observed.trajectories) : task.observed.trajectories,
-        prior, estep_options);
+    const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, task.observed.trajectories), prior,
+                                 estep_options);
     learned = learn_reward(task.mdp, estep, options);
   }
   const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
@@ -229,8 +233,10 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_c0.02", "posterior", 0.02, 1},
       {"posterior_r4", "posterior", 0.1, 4},
       {"oracle_sensor", "oracle", 0.1, 1},
-      {"oracle_sensor_end", "oracle", 0.1, 1, true},
-      {"posterior_end", "posterior", 0.1, 1, true},
+      {"oracle_sensor_end", "oracle", 0.1, 1, RandomTaskMethod::End::kState},
+      {"posterior_end", "posterior", 0.1, 1, RandomTaskMethod::End::kState},
+      {"posterior_end_sensor", "posterior", 0.1, 1, RandomTaskMethod::End::kSensor},
+      {"oracle_end_sensor", "oracle", 0.1, 1, RandomTaskMethod::End::kSensor},
   };
   return methods;
 }
@@ -420,6 +426,9 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "posterior_end");
   compare("posterior_end", "oracle_sensor_end");
   compare("oracle_sensor_end", "true_trajectories");
+  compare("posterior", "posterior_end_sensor");
+  compare("posterior_end_sensor", "posterior_end");
+  compare("posterior_end_sensor", "oracle_end_sensor");
 }
 
 // Does the default's answer depend on c?
@@ -513,8 +522,9 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
 std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, const std::string& path_stem) {
   // The main methods (the c and restart variants are in the summary's tables).
   std::vector<std::string> methods;
-  for (const std::string m : {"true_trajectories", "oracle_sensor_end", "posterior_end", "oracle_sensor", "fixed_prior",
-                              "paper_c0.5", "paper_c0.1", "posterior"}) {
+  for (const std::string m :
+       {"true_trajectories", "oracle_sensor_end", "posterior_end", "oracle_end_sensor", "posterior_end_sensor",
+        "oracle_sensor", "fixed_prior", "paper_c0.5", "paper_c0.1", "posterior"}) {
     if (std::any_of(runs.begin(), runs.end(), [&](const RandomTaskRun& r) { return r.method == m; }))
       methods.push_back(m);
   }
@@ -539,14 +549,15 @@ std::string draw_random_tasks_figure(const std::vector<RandomTaskRun>& runs, con
        << "set boxwidth 0.9\nset xtics rotate by -30 left\nset grid ytics\nset key outside right top\nset yrange "
           "[0:105]\n"
        << "set ylabel '% of runs'\nset bmargin 7\n";
-  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666"};
+  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e",
+                           "#e6ab02", "#a6761d", "#666666", "#1f78b4", "#b2df8a"};
   auto panel = [&](const std::string& block, const std::string& title) {
     std::ostringstream plot;
     plot << "set title " << gnuplot_quoted(title) << "\nplot ";
     for (size_t m = 0; m < methods.size(); ++m) {
       if (m) plot << ", \\\n     ";
       plot << block << " using " << 2 + 3 * m << ":" << 3 + 3 * m << ":" << 4 + 3 * m << (m == 0 ? ":xtic(1)" : "")
-           << " title " << gnuplot_quoted(methods[m]) << " lc rgb '" << colours[m % 8] << "'";
+           << " title " << gnuplot_quoted(methods[m]) << " lc rgb '" << colours[m % 10] << "'";
     }
     return plot.str() + "\n";
   };

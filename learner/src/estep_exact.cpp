@@ -184,9 +184,33 @@ void ExactEngine::emissions(const ObservedTrajectory& trajectory, const std::vec
   }
 }
 
+void ExactEngine::end_evidence(const ObservedTrajectory& trajectory, const Eigen::MatrixXd& end_model) {
+  end_symbols_ = static_cast<int>(end_model.cols());
+  if (trajectory.ends_in_terminal) end_log_ = end_log_evidence(mdp_, trajectory, end_model);
+}
+
+void ExactEngine::entered_state_posterior() {
+  const int S = mdp_.num_states;
+  // e shifted by its maximum: the ratios below do not change, nothing underflows that matters.
+  scratch_.head(S) = shifted_exp(end_log_);
+  const Eigen::VectorXd exit = mdp_.transitions * scratch_.head(S);  // per pair: sum_s T(s | r) e(s)
+  ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / exit.array(), 0.0);
+  entered_.resize(S);
+  sparse_times(incoming_, ratio_.data(), entered_.data());
+  entered_.array() *= scratch_.head(S).array();
+}
+
+void ExactEngine::add_end_counts(const ObservedTrajectory& trajectory, int end_symbols, AlphaCounts& out) {
+  if (trajectory.end_symbols.empty()) return;
+  if (out.end.size() == 0) out.end = Eigen::MatrixXd::Zero(mdp_.num_states, end_symbols);
+  entered_state_posterior();
+  for (int w : trajectory.end_symbols) out.end.col(w) += entered_;
+}
+
 double ExactEngine::forward_backward(const SoftSolution& policy, const ObservationModel& model,
                                      const ObservedTrajectory& trajectory, bool with_backward) {
   emissions(model, trajectory);
+  end_evidence(trajectory, model.end);
   return passes(policy, trajectory, with_backward);
 }
 
@@ -290,12 +314,15 @@ double ExactEngine::scaled_end(const ObservedTrajectory& trajectory) {
   const int T = trajectory.length();
   const int S = mdp_.num_states;
   const int P = mdp_.num_pairs();
-  // The last step's backward message: 1, or Pr(next state is terminal | r) when the
-  // trajectory is known to have ended by entering a terminal state (the one seen, when it
-  // was: end_evidence).
+  // The last step's backward message: 1, or what the end says of the state the last
+  // action entered, sum_s T(s | r) Pr(end | s) (end_log_, shifted by its maximum `top`,
+  // which is added back to the log-likelihood), when the trajectory is known to have
+  // ended by entering a terminal state.
   beta_hat_.resize(T, P);
+  double top = 0.0;
   if (trajectory.ends_in_terminal) {
-    scratch_.head(S) = end_evidence(mdp_, trajectory);
+    scratch_.head(S) = shifted_exp(end_log_, &top);
+    if (top == kNegInf) return kNegInf;  // no terminal state can give this end
     beta_hat_.row(T - 1).noalias() = (mdp_.transitions * scratch_).transpose();
   } else {
     beta_hat_.row(T - 1).setOnes();
@@ -304,7 +331,7 @@ double ExactEngine::scaled_end(const ObservedTrajectory& trajectory) {
   if (normaliser_ == 0.0) return kNaN;  // impossible, or underflowed: the log-space passes tell
   // The lost mass against the kept at the last step (beta_hat <= 1 there).
   if (!(normaliser_ >= kUnderflowFloor) || !(lost_[T - 1] - std::log(normaliser_) <= kLogNegligible)) return kNaN;
-  return std::log(normaliser_);
+  return std::log(normaliser_) + top;
 }
 
 bool ExactEngine::scaled_backward(const SoftSolution& policy, int T) {
@@ -367,12 +394,11 @@ double ExactEngine::log_passes(const SoftSolution& policy, const ObservedTraject
   }
   // Backward: log beta_t(r) = logsumexp_s' [log T(s'|r) + log g_{t+1}(s')],
   //           log g(s') = logsumexp_a' [log pi(a'|s') + log e(s',a') + log beta(s',a')].
-  // At the last step beta is 1, or Pr(next state is terminal | r) when the trajectory
-  // is known to have ended by entering a terminal state (the one seen: end_evidence).
+  // At the last step beta is 1, or log sum_s T(s | r) Pr(end | s) when the trajectory
+  // is known to have ended by entering a terminal state (end_log_).
   log_beta_.resize(T, P);
   if (trajectory.ends_in_terminal) {
-    const Eigen::VectorXd end = end_evidence(mdp_, trajectory);
-    for (int s = 0; s < S; ++s) scratch_[s] = end[s] > 0.0 ? std::log(end[s]) : kNegInf;
+    scratch_.head(S) = end_log_;
     for (int r = 0; r < P; ++r) log_beta_(T - 1, r) = log_sum_exp_row(log_transitions_, r, scratch_.data());
   } else {
     log_beta_.row(T - 1).setZero();
@@ -448,6 +474,10 @@ TrajectoryPosterior ExactEngine::posterior(const SoftSolution& policy, const Obs
       }
     }
   }
+  if (trajectory.ends_in_terminal) {  // marginal_ holds the last step's
+    entered_state_posterior();
+    out.end_states = entered_;
+  }
   return out;
 }
 
@@ -470,6 +500,7 @@ void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll,
       per_observation(n);
     }
   }
+  add_end_counts(trajectory, end_symbols_, out.alpha_dot);  // marginal_ holds the last step's
 }
 
 void ExactEngine::accumulate(const SoftSolution& policy, const ObservationModel& model,
@@ -498,6 +529,7 @@ void ExactEngine::accumulate(const SoftSolution& policy, const ObservedTrajector
                              EStepStatistics& out, RowMatrix& kind_gamma, std::vector<char>& seen,
                              std::vector<int>& touched, bool watch) {
   emissions(trajectory, kinds_of, emissions_table);
+  end_evidence(trajectory, emissions_table.end);
   const double ll = passes(policy, trajectory, true);
   add_marginals(trajectory, ll, out, watch, [&](int n) {
     const int k = kinds_of[static_cast<size_t>(n)];
@@ -520,6 +552,7 @@ KindEmissions kind_emissions(const ObservationModel& model, const ObservationKin
     out.p.row(k) = (kinds.eta(k, 0) * model.subject.col(w).array() + confounded).transpose();
   }
   out.log_p = out.p.array().log();
+  out.end = model.end;
   return out;
 }
 

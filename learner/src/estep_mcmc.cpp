@@ -25,7 +25,7 @@ class Chain {
         policy_(policy),
         model_(model),
         tr_(tr),
-        end_(end_evidence(mdp, tr)),
+        end_(shifted_exp(end_log_evidence(mdp, tr, model.end))),  // (a constant the ratios do not see)
         T_(tr.length()),
         Z_(1 + model.num_confounders()) {
     s_.assign(static_cast<size_t>(T_), 0);
@@ -82,10 +82,26 @@ class Chain {
     if (block) update_block(rng);
   }
 
+  // Pr(the last action entered s | the last pair r, the end's evidence), added to
+  // row s of `out` once per end symbol: the end sensor's expected counts of this draw,
+  // summed over s exactly (Rao-Blackwellised) rather than sampled.
+  void add_end_counts(AlphaCounts& out) const {
+    const int r = pair(T_ - 1);
+    const double total = std::exp(log_exit(r));
+    if (!(total > 0.0)) return;
+    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) {
+      const double q = it.value() * end_[it.col()] / total;
+      if (q > 0.0) {
+        for (int w : tr_.end_symbols) out.end(it.col(), w) += q;
+      }
+    }
+  }
+
  private:
   double log_transition(int r, int next) const { return safe_log(mdp_.transitions.coeff(r, next)); }
 
-  // log of what the end says given the last pair r: sum_s T(s | r) Pr(end | s) (end_evidence).
+  // log of what the end says given the last pair r: sum_s T(s | r) Pr(end | s)
+  // (end_log_evidence), up to a constant.
   double log_exit(int r) const {
     double p = 0.0;
     for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) p += it.value() * end_[it.col()];
@@ -220,7 +236,7 @@ class Chain {
   const SoftSolution& policy_;
   const ObservationModel& model_;
   const ObservedTrajectory& tr_;
-  const Eigen::VectorXd end_;  // end_evidence
+  const Eigen::VectorXd end_;  // Pr(end | s) up to a constant (end_log_evidence)
   int T_;
   int Z_;
   std::vector<int> s_;
@@ -286,6 +302,7 @@ bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& mode
   marginals = RowMatrix::Zero(T, mdp_.num_pairs());
   sources = RowMatrix::Zero(trajectory.num_observations(), Z);
   alpha_dot = AlphaCounts::zero(mdp_.num_pairs(), model.num_confounders(), model.num_symbols());
+  if (!trajectory.end_symbols.empty()) alpha_dot.end = Eigen::MatrixXd::Zero(mdp_.num_states, model.end.cols());
   // Per chain, the pair of every step of every kept draw (for the diagnostics).
   std::vector<std::vector<int>> paths(static_cast<size_t>(options_.chains));
   for (int c = 0; c < options_.chains; ++c) {
@@ -297,6 +314,7 @@ bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& mode
     for (int sweep = 0; sweep < options_.burn_in + options_.samples; ++sweep) {
       chain.sweep(single_site_, block_, chain_rng);
       if (sweep < options_.burn_in) continue;
+      if (!trajectory.end_symbols.empty()) chain.add_end_counts(alpha_dot);
       for (int t = 0; t < T; ++t) {
         const int r = chain.pair(t);
         marginals(t, r) += 1.0;
@@ -324,6 +342,7 @@ bool McmcEngine::sample(const SoftSolution& policy, const ObservationModel& mode
   sources /= total;
   alpha_dot.subject /= total;
   alpha_dot.confounders /= total;
+  alpha_dot.end /= total;
   return true;
 }
 

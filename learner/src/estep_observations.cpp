@@ -28,6 +28,9 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
       prior_.confounder_alpha.cols() != prior_.num_symbols) {
     throw InputError("observation_model", "alpha has the wrong shape");
   }
+  if (prior_.end_alpha.size() > 0 && prior_.end_alpha.rows() != mdp.num_states)
+    throw InputError("end_alpha", "has " + std::to_string(prior_.end_alpha.rows()) + " rows, expected one per state (" +
+                                      std::to_string(mdp.num_states) + ")");
   for (size_t i = 0; i < trajectories_.size(); ++i) {
     const ObservedTrajectory& t = trajectories_[i];
     if (t.length() < 1) throw InputError("demonstration[" + std::to_string(i) + "].steps", "is empty");
@@ -38,13 +41,23 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
       throw InputError("demonstration[" + std::to_string(i) + "].end_state",
                        std::to_string(t.end_state) + " is not a terminal state the trajectory ended in");
     }
+    try {
+      end_log_evidence(mdp, t, prior_.end_alpha);
+    } catch (const InputError& e) {
+      throw InputError("demonstration[" + std::to_string(i) + "]." + e.field(), e.message());
+    }
   }
   if (options_.executor) {
-    // The bus cannot carry end_state yet (estep_wire.cpp): refuse here, before any block is sent.
+    // The bus cannot carry what is seen of the end yet (estep_wire.cpp): refuse here,
+    // before any block is sent.
     for (size_t i = 0; i < trajectories_.size(); ++i) {
       if (trajectories_[i].end_state >= 0) {
         throw InputError("demonstration[" + std::to_string(i) + "].end_state",
                          "the E-step service cannot carry the terminal state seen yet");
+      }
+      if (!trajectories_[i].end_symbols.empty()) {
+        throw InputError("demonstration[" + std::to_string(i) + "].end_symbols",
+                         "the E-step service cannot carry an end sensor's reports yet");
       }
     }
     input_digest_ = dataset_digest(trajectories_);
@@ -251,6 +264,7 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
     double change = seen.cwiseProduct(row_change).maxCoeff();
     if (model.num_confounders() > 0)
       change = std::max(change, (next.confounders - model.confounders).cwiseAbs().maxCoeff());
+    if (next.end.size() > 0) change = std::max(change, (next.end - model.end).cwiseAbs().maxCoeff());
     change = std::max(change, eta_change);
     model = std::move(next);
     ++result.alpha_iterations;
@@ -332,9 +346,11 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
     AlphaCounts others = all;
     others.subject = (others.subject - own.alpha_dot.subject).cwiseMax(0.0);
     others.confounders = (others.confounders - own.alpha_dot.confounders).cwiseMax(0.0);
+    if (own.alpha_dot.end.size() > 0) others.end = (others.end - own.alpha_dot.end).cwiseMax(0.0);
     for (size_t k = 0; k < strengths.size(); ++k) {
       const AlphaCounts posterior = dirichlet_posterior(prior_, strengths[k], others);
-      const ObservationModel without{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)};
+      const ObservationModel without{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders),
+                                     dirichlet_mean(posterior.end)};
       held_out(i, static_cast<Eigen::Index>(k)) =
           exact.log_likelihood(policy, trajectory, kinds.of.front(), kind_emissions(without, kinds));
     }

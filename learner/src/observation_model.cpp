@@ -5,12 +5,17 @@
 namespace hbirl {
 
 AlphaCounts AlphaCounts::zero(int pairs, int confounders, int symbols) {
-  return {Eigen::MatrixXd::Zero(pairs, symbols), Eigen::MatrixXd::Zero(confounders, symbols)};
+  return {Eigen::MatrixXd::Zero(pairs, symbols), Eigen::MatrixXd::Zero(confounders, symbols), Eigen::MatrixXd()};
 }
 
 AlphaCounts& AlphaCounts::operator+=(const AlphaCounts& other) {
   subject += other.subject;
   confounders += other.confounders;
+  if (end.size() == 0) {
+    end = other.end;
+  } else if (other.end.size() > 0) {
+    end += other.end;
+  }
   return *this;
 }
 
@@ -28,7 +33,7 @@ Eigen::MatrixXd dirichlet_mean(const Eigen::MatrixXd& alpha) {
 }
 
 ObservationModel dirichlet_mean(const ObservationPrior& prior) {
-  return {dirichlet_mean(prior.subject_alpha), dirichlet_mean(prior.confounder_alpha)};
+  return {dirichlet_mean(prior.subject_alpha), dirichlet_mean(prior.confounder_alpha), dirichlet_mean(prior.end_alpha)};
 }
 
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
@@ -47,8 +52,33 @@ Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
   return out;
 }
 
+Eigen::MatrixXd weighed_end_prior(const ObservationPrior& prior) {
+  Eigen::MatrixXd out = prior.end_alpha;
+  // As for the subject's pairs (weighed_subject_prior): a terminal state the prior has no
+  // counts for keeps its mean, or the demonstration alone would set what the sensor says
+  // of it and could explain reports by the expert entering where it did not.
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted =
+      (prior.end_alpha.array() > prior.end_alpha_base).rowwise().any();
+  if (counted.any()) {
+    for (Eigen::Index s = 0; s < out.rows(); ++s) {
+      if (!counted[s]) out.row(s) *= ObservationPrior::kMaxStrength;
+    }
+  }
+  return out;
+}
+
+namespace {
+// The end sensor's weighed prior plus its expected counts (none summed yet: the prior's).
+Eigen::MatrixXd end_posterior(const ObservationPrior& prior, const AlphaCounts& counts) {
+  Eigen::MatrixXd out = weighed_end_prior(prior);
+  if (counts.end.size() > 0) out += counts.end;
+  return out;
+}
+}  // namespace
+
 AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const AlphaCounts& counts) {
-  return {weighed_subject_prior(prior, s) + counts.subject, prior.confounder_alpha + counts.confounders};
+  return {weighed_subject_prior(prior, s) + counts.subject, prior.confounder_alpha + counts.confounders,
+          end_posterior(prior, counts)};
 }
 
 namespace {
@@ -67,7 +97,7 @@ double weighted_log(const Eigen::MatrixXd& o, const Eigen::MatrixXd& beta) {
 double log_prior_term(const ObservationModel& model, const ObservationPrior& prior, const ObservationPrior& alpha) {
   if (!alpha.learn || alpha.update != AlphaUpdate::kPosterior) return 0.0;
   return weighted_log(model.subject, weighed_subject_prior(prior, alpha.strength)) +
-         weighted_log(model.confounders, prior.confounder_alpha);
+         weighted_log(model.confounders, prior.confounder_alpha) + weighted_log(model.end, weighed_end_prior(prior));
 }
 
 const std::vector<double>& prior_strength_grid() {
@@ -84,6 +114,7 @@ void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const 
   if (alpha.update == AlphaUpdate::kPaper) {
     alpha.subject_alpha = c * alpha_dot.subject + (1.0 - c) * alpha.subject_alpha;
     alpha.confounder_alpha = c * alpha_dot.confounders + (1.0 - c) * alpha.confounder_alpha;
+    if (alpha_dot.end.size() > 0) alpha.end_alpha = c * alpha_dot.end + (1.0 - c) * alpha.end_alpha;
     return;
   }
   // MAP-EM's M-step is exact (docs/MODEL.md): no step size, so nothing a user must choose
@@ -91,6 +122,7 @@ void update_alpha(ObservationPrior& alpha, const ObservationPrior& prior, const 
   AlphaCounts target = dirichlet_posterior(prior, alpha.strength, alpha_dot);
   alpha.subject_alpha = std::move(target.subject);
   alpha.confounder_alpha = std::move(target.confounders);
+  alpha.end_alpha = std::move(target.end);
 }
 
 }  // namespace hbirl

@@ -1,6 +1,8 @@
 // The support of the observation model (observation_support.hpp).
 #include "learner/observation_support.hpp"
 
+#include "learner/input_error.hpp"
+
 namespace hbirl {
 
 namespace {
@@ -31,14 +33,19 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
   std::vector<char> reach(static_cast<size_t>(S), 0), next(static_cast<size_t>(S), 0);
   for (int s = 0; s < S; ++s) reach[static_cast<size_t>(s)] = mdp.start[s] > 0.0;
   std::vector<char> alive(static_cast<size_t>(mdp.num_pairs()), 0);
-  if (t.end_state >= 0 && (!t.ends_in_terminal || t.end_state >= S || !mdp.is_terminal(t.end_state))) {
+  // What the end allows: the terminal states that can give it (end_state, and the end
+  // symbols under the end sensor's prior: log alpha is -inf where alpha is 0).
+  Eigen::VectorXd end;
+  try {
+    end = end_log_evidence(mdp, t, prior.end_alpha);
+  } catch (const InputError& e) {
+    return ImpossibleObservation{index, t.length() - 1, -1, e.field() + " " + e.message()};
+  }
+  if (t.end_state >= 0 && !t.ends_in_terminal) {
     return ImpossibleObservation{
         index, t.length() - 1, -1,
-        "end_state " + std::to_string(t.end_state) +
-            (t.ends_in_terminal ? " is not a terminal state"
-                                : " is set, but the trajectory does not end in a terminal state")};
+        "end_state " + std::to_string(t.end_state) + " is set, but the trajectory does not end in a terminal state"};
   }
-  const Eigen::VectorXd end = end_evidence(mdp, t);
   for (int step = 0; step < t.length(); ++step) {
     bool any = false;
     for (int s = 0; s < S; ++s) {
@@ -83,7 +90,7 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
       for (SparseRowMatrix::InnerIterator it(mdp.transitions, r); it; ++it) {
         if (it.value() <= 0.0) continue;
         next[static_cast<size_t>(it.col())] = 1;
-        ends = ends || (mdp.is_terminal(static_cast<int>(it.col())) && end[it.col()] > 0.0);
+        ends = ends || (mdp.is_terminal(static_cast<int>(it.col())) && end[it.col()] > kNegInf);
       }
     }
     if (last && t.ends_in_terminal && !ends) {
@@ -91,7 +98,10 @@ std::optional<ImpossibleObservation> check(const Mdp& mdp, const ObservedTraject
           index, step, -1,
           t.end_state >= 0 ? "the trajectory ends in terminal state " + std::to_string(t.end_state) +
                                  ", but no state-action it can be in leads to it"
-                           : "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
+          : !t.end_symbols.empty()
+              ? "the trajectory ends in a terminal state whose end symbols the end sensor can give (prior "
+                "end_alpha above 0), but no state-action it can be in leads to one"
+              : "the trajectory ends in a terminal state, but no state-action it can be in leads to one"};
     }
     reach.swap(next);
   }

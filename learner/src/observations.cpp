@@ -27,6 +27,10 @@ std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories) {
     h.add(t.weights.data(), t.weights.size() * sizeof(double));
     h.add(static_cast<unsigned char>(t.ends_in_terminal));
     if (t.end_state >= 0) h.add(static_cast<std::int64_t>(t.end_state));  // digests without it unchanged
+    if (!t.end_symbols.empty()) {
+      h.add(static_cast<std::uint64_t>(t.end_symbols.size()));
+      h.add(t.end_symbols.data(), t.end_symbols.size() * sizeof(int));
+    }
     if (!t.contexts.empty()) {
       h.add(static_cast<std::uint64_t>(t.contexts.size()));
       h.add(t.contexts.data(), t.contexts.size() * sizeof(int));
@@ -35,17 +39,40 @@ std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories) {
   return h.value();
 }
 
-Eigen::VectorXd end_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory) {
-  if (!trajectory.ends_in_terminal) return Eigen::VectorXd::Ones(mdp.num_states);
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(mdp.num_states);
-  if (trajectory.end_state >= 0) {
-    if (trajectory.end_state >= mdp.num_states || !mdp.is_terminal(trajectory.end_state)) {
-      throw InputError("end_state", std::to_string(trajectory.end_state) + " is not a terminal state");
-    }
-    out[trajectory.end_state] = 1.0;
-    return out;
+Eigen::VectorXd end_log_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory,
+                                 const Eigen::MatrixXd& end_model) {
+  const int S = mdp.num_states;
+  if (!trajectory.ends_in_terminal) {
+    if (!trajectory.end_symbols.empty())
+      throw InputError("end_symbols", "given, but the trajectory does not end in a terminal state");
+    return Eigen::VectorXd::Zero(S);
   }
-  for (int s = 0; s < mdp.num_states; ++s) out[s] = mdp.is_terminal(s) ? 1.0 : 0.0;
+  const int seen = trajectory.end_state;
+  if (seen >= 0 && (seen >= S || !mdp.is_terminal(seen)))
+    throw InputError("end_state", std::to_string(seen) + " is not a terminal state");
+  if (!trajectory.end_symbols.empty() && end_model.rows() != S)
+    throw InputError("end_symbols", "given, but there is no end sensor (no end_alpha)");
+  for (int w : trajectory.end_symbols) {
+    if (w < 0 || w >= end_model.cols())
+      throw InputError("end_symbols", std::to_string(w) + " is not a symbol of the end sensor (it has " +
+                                          std::to_string(end_model.cols()) + ")");
+  }
+  Eigen::VectorXd out = Eigen::VectorXd::Constant(S, kNegInf);
+  for (int s = 0; s < S; ++s) {
+    if (!mdp.is_terminal(s) || (seen >= 0 && s != seen)) continue;
+    double sum = 0.0;
+    for (int w : trajectory.end_symbols) sum += std::log(end_model(s, w));  // log 0 = -inf: impossible there
+    out[s] = sum;
+  }
+  return out;
+}
+
+Eigen::VectorXd shifted_exp(const Eigen::VectorXd& v, double* top) {
+  const double m = v.size() > 0 ? v.maxCoeff() : kNegInf;
+  if (top) *top = m;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
+  if (m == kNegInf) return out;
+  for (Eigen::Index i = 0; i < v.size(); ++i) out[i] = v[i] == kNegInf ? 0.0 : std::exp(v[i] - m);
   return out;
 }
 
@@ -67,6 +94,7 @@ ObservedTrajectory merge_identical_observations(const ObservedTrajectory& trajec
   ObservedTrajectory out;
   out.ends_in_terminal = trajectory.ends_in_terminal;
   out.end_state = trajectory.end_state;
+  out.end_symbols = trajectory.end_symbols;
   const Eigen::Index sources = trajectory.eta.cols();
   std::vector<int> rows;
   std::vector<double> weights;

@@ -32,6 +32,7 @@ inline constexpr TupleList kFeatureTuple{4, "[state, action, feature, value]", 3
 inline constexpr TupleList kImpossibleTuple{2, "[state, action]"};
 inline constexpr TupleList kSubjectAlphaTuple{4, "[state, action, symbol, alpha]"};
 inline constexpr TupleList kConfounderAlphaTuple{3, "[confounder, symbol, alpha]"};
+inline constexpr TupleList kEndAlphaTuple{3, "[terminal_state, symbol, alpha]"};
 inline constexpr TupleList kTruthTuple{2, "[state, action]"};
 inline constexpr TupleList kSubjectObservationTuple{4, "[state, action, symbol, probability]"};
 inline constexpr TupleList kConfounderObservationTuple{3, "[element, symbol, probability]"};

@@ -95,7 +95,9 @@ const JsonShape& mdp_shape() {
 const JsonShape& observation_model_shape() {
   static const JsonShape subject = JsonShape::list(kSubjectAlphaTuple),
                          confounder = JsonShape::list(kConfounderAlphaTuple),
-                         unlisted = JsonShape::object({{"eta", nullptr}});
+                         unlisted = JsonShape::object({{"eta", nullptr}}), end_alpha = JsonShape::list(kEndAlphaTuple),
+                         end_sensor = JsonShape::object(
+                             {{"num_symbols", nullptr}, {"alpha", &end_alpha}, {"alpha_default", nullptr}});
   static const JsonShape shape = JsonShape::object({{"num_symbols", nullptr},
                                                     {"num_confounders", nullptr},
                                                     {"subject_alpha", &subject},
@@ -108,7 +110,8 @@ const JsonShape& observation_model_shape() {
                                                     {"prior_strength", nullptr},
                                                     {"learn_eta", nullptr},
                                                     {"eta_prior_strength", nullptr},
-                                                    {"unlisted_source", &unlisted}});
+                                                    {"unlisted_source", &unlisted},
+                                                    {"end_sensor", &end_sensor}});
   return shape;
 }
 
@@ -121,8 +124,12 @@ const JsonShape& step_shape() {
 
 const JsonShape& trajectory_shape() {
   static const JsonShape steps = JsonShape::list(step_shape()), truth = JsonShape::list(kTruthTuple);
-  static const JsonShape shape =
-      JsonShape::object({{"steps", &steps}, {"truth", &truth}, {"ends_in_terminal", nullptr}, {"controlled", nullptr}});
+  static const JsonShape shape = JsonShape::object({{"steps", &steps},
+                                                    {"truth", &truth},
+                                                    {"ends_in_terminal", nullptr},
+                                                    {"end_state", nullptr},
+                                                    {"end_symbols", nullptr},
+                                                    {"controlled", nullptr}});
   return shape;
 }
 
@@ -409,6 +416,40 @@ void check_alpha_totals(const JsonNode& node, const Mdp& mdp, const ObservationP
   }
 }
 
+// The end sensor (docs/MODEL.md "Sensors that see the end"): its alphabet and the
+// Dirichlet prior of O_end(s) for each terminal state s (alpha_default, 1 when absent, then
+// the entries listed); the other states' rows stay 0 (never used).
+void read_end_sensor(const JsonNode& node, const Mdp& mdp, ObservationPrior& prior) {
+  if (std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) == mdp.terminal.end())
+    node.fail("is given, but the MDP has no terminal states for it to see");
+  const JsonNode count = node.at("num_symbols");
+  const int K = static_cast<int>(count.as_int(1, 1 << 16));
+  if (static_cast<long long>(mdp.num_states) * K > kMaxFeatureCells)
+    count.fail("num_states * num_symbols is more than the " + std::to_string(kMaxFeatureCells) + " cells allowed");
+  double fallback = 1.0;
+  if (auto d = node.find("alpha_default")) fallback = d->as_number(0.0, 1e300);
+  prior.end_alpha = Eigen::MatrixXd::Zero(mdp.num_states, K);
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s)) prior.end_alpha.row(s).setConstant(fallback);
+  }
+  if (auto list = node.find("alpha")) {
+    for (size_t i = 0; i < list->size(); ++i) {
+      const JsonNode e = (*list)[i];
+      expect_tuple(e, kEndAlphaTuple);
+      const int s = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
+      if (!mdp.is_terminal(s))
+        e[0].fail("state " + std::to_string(s) + " is not terminal; the end sensor sees only those");
+      const int w = static_cast<int>(e[1].as_int(0, K - 1));
+      prior.end_alpha(s, w) = e[2].as_number(0.0, 1e300);
+    }
+  }
+  for (int s = 0; s < mdp.num_states; ++s) {
+    if (mdp.is_terminal(s) && !(prior.end_alpha.row(s).sum() > 0.0))
+      (node.has("alpha") ? node.at("alpha") : node)
+          .fail("alpha of terminal state " + std::to_string(s) + " sums to 0; set a positive entry or alpha_default");
+  }
+}
+
 // How the prior is learned: learn, update, c, learn_eta, eta_prior_strength,
 // unlisted_source and prior_strength.
 void read_learning_options(const JsonNode& node, ObservationPrior& prior, std::vector<std::string>* warnings) {
@@ -465,6 +506,7 @@ ObservationPrior read_observation_model(const JsonNode& node, const Mdp& mdp, st
   }
   read_alphas(node, mdp, prior);
   check_alpha_totals(node, mdp, prior);
+  if (auto end = node.find("end_sensor")) read_end_sensor(*end, mdp, prior);
   read_learning_options(node, prior, warnings);
   return prior;
 }
@@ -632,6 +674,37 @@ Trajectory read_truth(const JsonNode& node, const Mdp& mdp) {
   return truth;
 }
 
+// What was seen of how a trajectory ended: "end_state" (the terminal state entered, known
+// for certain) and "end_symbols" (an end sensor's reports of it). Both need "steps" (they
+// are observations) and a trajectory that ended in a terminal state.
+void read_end(const JsonNode& item, const Problem& problem, DemonstratedTrajectory& trajectory) {
+  const std::optional<JsonNode> state = item.find("end_state"), symbols = item.find("end_symbols");
+  for (const auto& node : {state, symbols}) {
+    if (!node) continue;
+    if (!trajectory.steps) node->fail("needs \"steps\": it is what was observed of the end");
+    if (!trajectory.ends_in_terminal) node->fail("is given, but the trajectory does not end in a terminal state");
+  }
+  if (state) {
+    const int s = static_cast<int>(state->as_int(0, problem.mdp.num_states - 1));
+    if (!problem.mdp.is_terminal(s)) state->fail("state " + std::to_string(s) + " is not terminal");
+    if (trajectory.truth) {
+      const StateAction last = trajectory.truth->back();
+      if (!(problem.mdp.transitions.coeff(problem.mdp.pair(last.state, last.action), s) > 0.0))
+        state->fail("state " + std::to_string(s) + " cannot follow the truth's last step " +
+                    pair_name(last.state, last.action));
+    }
+    trajectory.steps->end_state = s;
+  }
+  if (symbols) {
+    const int K = problem.observation_model ? problem.observation_model->num_end_symbols() : 0;
+    if (K == 0) symbols->fail("is given, but observation_model has no \"end_sensor\"");
+    if (trajectory.controlled)
+      symbols->fail("a controlled run's end reports are not used (give them in a demonstration)");
+    for (size_t k = 0; k < symbols->size(); ++k)
+      trajectory.steps->end_symbols.push_back(static_cast<int>((*symbols)[k].as_int(0, K - 1)));
+  }
+}
+
 Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warnings) {
   const JsonNode root(doc, "");
   if (!doc.is_object()) root.fail("the problem file must be a JSON object");
@@ -676,6 +749,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
       }
     }
     if (!trajectory.steps && !trajectory.truth) item.fail("has neither \"steps\" nor \"truth\"");
+    read_end(item, problem, trajectory);
     if (auto c = item.find("controlled")) {
       trajectory.controlled = c->as_bool();
       if (trajectory.controlled && (!trajectory.steps || !trajectory.truth)) {
@@ -802,6 +876,14 @@ OrderedJson observation_model_to_json(const ObservationPrior& p, const Mdp& mdp)
   } else {
     om["prior_strength"] = p.strength;
   }
+  if (p.num_end_symbols() > 0) {
+    J alpha = J::array();
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (!mdp.is_terminal(s)) continue;
+      for (int w = 0; w < p.num_end_symbols(); ++w) alpha.push_back({s, w, p.end_alpha(s, w)});
+    }
+    om["end_sensor"] = J{{"num_symbols", p.num_end_symbols()}, {"alpha", alpha}};
+  }
   return om;
 }
 
@@ -814,8 +896,8 @@ OrderedJson trajectory_to_json(const DemonstratedTrajectory& trajectory, bool ha
   if (trajectory.controlled) item["controlled"] = true;
   if (trajectory.steps) {
     const ObservedTrajectory& o = *trajectory.steps;
-    // Problem files cannot say which terminal state was seen yet (issue 33): not silently less.
-    if (o.end_state >= 0) throw InputError("end_state", "problem files cannot carry the terminal state seen yet");
+    if (o.end_state >= 0) item["end_state"] = o.end_state;
+    if (!o.end_symbols.empty()) item["end_symbols"] = o.end_symbols;
     J steps = J::array();
     for (int t = 0; t < o.length(); ++t) {
       J observations = J::array();

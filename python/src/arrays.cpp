@@ -203,6 +203,8 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
   for (size_t i = 0; i < trajectories.size(); ++i) {
     const ObservedTrajectory& t = trajectories[i];
     if (t.end_state >= 0) throw InputError("end_state", "the flat form cannot carry the terminal state seen yet");
+    if (!t.end_symbols.empty())
+      throw InputError("end_symbols", "the flat form cannot carry an end sensor's reports yet");
     le(static_cast<py::ssize_t>(i)) = t.length();
     terminal.push_back(t.ends_in_terminal);
     for (int s = 0; s < t.length(); ++s) {

@@ -59,6 +59,7 @@ hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count
   // trajectory_t has no field for the terminal state seen yet: a worker would learn from
   // less than the data say, so such data are not sent (issue 33).
   if (t.end_state >= 0) throw InputError("end_state", "the bus cannot carry the terminal state seen yet");
+  if (!t.end_symbols.empty()) throw InputError("end_symbols", "the bus cannot carry an end sensor's reports yet");
   hbirl::trajectory_t m{};
   m.utime = 0;  // a data set, not a moment of the demonstration
   m.block_digest = static_cast<std::int64_t>(block_digest);

@@ -37,7 +37,7 @@ TEST(GridworldScenario, SourceAccuracyScoresEveryObservation) {
       Rng rng(5);
       assign_eta(s.observations, 1 + confounders, kind, rng);
       const SoftSolution policy = soft_value_iteration(s.task.mdp, s.task.mdp.reward(s.task.true_weights));
-      const ObservationModel model{s.subject_o, s.confounder_o};
+      const ObservationModel model{s.subject_o, s.confounder_o, {}};
       const double merged = source_accuracy(s.task.mdp, policy, model, s.observations);
       EXPECT_EQ(merged, raw_source_accuracy(s.task.mdp, policy, model, s.observations)) << confounders;
       EXPECT_GT(merged, 0.0);

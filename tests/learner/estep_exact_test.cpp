@@ -13,6 +13,25 @@
 namespace hbirl {
 namespace {
 
+// The exact posterior against brute-force enumeration's; false when the truth has
+// probability 0 (then the engine must say so too).
+bool expect_matches_enumeration(const testing::BruteForce& truth, const TrajectoryPosterior& post,
+                                const ObservedTrajectory& trajectory, int trial) {
+  if (truth.likelihood == 0.0) {
+    EXPECT_EQ(post.log_likelihood, -std::numeric_limits<double>::infinity()) << "trial " << trial;
+    return false;
+  }
+  EXPECT_NEAR(post.log_likelihood, std::log(truth.likelihood), 1e-9) << "trial " << trial;
+  EXPECT_LT((post.marginals - truth.marginals).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+  if (trajectory.num_observations() > 0) {
+    EXPECT_LT((post.sources - truth.sources).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+  }
+  if (trajectory.ends_in_terminal) {
+    EXPECT_LT((post.end_states - truth.end_states).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+  }
+  return true;
+}
+
 // The terminal state a trajectory entered, when seen (ObservedTrajectory::end_state):
 // the posterior conditions on entering that one, as brute-force enumeration says, and the
 // likelihoods of the two ends add up to that of an unseen end.
@@ -28,18 +47,12 @@ TEST(ExactEngine, SeenEndStateEqualsBruteForceEnumeration) {
       p.trajectory.end_state = end;
       const testing::BruteForce truth = testing::brute_force(p.mdp, p.policy, p.model, p.trajectory);
       const TrajectoryPosterior post = engine.posterior(p.policy, p.model, p.trajectory);
-      if (truth.likelihood == 0.0) {
-        EXPECT_EQ(post.log_likelihood, -std::numeric_limits<double>::infinity()) << "trial " << trial;
+      if (!expect_matches_enumeration(truth, post, p.trajectory, trial)) {
         ++impossible;
         continue;
       }
       ++compared;
       sum += truth.likelihood;
-      EXPECT_NEAR(post.log_likelihood, std::log(truth.likelihood), 1e-9) << "trial " << trial << " end " << end;
-      EXPECT_LT((post.marginals - truth.marginals).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
-      if (p.trajectory.num_observations() > 0) {
-        EXPECT_LT((post.sources - truth.sources).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
-      }
     }
     if (sum > 0.0) {
       EXPECT_NEAR(std::log(sum), unseen, 1e-9) << "trial " << trial;
@@ -47,6 +60,59 @@ TEST(ExactEngine, SeenEndStateEqualsBruteForceEnumeration) {
   }
   EXPECT_GE(compared, 40);  // (an end no last pair can reach is rare here: `impossible` counts them)
   EXPECT_LT(impossible, 40);
+}
+
+// An end sensor's reports (end_symbols under O_end) against brute-force enumeration: the
+// likelihood, the marginals, the sources, the posterior of the state entered and the end
+// sensor's expected counts, by the per-observation and the by-kind accumulation. One
+// report's likelihoods, summed over the symbols it could have been, are the unreported end's.
+TEST(ExactEngine, EndSymbolsEqualBruteForceEnumeration) {
+  Rng rng(777);
+  int compared = 0, impossible = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    const int K = 2 + trial % 2;
+    p.model.end = testing::random_distributions(p.mdp.num_states, K, rng);
+    if (trial % 5 == 0) {  // a symbol one terminal state never gives
+      p.model.end(2 + trial % 2, 0) = 0.0;
+      p.model.end.row(2 + trial % 2) /= p.model.end.row(2 + trial % 2).sum();
+    }
+    ExactEngine engine(p.mdp);
+    const double unreported = engine.posterior(p.policy, p.model, p.trajectory).log_likelihood;
+    double one_report = 0.0;
+    for (int w = 0; w < K; ++w) {
+      p.trajectory.end_symbols = {w};
+      one_report += std::exp(engine.posterior(p.policy, p.model, p.trajectory).log_likelihood);
+    }
+    EXPECT_NEAR(std::log(one_report), unreported, 1e-9) << "trial " << trial;
+    p.trajectory.end_symbols.clear();
+    for (int i = 1 + trial % 3; i > 0; --i) p.trajectory.end_symbols.push_back(rng.uniform_int(K));
+    const testing::BruteForce truth = testing::brute_force(p.mdp, p.policy, p.model, p.trajectory);
+    const TrajectoryPosterior post = engine.posterior(p.policy, p.model, p.trajectory);
+    if (!expect_matches_enumeration(truth, post, p.trajectory, trial)) {
+      ++impossible;
+      continue;
+    }
+    ++compared;
+    EStepStatistics stats = EStepStatistics::zero(p.mdp.num_pairs(), p.model.num_confounders(), p.model.num_symbols());
+    engine.accumulate(p.policy, p.model, p.trajectory, stats);
+    EXPECT_NEAR(stats.log_likelihood, truth.stats.log_likelihood, 1e-9);
+    EXPECT_LT((stats.counts - truth.stats.counts).cwiseAbs().maxCoeff(), 1e-9);
+    ASSERT_EQ(stats.alpha_dot.end.rows(), p.mdp.num_states);
+    EXPECT_LT((stats.alpha_dot.end - truth.stats.alpha_dot.end).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+    EXPECT_NEAR(stats.alpha_dot.end.sum(), static_cast<double>(p.trajectory.end_symbols.size()), 1e-9);
+    // By kinds: the same sums.
+    const std::vector<ObservedTrajectory> one{p.trajectory};
+    const ObservationKinds kinds = *observation_kinds(one, 100);
+    EStepStatistics by_kind =
+        EStepStatistics::zero(p.mdp.num_pairs(), p.model.num_confounders(), p.model.num_symbols());
+    accumulate_by_kind(engine, p.policy, p.model, one, 0, 1, kinds, kind_emissions(p.model, kinds), -1, by_kind);
+    EXPECT_NEAR(by_kind.log_likelihood, truth.stats.log_likelihood, 1e-9);
+    EXPECT_LT((by_kind.alpha_dot.end - truth.stats.alpha_dot.end).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((by_kind.alpha_dot.subject - truth.stats.alpha_dot.subject).cwiseAbs().maxCoeff(), 1e-9);
+  }
+  EXPECT_GE(compared, 30);
+  RecordProperty("impossible", impossible);
 }
 
 TEST(ExactEngine, EqualsBruteForceEnumeration) {
@@ -164,7 +230,10 @@ Reference reference_posterior(const Mdp& mdp, const SoftSolution& policy, const 
     for (int r = 0; r < P; ++r) {
       std::vector<double> out;
       for (int s2 = 0; s2 < mdp.num_states; ++s2) {
-        if (mdp.is_terminal(s2) && (tr.end_state < 0 || s2 == tr.end_state)) out.push_back(log_t(r, s2));
+        if (!mdp.is_terminal(s2) || (tr.end_state >= 0 && s2 != tr.end_state)) continue;
+        double seen = log_t(r, s2);  // and what the end sensor reported of it
+        for (int w : tr.end_symbols) seen += std::log(model.end(s2, w));
+        out.push_back(seen);
       }
       lb[static_cast<size_t>(T) - 1][static_cast<size_t>(r)] = reference_lse(out);
     }
@@ -308,7 +377,7 @@ TEST(ExactEngine, MassLostInLinearSpaceIsNoticed) {
 // -- it must agree with the plain log-space reference, impossible trajectories included.
 TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
   Rng rng(4242);
-  int scaled = 0, fallback = 0, impossible = 0, seen_end_fallback = 0;
+  int scaled = 0, fallback = 0, impossible = 0, seen_end_fallback = 0, end_sensed = 0, end_sensed_fallback = 0;
   for (int trial = 0; trial < 400; ++trial) {
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = 3 + trial % 6;
@@ -349,11 +418,23 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
     }
     tr.ends_in_terminal = o.terminal > 0 && trial % 4 == 0;
     if (o.terminal == 2 && trial % 16 == 0) tr.end_state = o.states - 1 - rng.uniform_int(2);  // which one was seen
+    if (tr.ends_in_terminal && trial % 3 == 0 && tr.end_state < 0) {
+      // An end sensor whose reports are hundreds of nats apart between the terminal states
+      // (its own stream: the other trials' draws stay as they were).
+      Rng end_rng(static_cast<std::uint64_t>(trial));
+      model.end = testing::random_distributions(mdp.num_states, symbols, end_rng);
+      for (Eigen::Index i = 0; i < model.end.size(); ++i) {
+        if (end_rng.uniform() < 0.4) model.end.data()[i] *= std::pow(10.0, -end_rng.uniform(0.0, 300.0));
+      }
+      for (int i = 1 + end_rng.uniform_int(4); i > 0; --i) tr.end_symbols.push_back(end_rng.uniform_int(symbols));
+    }
     const Reference ref = reference_posterior(mdp, policy, model, tr);
     ExactEngine engine(mdp);
     const TrajectoryPosterior post = engine.posterior(policy, model, tr);
     (engine.last_passes_scaled() ? scaled : fallback) += 1;
     seen_end_fallback += tr.end_state >= 0 && !engine.last_passes_scaled() && ref.log_likelihood > -INFINITY;
+    end_sensed += !tr.end_symbols.empty() && ref.log_likelihood > -INFINITY;
+    end_sensed_fallback += !tr.end_symbols.empty() && !engine.last_passes_scaled() && ref.log_likelihood > -INFINITY;
     if (ref.log_likelihood == -INFINITY) {
       ++impossible;
       EXPECT_EQ(post.log_likelihood, -INFINITY) << "trial " << trial;
@@ -371,6 +452,8 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
   EXPECT_GE(scaled, 50);
   EXPECT_GE(fallback, 10);
   EXPECT_GE(seen_end_fallback, 1);
+  EXPECT_GE(end_sensed, 10);  // possible trajectories with an end sensor's reports
+  EXPECT_GE(end_sensed_fallback, 1);
   RecordProperty("scaled", scaled);
   RecordProperty("fallback", fallback);
   RecordProperty("impossible", impossible);

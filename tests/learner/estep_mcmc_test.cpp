@@ -93,6 +93,41 @@ TEST(McmcEngine, AgreesWithExactWhenTheEndStateIsSeen) {
   EXPECT_GE(informative, 2);
 }
 
+// With an end sensor's reports (end_symbols), the paper's MCMC agrees with the exact engine:
+// the marginals, the sources and the end sensor's expected counts.
+TEST(McmcEngine, AgreesWithExactOnAnEndSensorsReports) {
+  Rng rng(515);
+  McmcOptions options = sweeps(20000, 1000, 2);
+  options.block = McmcOptions::Block::kAlways;
+  int compared = 0, informative = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    p.model.end = testing::random_distributions(p.mdp.num_states, 2, rng);
+    const RowMatrix unreported = ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).marginals;
+    p.trajectory.end_symbols = {trial % 2, trial % 2};
+    if (!possible(p)) continue;
+    const RowMatrix reported = ExactEngine(p.mdp).posterior(p.policy, p.model, p.trajectory).marginals;
+    informative += (reported - unreported).cwiseAbs().maxCoeff() > 2 * kTolerance;
+    const Agreement a = compare(p, options, 700 + static_cast<std::uint64_t>(trial));
+    EXPECT_LT(a.marginals, kTolerance) << "trial " << trial;
+    EXPECT_LT(a.sources, kTolerance) << "trial " << trial;
+    McmcEngine mcmc(p.mdp, options);
+    EStepStatistics sampled =
+        EStepStatistics::zero(p.mdp.num_pairs(), p.model.num_confounders(), p.model.num_symbols());
+    EStepStatistics exact = sampled;
+    Rng sampler(900 + static_cast<std::uint64_t>(trial));
+    mcmc.accumulate(p.policy, p.model, p.trajectory, sampler, sampled);
+    ExactEngine(p.mdp).accumulate(p.policy, p.model, p.trajectory, exact);
+    ASSERT_EQ(sampled.alpha_dot.end.rows(), p.mdp.num_states);
+    // Two reports: each entry is twice a probability, so twice the tolerance.
+    EXPECT_LT((sampled.alpha_dot.end - exact.alpha_dot.end).cwiseAbs().maxCoeff(), 2 * kTolerance) << "trial " << trial;
+    EXPECT_NEAR(sampled.alpha_dot.end.sum(), 2.0, 1e-9);
+    ++compared;
+  }
+  EXPECT_GE(compared, 5);
+  EXPECT_GE(informative, 2);
+}
+
 // The paper's single-site updates alone (no block move), where they are irreducible:
 // every state reachable from every (s, a).
 TEST(McmcEngine, SingleSiteUpdatesAloneAgreeOnDenseTransitions) {
@@ -201,11 +236,7 @@ TEST(McmcEngine, DiagnosticsFlagTooFewSamples) {
 TEST(McmcEngine, DiagnosticsSameBitsWhateverTheThreadCount) {
   Rng rng(5);
   const testing::TinyProblem p = testing::tiny_problem(4, rng);
-  ObservationPrior prior;
-  prior.num_symbols = p.model.num_symbols();
-  prior.num_confounders = p.model.num_confounders();
-  prior.subject_alpha = p.model.subject;  // normalised rows: the Dirichlet mean is the model
-  prior.confounder_alpha = p.model.confounders;
+  ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
   prior.learn = false;
   McmcOptions mcmc = sweeps(200, 20, 4);
   mcmc.block = McmcOptions::Block::kAlways;

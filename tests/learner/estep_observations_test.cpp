@@ -160,11 +160,7 @@ TEST(ObservationEStep, KeepsTheSeenEnd) {
   int differ = 0;
   for (int trial = 0; trial < 12; ++trial) {
     testing::TinyProblem p = testing::two_exits(trial, rng);
-    ObservationPrior prior;
-    prior.num_symbols = static_cast<int>(p.model.subject.cols());
-    prior.num_confounders = p.model.num_confounders();
-    prior.subject_alpha = p.model.subject;
-    prior.confounder_alpha = p.model.confounders;
+    ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
     prior.learn = false;
     ExactEngine engine(p.mdp);
     const double unseen = engine.posterior(p.policy, p.model, p.trajectory).log_likelihood;
@@ -178,18 +174,66 @@ TEST(ObservationEStep, KeepsTheSeenEnd) {
   }
   EXPECT_GE(differ, 5);
   testing::TinyProblem p = testing::two_exits(0, rng);
-  ObservationPrior prior;
-  prior.num_symbols = static_cast<int>(p.model.subject.cols());
-  prior.num_confounders = p.model.num_confounders();
-  prior.subject_alpha = p.model.subject;
-  prior.confounder_alpha = p.model.confounders;
-  p.trajectory.end_state = 0;  // not terminal
+  ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
+  p.trajectory.end_state = 0;                           // not terminal
   try {
     ObservationEStep(p.mdp, {p.trajectory}, prior, {});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "demonstration[0].end_state");
   }
+}
+
+// The end sensor is learned as the elements are (docs/MODEL.md "Sensors that see the end"):
+// one refinement of the posterior update is its prior plus the exact engine's expected end
+// counts under the prior's mean; reports the model cannot read are named at construction.
+TEST(ObservationEStep, LearnsTheEndSensor) {
+  Rng rng(61);
+  int learned = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    testing::TinyProblem p = testing::two_exits(trial, rng);
+    ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
+    prior.end_alpha = 1.0 + 3.0 * testing::random_distributions(p.mdp.num_states, 2, rng).array();
+    prior.automatic_strength = false;
+    prior.learn_eta = false;
+    p.trajectory.end_symbols = {trial % 2, 1, 0};
+    const ObservationModel start = dirichlet_mean(prior);
+    ExactEngine engine(p.mdp);
+    EStepStatistics direct = EStepStatistics::zero(p.mdp.num_pairs(), start.num_confounders(), start.num_symbols());
+    engine.accumulate(p.policy, start, p.trajectory, direct);
+    if (direct.impossible > 0) continue;
+    ObservationEStepOptions options;
+    options.max_alpha_iterations = 1;
+    const ObservationEStep estep(p.mdp, {p.trajectory}, prior, options);
+    EStepState state = estep.initial_state(1);
+    const EStepResult r = estep.expect(p.policy, state);
+    EXPECT_NEAR(r.log_likelihood, direct.log_likelihood, 1e-9) << "trial " << trial;
+    const Eigen::MatrixXd expected = prior.end_alpha + direct.alpha_dot.end;
+    EXPECT_LT((state.alpha->end_alpha - expected).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+    EXPECT_NEAR(state.alpha->end_alpha.sum() - prior.end_alpha.sum(), 3.0, 1e-9);
+    ++learned;
+  }
+  EXPECT_GE(learned, 8);
+  testing::TinyProblem p = testing::two_exits(0, rng);
+  ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
+  auto refused = [&](const ObservationPrior& with, const std::string& field) {
+    try {
+      ObservationEStep(p.mdp, {p.trajectory}, with, {});
+      ADD_FAILURE() << field;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), field) << e.what();
+    }
+  };
+  p.trajectory.end_symbols = {0};
+  refused(prior, "demonstration[0].end_symbols");  // no end sensor
+  prior.end_alpha = Eigen::MatrixXd::Ones(p.mdp.num_states, 2);
+  p.trajectory.end_symbols = {2};
+  refused(prior, "demonstration[0].end_symbols");  // not a symbol of it
+  p.trajectory.end_symbols = {1};
+  p.trajectory.ends_in_terminal = false;
+  refused(prior, "demonstration[0].end_symbols");  // the trajectory was cut off
+  prior.end_alpha = Eigen::MatrixXd::Ones(2, 2);
+  refused(prior, "end_alpha");
 }
 
 void expect_same_statistics(const EStepStatistics& a, const EStepStatistics& b, const std::string& what) {
@@ -231,11 +275,7 @@ TEST(ObservationEStep, KindTableAgreesOnTinyProblems) {
   for (int trial = 0; trial < 40; ++trial) {
     const testing::TinyProblem p = testing::tiny_problem(trial, rng);
     if (p.trajectory.num_observations() == 0) continue;
-    ObservationPrior prior;
-    prior.num_symbols = p.model.num_symbols();
-    prior.num_confounders = p.model.num_confounders();
-    prior.subject_alpha = p.model.subject;  // normalised rows: the Dirichlet mean is the model
-    prior.confounder_alpha = p.model.confounders;
+    ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
     prior.learn = false;
     const std::vector<ObservedTrajectory> data(8, p.trajectory);
     ObservationEStepOptions per_observation;
@@ -468,8 +508,9 @@ TEST(ObservationEStep, HeldOutLikelihoodByHand) {
     others.subject -= own[i].alpha_dot.subject;
     others.confounders -= own[i].alpha_dot.confounders;
     const AlphaCounts posterior = dirichlet_posterior(g.prior, g.prior.strength, others);
-    held_out += engine.log_likelihood(
-        policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)}, estep.trajectories()[i]);
+    held_out +=
+        engine.log_likelihood(policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders), {}},
+                              estep.trajectories()[i]);
   }
   EXPECT_NEAR(choice->current_score, held_out, 1e-8 * std::abs(held_out));
   EXPECT_GE(choice->best_score, choice->current_score);
@@ -608,11 +649,7 @@ TEST(ObservationEStep, AddUnlistedSourceAddsOneFlatSource) {
   Rng rng(8);
   testing::TinyProblem p = testing::tiny_problem(3, rng);
   while (p.trajectory.num_observations() == 0) p = testing::tiny_problem(3, rng);
-  ObservationPrior prior;
-  prior.num_symbols = p.model.num_symbols();
-  prior.num_confounders = p.model.num_confounders();
-  prior.subject_alpha = p.model.subject;
-  prior.confounder_alpha = p.model.confounders;
+  ObservationPrior prior = testing::prior_at(p.model);  // its mean is the model
   prior.unlisted_eta = 0.25;
   std::vector<ObservedTrajectory> data{p.trajectory};
   add_unlisted_source(prior, data);

@@ -143,7 +143,7 @@ TEST(ObservationModel, PosteriorMeanMaximisesTheMapObjective) {
   for (Eigen::Index i = 0; i < dot.subject.size(); ++i) dot.subject.data()[i] = 10 * rng.uniform();
   for (Eigen::Index i = 0; i < dot.confounders.size(); ++i) dot.confounders.data()[i] = 30 * rng.uniform();
   const AlphaCounts posterior = dirichlet_posterior(prior, alpha.strength, dot);
-  const ObservationModel best{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders)};
+  const ObservationModel best{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders), {}};
   auto objective = [&](const ObservationModel& o) {
     double f = 0.0;
     for (Eigen::Index i = 0; i < o.subject.size(); ++i) f += dot.subject.data()[i] * std::log(o.subject.data()[i]);

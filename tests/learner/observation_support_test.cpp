@@ -29,7 +29,7 @@ Eigen::MatrixXd sparse_alpha(int rows, int symbols, Rng& rng) {
 // states, impossible actions, deterministic moves, zeros in alpha and in eta.
 TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
   Rng rng(17);
-  int impossible = 0, possible = 0, seen_ends = 0, only_by_end = 0;
+  int impossible = 0, possible = 0, seen_ends = 0, only_by_end = 0, reported_ends = 0, only_by_report = 0;
   for (int trial = 0; trial < 400; ++trial) {
     testing::RandomMdpOptions o = testing::varied_options(trial);
     o.states = std::min(o.states, 4);
@@ -68,12 +68,20 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
     t.ends_in_terminal = o.terminal > 0 && rng.uniform() < 0.5;
     // Now and then the terminal state entered was seen: one of them (the last o.terminal states).
     if (t.ends_in_terminal && rng.uniform() < 0.5) t.end_state = o.states - 1 - rng.uniform_int(o.terminal);
+    // Now and then an end sensor reported on it, with zeros in its prior (its own stream).
+    Rng end_rng(static_cast<std::uint64_t>(trial));
+    if (t.ends_in_terminal && t.end_state < 0 && end_rng.uniform() < 0.6) {
+      prior.end_alpha = sparse_alpha(mdp.num_states, 2, end_rng);
+      for (int k = 1 + end_rng.uniform_int(2); k > 0; --k) t.end_symbols.push_back(end_rng.uniform_int(2));
+    }
     ObservationModel model;
     model.subject = prior.subject_alpha.array().colwise() / prior.subject_alpha.rowwise().sum().array();
     model.confounders = prior.confounder_alpha;
     if (prior.num_confounders > 0) {
       model.confounders = prior.confounder_alpha.array().colwise() / prior.confounder_alpha.rowwise().sum().array();
     }
+    if (prior.end_alpha.size() > 0)
+      model.end = prior.end_alpha.array().colwise() / prior.end_alpha.rowwise().sum().array();
     const SoftSolution policy = soft_value_iteration(mdp, Eigen::VectorXd::Zero(mdp.num_pairs()));  // full support
     const bool zero = brute_force(mdp, policy, model, t).likelihood == 0.0;
     const auto found = first_impossible_observation(mdp, {t}, prior);
@@ -85,10 +93,19 @@ TEST(ObservationSupport, ImpossibleExactlyWhenTheBruteForceLikelihoodIsZero) {
       unseen.end_state = -1;
       only_by_end += brute_force(mdp, policy, model, unseen).likelihood > 0.0;
     }
+    reported_ends += !t.end_symbols.empty();
+    if (zero && !t.end_symbols.empty()) {  // impossible only because of what the end sensor said?
+      ObservedTrajectory unreported = t;
+      unreported.end_symbols.clear();
+      only_by_report += brute_force(mdp, policy, model, unreported).likelihood > 0.0;
+    }
   }
   // Both kinds were met often enough for the agreement to mean something.
   EXPECT_GT(seen_ends, 20);
   EXPECT_GE(only_by_end, 1);
+  EXPECT_GT(reported_ends, 20);
+  EXPECT_GE(only_by_report, 1);
+  RecordProperty("only_by_report", only_by_report);
   EXPECT_GT(impossible, 40);
   EXPECT_GT(possible, 40);
 }

@@ -41,7 +41,7 @@ TinyData tiny_data(int features, std::uint64_t seed) {
   TinyData d{testing::random_mdp(o, rng), {}, {}, {}};
   const Eigen::VectorXd theta = testing::random_vector(features, rng, 1.5);
   const SoftSolution expert = soft_value_iteration(d.mdp, d.mdp.reward(theta));
-  const ObservationModel model{random_distributions(d.mdp.num_pairs(), 3, rng), random_distributions(1, 3, rng)};
+  const ObservationModel model{random_distributions(d.mdp.num_pairs(), 3, rng), random_distributions(1, 3, rng), {}};
   for (int i = 0; i < 6; ++i) {
     const Trajectory steps = sample_trajectory(d.mdp, expert.policy, 3, rng);
     d.truth.push_back(steps);

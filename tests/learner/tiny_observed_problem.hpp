@@ -65,6 +65,16 @@ inline TinyProblem tiny_problem(int trial, Rng& rng, bool dense = false) {
   return p;
 }
 
+// A prior whose Dirichlet mean is `model` (its rows are distributions), learned by default.
+inline ObservationPrior prior_at(const ObservationModel& model) {
+  ObservationPrior prior;
+  prior.num_symbols = model.num_symbols();
+  prior.num_confounders = model.num_confounders();
+  prior.subject_alpha = model.subject;
+  prior.confounder_alpha = model.confounders;
+  return prior;
+}
+
 // A tiny problem whose MDP has two terminal states (states 2 and 3: a goal and a trap,
 // say), every state reaching both or one of them, and whose trajectory ends by entering
 // one (its end_state left unseen, -1).

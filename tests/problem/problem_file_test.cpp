@@ -93,6 +93,71 @@ TEST(ProblemFile, RoundTripsThroughJson) {
   EXPECT_EQ(*p.demonstration[0].truth, *q.demonstration[0].truth);
 }
 
+// The spec example with a terminal state 3 that (2, 0) enters, an end sensor of two
+// symbols and a trajectory that says what was seen of its end (README "Problem files").
+json with_end_sensor() {
+  json d = spec_example();
+  d["mdp"]["num_states"] = 4;
+  d["mdp"]["terminal"] = {3};
+  d["mdp"]["transitions"][5] = {2, 0, 3, 1.0};
+  d["observation_model"]["end_sensor"] = json::parse(R"({"num_symbols": 2, "alpha": [[3, 0, 9.0]]})");
+  d["demonstration"][0]["end_symbols"] = {0, 0, 1};
+  d["demonstration"][0]["end_state"] = 3;
+  return d;
+}
+
+TEST(ProblemFile, EndSensorAndWhatWasSeenOfTheEndRoundTrip) {
+  std::vector<std::string> warnings;
+  const Problem p = parse_problem(with_end_sensor().dump(), &warnings);
+  EXPECT_TRUE(warnings.empty());
+  const ObservationPrior& prior = *p.observation_model;
+  ASSERT_EQ(prior.num_end_symbols(), 2);
+  EXPECT_DOUBLE_EQ(prior.end_alpha(3, 0), 9.0);
+  EXPECT_DOUBLE_EQ(prior.end_alpha(3, 1), 1.0);                        // alpha_default
+  EXPECT_DOUBLE_EQ(prior.end_alpha.topRows(3).cwiseAbs().sum(), 0.0);  // rows never used
+  const ObservedTrajectory& steps = *p.demonstration[0].steps;
+  EXPECT_EQ(steps.end_symbols, (std::vector<int>{0, 0, 1}));
+  EXPECT_EQ(steps.end_state, 3);
+  const Problem q = parse_problem(problem_to_json(p).dump());
+  EXPECT_EQ(q.observation_model->end_alpha, prior.end_alpha);
+  EXPECT_EQ(q.demonstration[0].steps->end_symbols, steps.end_symbols);
+  EXPECT_EQ(q.demonstration[0].steps->end_state, 3);
+  EXPECT_EQ(problem_to_json(q).dump(), problem_to_json(p).dump());
+}
+
+TEST(ProblemFile, WhatWasSeenOfTheEndIsChecked) {
+  auto expect_end_error = [](const std::function<void(json&)>& mutate, const std::string& field,
+                             const std::string& fragment) {
+    expect_error(
+        [&](json& d) {
+          d = with_end_sensor();
+          mutate(d);
+        },
+        field, fragment);
+  };
+  expect_end_error([](json& d) { d["observation_model"].erase("end_sensor"); }, "demonstration[0].end_symbols",
+                   "observation_model has no \"end_sensor\"");
+  expect_end_error([](json& d) { d["demonstration"][0]["end_symbols"][1] = 2; }, "demonstration[0].end_symbols[1]", "");
+  expect_end_error([](json& d) { d["demonstration"][0]["end_state"] = 1; }, "demonstration[0].end_state",
+                   "state 1 is not terminal");
+  expect_end_error([](json& d) { d["demonstration"][0]["ends_in_terminal"] = false; }, "demonstration[0].end_state",
+                   "does not end in a terminal state");
+  expect_end_error([](json& d) { d["demonstration"][0].erase("steps"); }, "demonstration[0].end_state",
+                   "needs \"steps\"");
+  expect_end_error(
+      [](json& d) {
+        d["observation_model"]["end_sensor"]["alpha"] = {{1, 0, 2.0}};
+      },
+      "observation_model.end_sensor.alpha[0][0]", "state 1 is not terminal");
+  expect_end_error(
+      [](json& d) {
+        d["observation_model"]["end_sensor"]["alpha"] = {{3, 0, 0.0}, {3, 1, 0.0}};
+      },
+      "observation_model.end_sensor.alpha", "alpha of terminal state 3 sums to 0");
+  expect_error([](json& d) { d["observation_model"]["end_sensor"] = json::parse(R"({"num_symbols": 2})"); },
+               "observation_model.end_sensor", "the MDP has no terminal states");
+}
+
 // An MDP written and read back is the same MDP to the bit, even where its start
 // distribution sums to 1 only up to rounding (25 x 0.04 in doubles: reading it used to
 // renormalise every probability by an ulp, so a recorded run's exported problem learned

@@ -19,6 +19,10 @@
 //   posterior_end      the default, with a sensor that sees which terminal state each
 //                      trajectory entered (ObservedTrajectory::end_state): what such a
 //                      sensor buys the learner as it is
+//   posterior_end_sensor  the default with the task's noisy end sensor (random_task.hpp
+//                      "end"): 1-3 reports per ending, O_end learned from the controlled
+//                      run's prior (docs/MODEL.md "Sensors that see the end")
+//   oracle_end_sensor  oracle_sensor with the same reports and the true O_end
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -38,7 +42,10 @@ struct RandomTaskMethod {
   std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle"
   double c = 0.1;
   int restarts = 1;
-  bool sees_end = false;  // the sensor also saw which terminal state each trajectory entered
+  // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
+  // state entered (ObservedTrajectory::end_state), or the task's end sensor's reports.
+  enum class End { kUnseen, kState, kSensor };
+  End end = End::kUnseen;
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();

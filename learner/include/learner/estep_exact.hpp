@@ -30,7 +30,10 @@ struct TrajectoryPosterior {
   double log_likelihood = 0.0;  // log Pr(observations | theta, O); -inf if impossible
   RowMatrix marginals;          // T x (S*A): Pr(s_t = s, a_t = a | data)
   RowMatrix sources;            // one row per observation: Pr(Z = z | data), subject first
-  McmcDiagnostics mcmc;         // the MCMC engine's convergence diagnostics (neutral otherwise)
+  // Pr(the last action entered s | data) per state when the trajectory ended in a terminal
+  // state (what the end sensor's expected counts are made of); empty otherwise.
+  Eigen::VectorXd end_states;
+  McmcDiagnostics mcmc;  // the MCMC engine's convergence diagnostics (neutral otherwise)
 };
 
 // What the E-step sums over trajectories.
@@ -59,8 +62,9 @@ struct EStepStatistics {
 // The emission of every observation kind (observations.hpp) under one observation
 // model: computed once per E-step pass and shared by all trajectories.
 struct KindEmissions {
-  RowMatrix p;      // kinds x (S*A): p(w | s,a) = eta(0) O_{s,a}(w) + sum_e eta(e) O_e(w)
-  RowMatrix log_p;  // its log
+  RowMatrix p;          // kinds x (S*A): p(w | s,a) = eta(0) O_{s,a}(w) + sum_e eta(e) O_e(w)
+  RowMatrix log_p;      // its log
+  Eigen::MatrixXd end;  // the model's O_end, for the trajectories' end symbols
 };
 KindEmissions kind_emissions(const ObservationModel& model, const ObservationKinds& kinds);
 
@@ -158,6 +162,7 @@ class ExactEngine final : public PosteriorEngine {
   double log_likelihood(const SoftSolution& policy, const ObservedTrajectory& trajectory,
                         const std::vector<int>& kinds_of, const KindEmissions& table) {
     emissions(trajectory, kinds_of, table);
+    end_evidence(trajectory, table.end);
     return passes(policy, trajectory, false);
   }
   // Adds the trajectory's expected visits, alpha_dot and log-likelihood to `out` (and,
@@ -213,6 +218,14 @@ class ExactEngine final : public PosteriorEngine {
   void marginal(int t, double log_likelihood);
   // p(w | r) of observation n for every pair, into row n of p_.
   void mixture(const ObservationModel& model, const ObservedTrajectory& trajectory, int n);
+  // What the trajectory's end says (end_log_evidence) into end_log_, under O_end `end_model`.
+  void end_evidence(const ObservedTrajectory& trajectory, const Eigen::MatrixXd& end_model);
+  // Pr(the last action entered s | data) into entered_, from the last step's marginals in
+  // marginal_: sum_r gamma(r) T(s | r) e(s) / sum_s' T(s' | r) e(s'), e = exp end_log_.
+  void entered_state_posterior();
+  // The end sensor's expected counts: entered_ once per end symbol (docs/MODEL.md
+  // "Sensors that see the end").
+  void add_end_counts(const ObservedTrajectory& trajectory, int end_symbols, AlphaCounts& out);
 
   const Mdp& mdp_;
   SparseRowMatrix incoming_;         // S x (S*A), T transposed
@@ -235,6 +248,9 @@ class ExactEngine final : public PosteriorEngine {
   RowMatrix p_;           // one row per observation: p(w | r) per pair (kept for the posteriors)
   Eigen::ArrayXd ratio_;  // gamma / p of one observation
   Eigen::VectorXd scratch_;
+  Eigen::VectorXd end_log_;    // per state: log Pr(end | the last action entered it)
+  int end_symbols_ = 0;        // K, the end alphabet of the model end_log_ was made under
+  Eigen::VectorXd entered_;    // per state: Pr(the last action entered it | data)
   Eigen::ArrayXd shift_;       // per pair, backward pass
   Eigen::VectorXd shifted_;    // log_product's workspace
   Eigen::VectorXd previous_;   // log alpha of the step before, forward pass

@@ -17,16 +17,20 @@ namespace hbirl {
 struct ObservationModel {
   Eigen::MatrixXd subject;      // (S*A) x Omega, rows sum to 1; column-major so O(., w) is contiguous
   Eigen::MatrixXd confounders;  // E x Omega, rows sum to 1
+  Eigen::MatrixXd end;          // S x K: the end sensor's O_end(s) (terminal rows used); empty: none
 
   int num_symbols() const { return static_cast<int>(subject.cols()); }
   int num_confounders() const { return static_cast<int>(confounders.rows()); }
 };
 
 // Expected source-labelled counts (alpha dot): subject(r, w) = E[#observations of symbol w
-// made by the subject while at pair r]; confounders(e, w) likewise for element e.
+// made by the subject while at pair r]; confounders(e, w) likewise for element e;
+// end(s, w) = E[#end symbols w reported of terminal state s] (empty when no trajectory
+// summed had any: operator+= takes the other's shape).
 struct AlphaCounts {
   Eigen::MatrixXd subject;
   Eigen::MatrixXd confounders;
+  Eigen::MatrixXd end;
 
   static AlphaCounts zero(int pairs, int confounders, int symbols);
   AlphaCounts& operator+=(const AlphaCounts& other);
@@ -41,9 +45,14 @@ ObservationModel dirichlet_mean(const ObservationPrior& prior);
 // (ObservationPrior).
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s);
 
+// The end sensor's prior as the posterior update uses it: end_alpha, with the rows of
+// terminal states it has no counts for (no entry above end_alpha_base) held at their
+// mean (times kMaxStrength), unless no row has counts.
+Eigen::MatrixXd weighed_end_prior(const ObservationPrior& prior);
+
 // The Dirichlet posterior of the posterior update for prior `prior`, subject weight s and
 // expected counts: weighed_subject_prior(prior, s) + counts.subject, prior.confounder_alpha
-// + counts.confounders.
+// + counts.confounders, weighed_end_prior(prior) + counts.end.
 AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const AlphaCounts& counts);
 
 // The prior's term of the posterior update's objective (MAP-EM maximises log Pr(data |

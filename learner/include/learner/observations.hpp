@@ -31,12 +31,17 @@ struct ObservedTrajectory {
   // The trajectory ended because its last action led into a terminal state (rather than
   // being cut off): the posterior then conditions on that.
   bool ends_in_terminal = false;
-  // Which terminal state the last action entered, when the sensor saw it (ends_in_terminal
-  // only; a goal and a trap, say, then differ): the posterior conditions on entering that
-  // one. -1: not seen (only that it entered one). Not carried by problem files, the flat
-  // Python form or the bus yet (they refuse it): the random-task experiment's
-  // oracle_sensor_end and posterior_end set it (issue 33).
+  // Which terminal state the last action entered, when it is known for certain
+  // (ends_in_terminal only; a goal and a trap, say, then differ): the posterior conditions
+  // on entering that one. -1: not known. An oracle's knowledge (the random-task
+  // experiment's oracle_sensor_end); a real sensor's reports are end_symbols. Not carried
+  // by problem files, the flat Python form or the bus (they refuse it).
   int end_state = -1;
+  // What an end sensor reported of the terminal state the last action entered
+  // (ends_in_terminal only; docs/MODEL.md "Sensors that see the end"): symbols of the end
+  // alphabet {0 .. K-1}, each drawn from O_end(s) of the state s entered. The subject's
+  // own outcome (the onion lands in the bin, the picker reaches the dock), so no eta.
+  std::vector<int> end_symbols;
 
   int length() const { return static_cast<int>(step_begin.size()) - 1; }
   int num_observations() const { return static_cast<int>(symbols.size()); }
@@ -47,11 +52,21 @@ struct ObservedTrajectory {
   int context(int n) const { return contexts.empty() ? -1 : contexts[static_cast<size_t>(n)]; }
 };
 
-// What a trajectory's end says of the state s its last action entered, Pr(end | s) for
-// every state: 1 for all when it may have been cut off, for the terminal states when it
-// ended in one, for end_state alone when that was seen (else 0). The last step's backward
-// message is sum_s T(s | s_T, a_T) times this.
-Eigen::VectorXd end_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory);
+// What a trajectory's end says of the state s its last action entered, log Pr(end | s)
+// for every state: 0 for all when it may have been cut off; for a trajectory that ended
+// in a terminal state, -inf off the terminal states (and off end_state when that is
+// known), and on them the sum of log O_end(s, w) over its end_symbols. `end_model` is
+// O_end (S x K, ObservationModel::end; any positive matrix of that shape gives the
+// support). The last step's backward message is sum_s T(s | s_T, a_T) exp of this.
+// Throws InputError naming the field for an end_state or end symbol the MDP or the end
+// sensor does not have.
+Eigen::VectorXd end_log_evidence(const Mdp& mdp, const ObservedTrajectory& trajectory,
+                                 const Eigen::MatrixXd& end_model);
+
+// exp(v - max v) entry by entry, exactly 0 where v is -inf (Eigen's vectorised exp is not
+// there), with max v in *top: the end's evidence up to a constant. All 0 (and *top -inf)
+// when every entry is -inf.
+Eigen::VectorXd shifted_exp(const Eigen::VectorXd& v, double* top = nullptr);
 
 // A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta, weight and end, bit for
 // bit. Two processes with the same digest hold the same data (services/ compares them).
@@ -140,6 +155,16 @@ struct ObservationPrior {
   // (add_unlisted_source). `unlisted_added` says the catch-all is the last confounder.
   double unlisted_eta = 0.0;
   bool unlisted_added = false;
+  // The end sensor's Dirichlet prior (docs/MODEL.md "Sensors that see the end"): one row
+  // per state, K columns (the end alphabet; 0 columns: no end sensor). Only the terminal
+  // states' rows are used. Refined inside the E-step as the elements' are: the posterior
+  // update adds the expected counts to it (no strength), the paper's update steps by c.
+  Eigen::MatrixXd end_alpha;
+  // The pseudo-count of a terminal state nobody counted reports of (a problem file's
+  // end_sensor.alpha_default): rows with no entry above it keep their mean under the
+  // posterior update (weighed_end_prior).
+  double end_alpha_base = 1.0;
+  int num_end_symbols() const { return static_cast<int>(end_alpha.cols()); }
   static constexpr double kMinStrength = 1e-3;
   static constexpr double kMaxStrength = 1e3;
 };

@@ -281,6 +281,43 @@ void observe(RandomTask& task, const std::vector<char>& ended, Rng& rng) {
 
 }  // namespace
 
+// The end sensor (random_task.hpp "end"): its truth, the demonstrations' reports and the
+// prior its calibration gives.
+void sense_ends(RandomTask& task, Rng world, Rng data) {
+  const int S = task.mdp.num_states;
+  std::vector<int> symbol_of(static_cast<size_t>(S), -1);
+  int K = 0;
+  for (int s = 0; s < S; ++s) {
+    if (task.mdp.is_terminal(s)) symbol_of[static_cast<size_t>(s)] = K++;
+  }
+  task.end_accuracy = world.uniform(0.55, 0.95);
+  task.end_o = Eigen::MatrixXd::Zero(S, K);
+  for (int s = 0; s < S; ++s) {
+    const int own = symbol_of[static_cast<size_t>(s)];
+    if (own < 0) continue;
+    task.end_o.row(s).setConstant(K == 1 ? 1.0 : (1.0 - task.end_accuracy) / (K - 1));
+    if (K > 1) task.end_o(s, own) = task.end_accuracy;
+  }
+  auto reports = [&](int entered) {
+    std::vector<int> out;
+    if (entered < 0) return out;
+    for (int k = uniform_between(data, 1, 3); k > 0; --k)
+      out.push_back(data.categorical(task.end_o.row(entered).transpose()));
+    return out;
+  };
+  for (int entered : task.entered) task.end_reports.push_back(reports(entered));
+  task.end_alpha = Eigen::MatrixXd::Zero(S, K);
+  for (int s = 0; s < S; ++s) {
+    if (symbol_of[static_cast<size_t>(s)] >= 0) task.end_alpha.row(s).setOnes();
+  }
+  task.end_calibration = uniform_between(data, 2, 10);
+  for (int s = 0; s < S; ++s) {
+    if (symbol_of[static_cast<size_t>(s)] < 0) continue;
+    for (int k = 0; k < task.end_calibration; ++k)
+      task.end_alpha(s, data.categorical(task.end_o.row(s).transpose())) += 1.0;
+  }
+}
+
 const char* eta_kind_name(EtaKind kind) {
   switch (kind) {
     case EtaKind::kUniform:
@@ -335,6 +372,7 @@ RandomTask make_random_task(std::uint64_t seed, int draw, const RandomTaskOverri
   task.prior.num_confounders = task.num_confounders;
   task.prior.subject_alpha = controlled_run_alpha(task.mdp, task.controlled, task.subject_o, task.per_step, 1.0, data);
   task.prior.confounder_alpha = Eigen::MatrixXd::Ones(task.num_confounders, task.num_symbols);
+  sense_ends(task, root.split(0xE4D5E450ull), root.split(0xE4D0A700ull + static_cast<std::uint64_t>(draw)));
   return task;
 }
 

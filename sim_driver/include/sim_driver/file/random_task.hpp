@@ -27,6 +27,13 @@
 //            steps by the soft expert (ending early in a terminal state).
 //   prior    the subject's Dirichlet prior from a controlled run (the subject alone, true
 //            steps known) of 5-30 trajectories: its symbol counts per (s, a) plus 1.
+//   end      an end sensor (used by the methods that say so): one symbol per terminal
+//            state, O_end(s) putting accuracy 0.55-0.95 on s's own symbol and the rest
+//            evenly on the others; 1-3 reports of the state entered per trajectory that
+//            entered one; its prior a calibration's counts plus 1: 2-10 reports of each
+//            terminal state, staged without the expert (an onion put in the bin and on
+//            the floor). Drawn from streams of its own: the rest of the task is the same
+//            with or without it.
 // A task's data are drawn from (seed, draw): the same task watched again.
 #include <cstdint>
 #include <string>
@@ -75,6 +82,12 @@ struct RandomTask {
   GridworldObservations observed;          // what the sensor saw, true sources kept
   std::vector<Trajectory> controlled;      // the controlled run
   ObservationPrior prior;                  // subject from the controlled run, elements flat
+
+  double end_accuracy = 0.0;                  // the end sensor's O_end(s, s's own symbol)
+  Eigen::MatrixXd end_o;                      // S x terminal states, the truth (terminal rows)
+  std::vector<std::vector<int>> end_reports;  // per demonstration, what the end sensor said
+  int end_calibration = 0;                    // reports of each terminal state in its calibration
+  Eigen::MatrixXd end_alpha;                  // its prior from the calibration (terminal rows)
 };
 
 RandomTask make_random_task(std::uint64_t seed, int draw = 0, const RandomTaskOverrides& overrides = {});
