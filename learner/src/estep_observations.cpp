@@ -48,18 +48,6 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
     }
   }
   if (options_.executor) {
-    // The bus cannot carry what is seen of the end yet (estep_wire.cpp): refuse here,
-    // before any block is sent.
-    for (size_t i = 0; i < trajectories_.size(); ++i) {
-      if (trajectories_[i].end_state >= 0) {
-        throw InputError("demonstration[" + std::to_string(i) + "].end_state",
-                         "the E-step service cannot carry the terminal state seen yet");
-      }
-      if (!trajectories_[i].end_symbols.empty()) {
-        throw InputError("demonstration[" + std::to_string(i) + "].end_symbols",
-                         "the E-step service cannot carry an end sensor's reports yet");
-      }
-    }
     input_digest_ = dataset_digest(trajectories_);
   }
   if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();

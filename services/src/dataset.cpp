@@ -38,6 +38,36 @@ void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_
   expected_actions_ = num_actions;
 }
 
+void DatasetBuilder::expect_ends(std::vector<char> terminal, int end_symbols) {
+  expected_ends_.emplace(std::move(terminal), end_symbols);
+}
+
+namespace {
+
+// What an END_EPISODE marker says of how the episode ended (end_state, -1 when not known,
+// and the end sensor's reports), checked against what may be said (`expected`: the
+// terminal states and the end alphabet, when known).
+std::pair<int, std::vector<int>> seen_end(const hbirl::episode_marker_t& m,
+                                          const std::optional<std::pair<std::vector<char>, int>>& expected) {
+  std::pair<int, std::vector<int>> out{m.end_state_known ? m.end_state : -1,
+                                       std::vector<int>(m.end_report.begin(), m.end_report.end())};
+  if (m.num_end_reports > 0 && m.controlled)
+    throw InputError("episode_marker.num_end_reports", "a controlled run's end reports are not used");
+  if (!expected) return out;
+  const auto& [terminal, end_symbols] = *expected;
+  if (out.first >= 0 && (out.first >= static_cast<int>(terminal.size()) || !terminal[static_cast<size_t>(out.first)]))
+    throw InputError("episode_marker.end_state", std::to_string(out.first) + " is not a terminal state of the domain");
+  if (m.num_end_reports > 0 && m.num_end_symbols != end_symbols) {
+    throw InputError("episode_marker.num_end_symbols",
+                     std::to_string(m.num_end_symbols) +
+                         (end_symbols == 0 ? ", but the domain has no end sensor"
+                                           : ", the domain's end sensor has " + std::to_string(end_symbols)));
+  }
+  return out;
+}
+
+}  // namespace
+
 void DatasetBuilder::contradicted(const std::string& why) {
   if (contradiction_.empty()) contradiction_ = why;
 }
@@ -152,12 +182,16 @@ void DatasetBuilder::on_end_episode(const hbirl::episode_marker_t& m) {
   // The simulator repeats every end marker each second until the reward comes: a
   // repeat leaves the counts as they are, without a walk over the episode's frames. An
   // end marker that says otherwise than an earlier one contradicts the run.
-  if (e.ended && (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
-                  e.ends_in_terminal != m.ends_in_terminal)) {
+  auto [end_state, end_reports] = seen_end(m, expected_ends_);
+  if (e.ended &&
+      (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
+       e.ends_in_terminal != m.ends_in_terminal || e.end_state != end_state || e.end_reports != end_reports)) {
     contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) +
                  " then " + std::to_string(m.num_steps) + " steps)");
   }
   e.ends_in_terminal = m.ends_in_terminal;
+  e.end_state = end_state;
+  e.end_reports = std::move(end_reports);
   if (e.ended && e.num_steps == m.num_steps && e.frames_per_step == m.frames_per_step) return;
   count(e, m.episode, -1);
   e.ended = true;
@@ -373,6 +407,8 @@ void DatasetBuilder::add_episode(Dataset& d, int id, const Episode& e) const {
   if (!e.ended || !in_run(id)) return;
   ObservedTrajectory t;
   t.ends_in_terminal = e.ends_in_terminal;
+  t.end_state = e.end_state;
+  t.end_symbols = e.end_reports;
   std::vector<double> eta;
   for (int step = 0; step < e.num_steps; ++step) {
     for (auto it = e.frames.lower_bound({step, 0});
@@ -499,7 +535,8 @@ void DatasetBuilder::watch_marker(const hbirl::episode_marker_t& m) {
                  " frames a step, then " + std::to_string(m.frames_per_step));
   }
   if (m.kind == hbirl::episode_marker_t::END_EPISODE && e.ended &&
-      (e.num_steps != m.num_steps || e.ends_in_terminal != m.ends_in_terminal)) {
+      (e.num_steps != m.num_steps || e.ends_in_terminal != m.ends_in_terminal ||
+       seen_end(m, expected_ends_) != std::pair(e.end_state, e.end_reports))) {
     contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) +
                  " then " + std::to_string(m.num_steps) + " steps)");
   }

@@ -345,6 +345,8 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
                  eta ? static_cast<int>(eta->rows()) : 0,
                  estep.options().watch,
                  0};
+  pass_.shape.end_rows = static_cast<int>(model.end.rows());
+  pass_.shape.end_symbols = static_cast<int>(model.end.cols());
   if (pass_.shape.watch >= 0)
     pass_.shape.watch_steps = estep.trajectories()[static_cast<size_t>(pass_.shape.watch)].length();
   pass_.received.assign(static_cast<size_t>(blocks), std::nullopt);

@@ -56,10 +56,6 @@ std::uint64_t numerics_fingerprint() {
 
 hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count, std::uint64_t block_digest,
                                const std::string& worker) {
-  // trajectory_t has no field for the terminal state seen yet: a worker would learn from
-  // less than the data say, so such data are not sent (issue 33).
-  if (t.end_state >= 0) throw InputError("end_state", "the bus cannot carry the terminal state seen yet");
-  if (!t.end_symbols.empty()) throw InputError("end_symbols", "the bus cannot carry an end sensor's reports yet");
   hbirl::trajectory_t m{};
   m.utime = 0;  // a data set, not a moment of the demonstration
   m.block_digest = static_cast<std::int64_t>(block_digest);
@@ -79,6 +75,10 @@ hbirl::trajectory_t to_message(const ObservedTrajectory& t, int index, int count
   m.weights = t.weights;
   m.num_context = static_cast<std::int32_t>(t.contexts.size());
   m.context = t.contexts;
+  m.end_state_known = t.end_state >= 0;
+  m.end_state = std::max(t.end_state, 0);
+  m.num_end_reports = static_cast<std::int32_t>(t.end_symbols.size());
+  for (int w : t.end_symbols) m.end_report.push_back(static_cast<std::int16_t>(w));
   return m;
 }
 
@@ -118,6 +118,14 @@ ObservedTrajectory from_message(const hbirl::trajectory_t& m) {
   }
   t.contexts = m.context;
   t.ends_in_terminal = m.ends_in_terminal;
+  // What was seen of the end: its states and symbols are checked against the MDP and the
+  // end sensor where the worker builds its E-step (ObservationEStep).
+  if (m.end_state_known) {
+    if (m.end_state < 0) throw InputError("trajectory.end_state", "is negative");
+    t.end_state = m.end_state;
+  }
+  if (m.num_end_reports < 0) throw InputError("trajectory.num_end_reports", "is negative");
+  t.end_symbols.assign(m.end_report.begin(), m.end_report.end());
   return t;
 }
 
@@ -153,6 +161,9 @@ hbirl::estep_request_t request_message(const PassData& pass, const ObservationES
   request.num_contexts = eta ? static_cast<std::int32_t>(eta->rows()) : 0;
   request.num_sources = 1 + model.num_confounders();
   if (eta) request.context_eta = lcm_rows(*eta);
+  request.num_end_rows = static_cast<std::int32_t>(model.end.rows());
+  request.num_end_symbols = static_cast<std::int32_t>(model.end.cols());
+  request.end_o = lcm_rows(model.end);
   return request;
 }
 
@@ -160,6 +171,8 @@ void check_shape(const hbirl::estep_result_t& m, const ResultShape& shape) {
   if (m.num_pairs != shape.pairs || m.num_symbols != shape.symbols || m.num_confounders != shape.confounders) {
     throw InputError("estep_result.num_pairs", "the statistics have the wrong shape");
   }
+  if (m.num_end_rows != 0 && (m.num_end_rows != shape.end_rows || m.num_end_symbols != shape.end_symbols))
+    throw InputError("estep_result.num_end_rows", "the end sensor's counts have the wrong shape");
   if (!std::isfinite(m.log_likelihood) && m.log_likelihood != -std::numeric_limits<double>::infinity()) {
     throw InputError("estep_result.log_likelihood", "is NaN or +inf");
   }
@@ -175,6 +188,11 @@ EStepStatistics statistics_of(const hbirl::estep_result_t& m, const ResultShape&
       (s.counts.array() < 0).any() || (s.alpha_dot.subject.array() < 0).any() ||
       (s.alpha_dot.confounders.array() < 0).any()) {
     throw InputError("estep_result.counts", "must be finite and >= 0");
+  }
+  if (m.num_end_rows > 0) {
+    s.alpha_dot.end = eigen_rows(m.alpha_end, m.num_end_symbols);
+    if (!s.alpha_dot.end.allFinite() || (s.alpha_dot.end.array() < 0).any())
+      throw InputError("estep_result.alpha_end", "must be finite and >= 0");
   }
   if (m.impossible < 0 || m.impossible > ObservationEStep::kBlockSize)
     throw InputError("estep_result.impossible", "out of range");
@@ -218,7 +236,8 @@ bool same_statistics(const EStepStatistics& a, const EStepStatistics& b, double 
     return ((x - y).array().abs() <= tolerance * (1.0 + y.array().abs())).all();
   };
   return close(a.counts, b.counts) && close(a.alpha_dot.subject, b.alpha_dot.subject) &&
-         close(a.alpha_dot.confounders, b.alpha_dot.confounders) && close(a.source_counts, b.source_counts) &&
+         close(a.alpha_dot.end, b.alpha_dot.end) && close(a.alpha_dot.confounders, b.alpha_dot.confounders) &&
+         close(a.source_counts, b.source_counts) &&
          (a.log_likelihood == b.log_likelihood ||
           std::abs(a.log_likelihood - b.log_likelihood) <= tolerance * (1.0 + std::abs(b.log_likelihood))) &&
          a.impossible == b.impossible && close(a.watched, b.watched) &&

@@ -65,6 +65,7 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app:
   out.log_likelihood = result.log_likelihood;
   out.em_iterations = learned.best().em_iterations;
   out.eta = learned.learned_eta;
+  out.end_sensor = learned.model.end;
   if (learned.confidence) out.confidence = learned.confidence->near_optimal;
   out.trajectories = static_cast<int>(data.observed.size());
   out.digest = dataset_digest(data.observed);

@@ -95,6 +95,22 @@ void validate(const hbirl::episode_marker_t& m) {
     throw InputError("episode_marker.num_steps", "must be in [1, " + std::to_string(kMaxSteps) + "]");
   if (m.kind == Marker::END_RUN && m.num_steps < 0)
     throw InputError("episode_marker.num_steps", "END_RUN's number of episodes is negative");
+  const bool seen_end = m.end_state_known || m.num_end_reports > 0;
+  if (seen_end && !(m.kind == Marker::END_EPISODE && m.ends_in_terminal)) {
+    throw InputError(m.end_state_known ? "episode_marker.end_state_known" : "episode_marker.num_end_reports",
+                     "only an END_EPISODE that ended in a terminal state says how it ended");
+  }
+  if (m.end_state_known && m.end_state < 0) throw InputError("episode_marker.end_state", "is negative");
+  if (m.num_end_symbols < 0 || m.num_end_symbols > kMaxEndSymbols)
+    throw InputError("episode_marker.num_end_symbols", "must be in [0, " + std::to_string(kMaxEndSymbols) + "]");
+  if (m.num_end_reports < 0 || m.num_end_reports > kMaxEndReports)
+    throw InputError("episode_marker.num_end_reports", "must be in [0, " + std::to_string(kMaxEndReports) + "]");
+  for (int k = 0; k < m.num_end_reports; ++k) {
+    const int w = m.end_report[static_cast<size_t>(k)];
+    if (w < 0 || w >= m.num_end_symbols)
+      throw InputError("episode_marker.end_report[" + std::to_string(k) + "]",
+                       std::to_string(w) + " is not a symbol of the end sensor's " + std::to_string(m.num_end_symbols));
+  }
 }
 
 void validate(const hbirl::ground_truth_t& m) {

@@ -355,6 +355,8 @@ std::unique_ptr<DatasetBuilder> subscribed_builder(Bus& bus, const OptimiserOpti
     const Mdp& mdp = options.domain->mdp();
     builder->expect(options.domain->name(), options.domain->num_symbols(), stated ? 1 + stated->num_confounders : 0,
                     mdp.num_states, mdp.num_actions);
+    builder->expect_ends(std::vector<char>(mdp.terminal.begin(), mdp.terminal.end()),
+                         stated ? stated->num_end_symbols() : 0);
   }
   builder->limit(options.max_dataset_bytes);
   builder->subscribe(bus, counters);

@@ -77,8 +77,9 @@ std::vector<ObservedTrajectory> local_block_data(const LocalBlocks& local,
 
 // The worker never refines alpha or eta: only the prior's shape matters here. With
 // learned eta the trajectories carry the optimiser's contexts.
-ObservationPrior worker_prior(int P, int W, int E, bool learned_eta) {
+ObservationPrior worker_prior(int P, int W, int E, bool learned_eta, Eigen::Index end_rows, Eigen::Index end_symbols) {
   ObservationPrior prior;
+  prior.end_alpha = Eigen::MatrixXd::Ones(end_rows, end_symbols);
   prior.learn_eta = learned_eta;
   prior.num_symbols = W;
   prior.num_confounders = E;
@@ -92,6 +93,11 @@ ObservationModel request_model(const hbirl::estep_request_t& m, int W) {
   ObservationModel model;
   model.subject = eigen_rows(m.subject_o, W);
   model.confounders = eigen_rows(m.confounder_o, W);
+  if (m.num_end_rows > 0) {
+    model.end = eigen_rows(m.end_o, m.num_end_symbols);
+    if (!model.end.allFinite() || (model.end.array() < 0).any())
+      throw InputError("estep_request.end_o", "the end sensor's model must be finite and >= 0");
+  }
   if (!model.subject.allFinite() || !model.confounders.allFinite() || (model.subject.array() < 0).any() ||
       (model.confounders.array() < 0).any()) {
     throw InputError("estep_request.subject_o", "the observation model must be finite and >= 0");
@@ -130,6 +136,9 @@ hbirl::estep_result_t block_result(const hbirl::estep_request_t& m, const EStepS
   r.num_confounders = E;
   r.alpha_subject = lcm_rows(s.alpha_dot.subject);
   r.alpha_confounder = lcm_rows(s.alpha_dot.confounders);
+  r.num_end_rows = static_cast<std::int32_t>(s.alpha_dot.end.rows());
+  r.num_end_symbols = static_cast<std::int32_t>(s.alpha_dot.end.cols());
+  r.alpha_end = lcm_rows(s.alpha_dot.end);
   r.log_likelihood = s.log_likelihood;
   r.impossible = s.impossible;
   r.compute_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -399,7 +408,8 @@ void SamplerWorker::serve(bool all_here_only) {
   const bool learned_eta = m.num_contexts > 0;
   const LocalBlocks local = local_blocks(m, assigned_, held_);
   const std::vector<std::pair<int, std::uint64_t>>& blocks = local.blocks;
-  const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), local.watch, learned_eta);
+  const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), local.watch, learned_eta,
+                                     m.num_end_rows, m.num_end_symbols);
   if (!estep_ || blocks != estep_blocks_ || shape != estep_shape_) {
     std::vector<ObservedTrajectory> data = local_block_data(local, held_, W, E);
     ObservationEStepOptions options;
@@ -408,7 +418,8 @@ void SamplerWorker::serve(bool all_here_only) {
     options.watch = local.watch;
     estep_.reset();
     estep_blocks_.clear();
-    estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta), options);
+    estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta, m.num_end_rows, m.num_end_symbols),
+                   options);
     estep_blocks_ = blocks;
     estep_shape_ = shape;
   }

@@ -134,6 +134,18 @@ TEST(EStepService, TrajectoriesRoundTrip) {
   }
   EXPECT_EQ(dataset_digest(back), dataset_digest(with_contexts));
   EXPECT_NE(dataset_digest(back), dataset_digest(observed));
+  // What was seen of the end goes with the data too (and into its digest).
+  ObservedTrajectory ended = observed[0];
+  ended.ends_in_terminal = true;
+  ended.end_state = 7;
+  ended.end_symbols = {1, 0, 1};
+  const ObservedTrajectory ended_back = from_message(to_message(ended, 0, 1, 1, "w"));
+  EXPECT_EQ(ended_back.end_state, 7);
+  EXPECT_EQ(ended_back.end_symbols, ended.end_symbols);
+  EXPECT_EQ(dataset_digest(std::span(&ended_back, 1)), dataset_digest(std::span(&ended, 1)));
+  hbirl::trajectory_t unknown = to_message(observed[0], 0, 1, 1, "w");
+  EXPECT_FALSE(unknown.end_state_known);
+  EXPECT_EQ(from_message(unknown).end_state, -1);
   const auto refused = [](const hbirl::trajectory_t& m, const std::string& field) {
     hbirl::testing::expect_refused([&] { from_message(m); }, field);
   };

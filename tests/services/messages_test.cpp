@@ -127,6 +127,34 @@ TEST(Messages, MarkerAndTruthRules) {
   m.num_steps = -1;
   EXPECT_EQ(refused_field(m), "episode_marker.num_steps");
 
+  // What was seen of the end: only on an END_EPISODE that ended in a terminal state, each
+  // report a symbol of the end sensor's alphabet.
+  m = good_marker(hbirl::episode_marker_t::END_EPISODE);
+  m.ends_in_terminal = true;
+  m.end_state_known = true;
+  m.end_state = 2;
+  m.num_end_symbols = 3;
+  m.num_end_reports = 2;
+  m.end_report = {0, 2};
+  EXPECT_EQ(refused_field(m), "");
+  auto cut_off = m;
+  cut_off.ends_in_terminal = false;
+  EXPECT_EQ(refused_field(cut_off), "episode_marker.end_state_known");
+  cut_off.end_state_known = false;
+  EXPECT_EQ(refused_field(cut_off), "episode_marker.num_end_reports");
+  auto begin = m;
+  begin.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
+  EXPECT_EQ(refused_field(begin), "episode_marker.end_state_known");
+  auto negative = m;
+  negative.end_state = -4;
+  EXPECT_EQ(refused_field(negative), "episode_marker.end_state");
+  auto outside = m;
+  outside.end_report = {0, 3};
+  EXPECT_EQ(refused_field(outside), "episode_marker.end_report[1]");
+  auto alphabet = m;
+  alphabet.num_end_symbols = kMaxEndSymbols + 1;
+  EXPECT_EQ(refused_field(alphabet), "episode_marker.num_end_symbols");
+
   hbirl::ground_truth_t t{};
   t.num_features = 2;
   t.true_weights = {1.0, -1.0};

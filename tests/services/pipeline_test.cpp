@@ -19,6 +19,7 @@
 #include <cmath>
 #include "perception/image_codec.hpp"
 #include <thread>
+#include <unistd.h>
 
 #include "experiments/onion_data.hpp"
 #include "learner/input_error.hpp"
@@ -1210,8 +1211,9 @@ namespace {
 // an endpoint of its own (it has no key), once the optimiser listens. With `key`, the
 // simulator and the optimiser sign and check every message.
 std::optional<OptimiserResult> corridor_run(const std::function<void(Bus&)>& hostile, Counters& opt_counters,
-                                            const RunKey* key = nullptr) {
-  const std::string path = std::string(HBIRL_SOURCE_DIR) + "/examples/corridor.json";
+                                            const RunKey* key = nullptr,
+                                            const std::string& path = std::string(HBIRL_SOURCE_DIR) +
+                                                                      "/examples/corridor.json") {
   const std::shared_ptr<const Domain> domain = open_domain(path);
   auto hub = std::make_shared<MemoryHub>();
   const auto endpoint = [&](Counters& counters) -> std::unique_ptr<Bus> {
@@ -1288,6 +1290,68 @@ TEST(Pipeline, MessagesThatDoNotFitTheDomainAreRefusedOneByOne) {
   EXPECT_EQ(attacked->learned.digest, clean->learned.digest);
   for (Eigen::Index k = 0; k < clean->learned.theta.size(); ++k)
     EXPECT_EQ(attacked->learned.theta[k], clean->learned.theta[k]);
+}
+
+// examples/corridor.json with an end sensor of two symbols on its exit (terminal state 3)
+// and 1-3 reports of it per demonstration, as a file in a fresh folder.
+std::string corridor_with_end_sensor() {
+  std::ifstream in(std::string(HBIRL_SOURCE_DIR) + "/examples/corridor.json");
+  nlohmann::json doc = nlohmann::json::parse(in);
+  doc["observation_model"]["end_sensor"] = {{"num_symbols", 2}, {"alpha", {{3, 0, 4.0}, {3, 1, 1.5}}}};
+  for (size_t i = 0; i < doc["demonstration"].size(); ++i)
+    doc["demonstration"][i]["end_symbols"] = std::vector<int>(1 + i % 3, static_cast<int>(i % 2));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("hbirl_ended_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "corridor.json").string();  // the stem is the domain's name
+  std::ofstream(path) << doc.dump();
+  return path;
+}
+
+// What an end sensor reported goes over the bus with each episode's end marker: the
+// optimiser holds every demonstration's reports as the file has them, learns the sensor's
+// O_end, and a marker whose reports are not of the domain's end sensor is refused, naming
+// the field, while the rest is learned from as without it.
+TEST(Pipeline, EndSensorReportsCrossTheBus) {
+  const std::string path = corridor_with_end_sensor();
+  const Problem problem = read_problem_file(path);
+  Counters clean_counters = quiet("optimiser");
+  const auto clean = corridor_run(nullptr, clean_counters, nullptr, path);
+  ASSERT_TRUE(clean.has_value());
+  EXPECT_EQ(clean_counters.bad_messages, 0) << clean_counters.last_problem;
+  ASSERT_EQ(clean->data.observed.size(), problem.demonstration.size());
+  for (size_t i = 0; i < problem.demonstration.size(); ++i)
+    EXPECT_EQ(clean->data.observed[i].end_symbols, problem.demonstration[i].steps->end_symbols) << i;
+  const Eigen::MatrixXd& end = clean->learned.end_sensor;
+  ASSERT_EQ(end.rows(), 4);
+  EXPECT_NEAR(end.row(3).sum(), 1.0, 1e-12);
+  const Eigen::MatrixXd prior = dirichlet_mean(problem.observation_model->end_alpha);
+  EXPECT_GT(std::abs(end(3, 0) - prior(3, 0)), 1e-3) << "the reports moved O_end";
+  Counters opt_counters = quiet("optimiser");
+  const auto hostile = [](Bus& bus) {
+    Counters c = quiet("hostile");
+    hbirl::episode_marker_t m{};
+    m.domain = "corridor";
+    m.episode = 0;
+    m.kind = hbirl::episode_marker_t::END_EPISODE;
+    m.num_steps = 3;
+    m.frames_per_step = 1;
+    m.ends_in_terminal = true;
+    m.num_end_symbols = 5;  // the corridor's end sensor has 2
+    m.num_end_reports = 1;
+    m.end_report = {4};
+    publish(bus, channels::kEpisode, m, c);
+    m.num_end_symbols = 2;
+    m.end_report = {1};
+    m.end_state_known = true;
+    m.end_state = 1;  // not terminal
+    publish(bus, channels::kEpisode, m, c);
+  };
+  const auto attacked = corridor_run(hostile, opt_counters, nullptr, path);
+  ASSERT_TRUE(attacked.has_value());
+  EXPECT_EQ(opt_counters.bad_messages, 2) << opt_counters.last_problem;
+  EXPECT_EQ(attacked->learned.theta, clean->learned.theta);
+  std::filesystem::remove_all(std::filesystem::path(path).parent_path());
 }
 
 // Forgeries from a process without the run's key -- an END_RUN before the run, another

@@ -34,8 +34,8 @@ struct ObservedTrajectory {
   // Which terminal state the last action entered, when it is known for certain
   // (ends_in_terminal only; a goal and a trap, say, then differ): the posterior conditions
   // on entering that one. -1: not known. An oracle's knowledge (the random-task
-  // experiment's oracle_sensor_end); a real sensor's reports are end_symbols. Not carried
-  // by problem files, the flat Python form or the bus (they refuse it).
+  // experiment's oracle_sensor_end); a real sensor's reports are end_symbols. Problem
+  // files and the bus carry both; the flat Python form refuses them.
   int end_state = -1;
   // What an end sensor reported of the terminal state the last action entered
   // (ends_in_terminal only; docs/MODEL.md "Sensors that see the end"): symbols of the end

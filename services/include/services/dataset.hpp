@@ -50,6 +50,10 @@ class DatasetBuilder {
   // truth are checked on every message (0: any), so a sensor that does not fit is refused
   // message by message, not after the run.
   void expect(const std::string& domain, int num_symbols, int num_sources, int num_states, int num_actions);
+  // What may be said of how an episode ended: a terminal state of `terminal` (one flag per
+  // state) and reports of an end sensor of `end_symbols` symbols (0: none may come). Until
+  // called, anything the markers' own validation allows.
+  void expect_ends(std::vector<char> terminal, int end_symbols);
   // At most this many bytes of observations are kept: a frame that would take the data
   // set past it is refused (InputError naming --max-dataset-mb) and not kept, whoever
   // floods the bus with made-up frames.
@@ -112,6 +116,8 @@ class DatasetBuilder {
     bool marked = false;  // a marker has said whether it is controlled (then later ones must agree)
     bool ended = false;
     bool ends_in_terminal = false;
+    int end_state = -1;            // the terminal state entered, when known for certain
+    std::vector<int> end_reports;  // the end sensor's
     int num_steps = 0;
     int frames_per_step = 0;
     std::map<std::pair<int, int>, Frame> frames;  // (step, frame)
@@ -153,6 +159,7 @@ class DatasetBuilder {
   bool taken_complete_ = false;                // the run was complete when taken
   std::array<std::uint8_t, 16> digest_key_{};  // frame_digest's, random
   int expected_symbols_ = 0, expected_sources_ = 0, expected_states_ = 0, expected_actions_ = 0;  // 0: any
+  std::optional<std::pair<std::vector<char>, int>> expected_ends_;  // terminal states, end alphabet
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;

@@ -43,7 +43,8 @@ hbirl::estep_request_t request_message(const PassData& pass, const ObservationES
 // The shape every answer to a pass's request has.
 struct ResultShape {
   int blocks = 0, pairs = 0, symbols = 0, confounders = 0, contexts = 0;
-  int watch = -1, watch_steps = 0;  // the watched trajectory and its length (-1: none)
+  int watch = -1, watch_steps = 0;    // the watched trajectory and its length (-1: none)
+  int end_rows = 0, end_symbols = 0;  // the end sensor's O_end (0: none)
 };
 // InputError unless the answer's statistics have the request's shape and a log-likelihood
 // that is a number or -inf.

@@ -25,6 +25,7 @@ struct Learned {
   int trajectories = 0;
   std::uint64_t digest = 0;       // of the demonstrations learned from
   std::optional<LearnedEta> eta;  // when eta was learned
+  Eigen::MatrixXd end_sensor;     // the learned O_end, one row per state (empty: no end sensor)
   // When posterior draws were asked for (settings.posterior.samples): the posterior
   // probability that the learned policy is within 5% of the optimal value (app::learn).
   std::optional<double> confidence;

@@ -22,6 +22,8 @@ constexpr int kMaxSteps = 100000;         // per episode
 constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
 constexpr int kMaxFeatures = 100000;      // of the true weights a ground truth carries
 constexpr int kMaxFrameSide = 4096;       // a camera frame's width and height, in pixels
+constexpr int kMaxEndSymbols = 1 << 15;   // an end sensor's alphabet (its reports are int16)
+constexpr int kMaxEndReports = 1000;      // an end sensor's reports of one episode's end
 
 // At least one symbol and one source; episode, step and frame in range; every symbol in
 // the alphabet; every eta a distribution (normalise_eta's tolerance); contexts none or one
@@ -36,7 +38,9 @@ void validate(const hbirl::camera_frame_t& m);
 void validate(const hbirl::detections_t& m);
 // A known kind; the episode, and for a step's marker the step, in range; frames per step
 // in [1, kMaxFramesPerStep] (but END_RUN); an episode's end in [1, kMaxSteps] steps; END_RUN's
-// count of episodes not negative.
+// count of episodes not negative; what was seen of the end (a known end_state not negative, an
+// end alphabet in [0, kMaxEndSymbols], at most kMaxEndReports reports each in it) only on an
+// END_EPISODE that ended in a terminal state.
 void validate(const hbirl::episode_marker_t& m);
 // Episode, step, state and action in range; at most kMaxFeatures true weights, all finite.
 void validate(const hbirl::ground_truth_t& m);

@@ -123,7 +123,8 @@ template <class Json>
 void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Domain> domain) {
   const auto vector = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
   j["domain"] = r.data.domain;
-  j["feature_names"] = domain_of(r.data, std::move(domain))->names(1).features;
+  const std::shared_ptr<const Domain> learned_in = domain_of(r.data, std::move(domain));
+  j["feature_names"] = learned_in->names(1).features;
   j["theta"] = vector(r.learned.theta);
   if (r.data.true_weights) j["true_weights"] = vector(*r.data.true_weights);
   if (r.learned.ile) j["ile"] = *r.learned.ile;
@@ -131,6 +132,14 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
   j["em_iterations"] = r.learned.em_iterations;
   if (r.learned.confidence) j["confidence"] = *r.learned.confidence;  // with posterior draws (hbirl learn --log)
   if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta);
+  if (r.learned.end_sensor.size() > 0) {  // the learned O_end per terminal state: [state, probabilities]
+    const Mdp& mdp = learned_in->mdp();
+    Json end = Json::array();
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (mdp.is_terminal(s)) end.push_back({s, vector(r.learned.end_sensor.row(s).transpose())});
+    }
+    j["end_sensor"] = end;
+  }
   j["demonstrations"] = r.learned.trajectories;
   j["controlled_episodes"] = r.data.controlled_observed.size();
   j["dataset_digest"] = r.learned.digest;

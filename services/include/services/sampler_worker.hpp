@@ -88,7 +88,7 @@ class SamplerWorker {
   // The E-step over the blocks it computes, and what it was made for.
   std::optional<ObservationEStep> estep_;
   std::vector<std::pair<int, std::uint64_t>> estep_blocks_;
-  std::tuple<int, int, int, bool, int, bool> estep_shape_{};
+  std::tuple<int, int, int, bool, int, bool, int, int> estep_shape_{};
   std::set<std::pair<std::int64_t, int>> answered_;  // (request id, attempt): idempotent
   std::atomic<std::int64_t> blocks_computed_{0};
   std::int64_t status_seq_ = 0;

@@ -15,6 +15,7 @@ class RecordedRun final : public SensorRun {
       throw InputError("observation_model", "missing: there is nothing to publish without symbols");
     num_symbols = problem.observation_model->num_symbols;
     num_sources = 1 + problem.observation_model->num_confounders;
+    num_end_symbols = problem.observation_model->num_end_symbols();
     if (problem.true_weights) true_weights = *problem.true_weights;
     std::vector<Trajectory> controlled, demonstrations;
     std::vector<ObservedTrajectory> controlled_seen, seen;
@@ -23,11 +24,6 @@ class RecordedRun final : public SensorRun {
       const DemonstratedTrajectory& d = problem.demonstration[i];
       if (!d.steps)
         throw InputError("demonstration[" + std::to_string(i) + "].steps", "missing: a sensor publishes observations");
-      // Not silently less: the bus does not carry what was seen of the end yet.
-      if (d.steps->end_state >= 0)
-        throw InputError("demonstration[" + std::to_string(i) + "].end_state", "the bus cannot carry it yet");
-      if (!d.steps->end_symbols.empty())
-        throw InputError("demonstration[" + std::to_string(i) + "].end_symbols", "the bus cannot carry them yet");
       // Steps without known truth still need a length: placeholders, never published.
       const Trajectory steps =
           d.truth ? *d.truth : Trajectory(static_cast<size_t>(d.steps->length()), StateAction{0, 0});

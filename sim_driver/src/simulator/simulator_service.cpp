@@ -201,6 +201,14 @@ hbirl::episode_marker_t Simulator::end_marker(int id) {
                   e.start_time + static_cast<double>(e.steps.size()) * run_->step_seconds);
   m.num_steps = static_cast<std::int32_t>(e.steps.size());
   m.ends_in_terminal = e.ends_in_terminal;
+  if (!run_->camera() && e.ends_in_terminal) {  // what was seen of how it ended
+    const ObservedTrajectory& seen = run_->observed(id);
+    m.end_state_known = seen.end_state >= 0;
+    m.end_state = std::max(seen.end_state, 0);
+    m.num_end_symbols = run_->num_end_symbols;
+    m.num_end_reports = static_cast<std::int32_t>(seen.end_symbols.size());
+    for (int w : seen.end_symbols) m.end_report.push_back(static_cast<std::int16_t>(w));
+  }
   return m;
 }
 

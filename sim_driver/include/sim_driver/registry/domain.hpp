@@ -56,6 +56,10 @@ class Simulation {
   Eigen::VectorXd true_weights;
   int num_symbols = 0;  // a sensor's
   int num_sources = 1;  // a sensor's: the subject and its confounding elements
+  // A sensor's end sensor's alphabet (0: none); its reports and any terminal state known to
+  // have been entered are the observed trajectories' end_symbols and end_state, published
+  // with each episode's end marker.
+  int num_end_symbols = 0;
 
   virtual bool camera() const = 0;
   // A camera's frame k of step t of episode `id`; returns its sim time.
