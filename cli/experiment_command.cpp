@@ -747,8 +747,9 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       "hbirl on random tasks nobody tuned it for (hbirl generate random-task): each task learned from its\n"
       "true trajectories, with O fixed at the controlled run's prior, with the paper's update (c = 0.5, 0.1) and\n"
       "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts); and the information limit's oracles\n"
-      "(the true O's and the simulator's source mixture, nothing learned; also told which terminal state each\n"
-      "trajectory entered), the default with a sensor that sees that, and the default and the oracle with the\n"
+      "(the true O's and each eta read as the simulator's rules say, nothing learned; also told which terminal\n"
+      "state each trajectory entered; the true O's with eta learned), the default with a sensor that sees which,\n"
+      "and the default and the oracle with the\n"
       "task's noisy end sensor (1-3 reports of the terminal state entered). Writes random_tasks_runs.csv (one row\n"
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
@@ -761,6 +762,11 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   tasks_cmd->add_option("--first-seed", args.options.first_seed, "Seed of the first task")->capture_default_str();
+  tasks_cmd
+      ->add_option("--controlled", args.options.controlled,
+                   "Trajectories of every task's controlled run (default: as each task draws it, 5-30): how "
+                   "much of the learner's gap to the oracles is the subject prior's information")
+      ->check(CLI::Range(1, 100000));
   tasks_cmd->add_option("--methods", args.methods, "Comma-separated: " + random_task_method_keys() + "; or all")
       ->capture_default_str();
   tasks_cmd->add_option("--threads", args.options.threads, "Threads (0 = one per core)")

@@ -160,6 +160,8 @@ CLI::App* add_random_task_generator(CLI::App* cmd, RandomTaskArgs& args) {
       ->check(CLI::Range(0.0, 1.0));
   task->add_option("--demonstrations", args.overrides.demonstrations, "Fix the number of demonstrations")
       ->check(CLI::Range(1, 100000));
+  task->add_option("--controlled", args.overrides.controlled, "Fix the number of controlled-run trajectories")
+      ->check(CLI::Range(1, 100000));
   task->add_option("--eta", args.overrides.eta, "Fix eta: plausible or uniform")
       ->check(CLI::IsMember({"plausible", "uniform"}));
   task->add_flag("--end-sensor", args.end_sensor,

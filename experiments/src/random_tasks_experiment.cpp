@@ -56,9 +56,11 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
 }
 
 // The oracles' data (issue 33): what the simulator used, nothing learned -- the true
-// subject O and element O's as the prior's fixed means, every observation's eta the
-// simulator's source mixture (the subject with probability subject_share, else an element
-// chosen evenly).
+// subject O and element O's as the prior's fixed means, every observation's eta what its
+// stated eta says of the true source under the simulator's own rules (calibrated_eta: the
+// source mixture -- the subject with probability subject_share, else an element chosen
+// evenly -- and how the labeller states eta). A first version used the mixture alone,
+// which throws away what a plausible eta says: the default, learning eta, beat it.
 std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task) {
   ObservationPrior prior = task.prior;
   prior.subject_alpha = task.subject_o;  // its Dirichlet mean is the true O
@@ -71,9 +73,22 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
   for (int e = 0; e < E; ++e) mixture[1 + e] = (1.0 - task.subject_share) / E;
   std::vector<ObservedTrajectory> observed = task.observed.trajectories;
   for (size_t i = 0; i < observed.size(); ++i) {
-    for (Eigen::Index n = 0; n < observed[i].eta.rows(); ++n) observed[i].eta.row(n) = mixture;
+    for (Eigen::Index n = 0; n < observed[i].eta.rows(); ++n)
+      observed[i].eta.row(n) = calibrated_eta(observed[i].eta.row(n), mixture, task.eta);
   }
   return {std::move(prior), std::move(observed)};
+}
+
+// The prior that holds O at the truth while eta is learned (oracle_o): the true O's as
+// Dirichlet parameters of 10^6 pseudo-counts a row (what a demonstration's counts move by
+// less than 10^-4), every row counted (a base of 0) and weighed as given (strength 1).
+void hold_at_true_o(const RandomTask& task, ObservationPrior& prior) {
+  constexpr double kPseudoCounts = 1e6;
+  prior.subject_alpha = kPseudoCounts * task.subject_o;
+  prior.confounder_alpha = kPseudoCounts * task.confounder_o;
+  prior.subject_alpha_base = 0.0;
+  prior.automatic_strength = false;
+  prior.strength = 1.0;
 }
 
 // What was seen of each trajectory's end (RandomTaskMethod::End) added to `observed`.
@@ -108,6 +123,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   } else {
     ObservationPrior prior = task.prior;
     if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_alpha;
+    if (method.kind == "oracle_o") hold_at_true_o(task, prior);
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
     prior.c = method.c;
@@ -237,6 +253,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_end", "posterior", 0.1, 1, RandomTaskMethod::End::kState},
       {"posterior_end_sensor", "posterior", 0.1, 1, RandomTaskMethod::End::kSensor},
       {"oracle_end_sensor", "oracle", 0.1, 1, RandomTaskMethod::End::kSensor},
+      {"oracle_o", "oracle_o", 0.1, 1},
   };
   return methods;
 }
@@ -265,12 +282,15 @@ std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& o) {
     for (int t = 0; t < o.tasks; ++t) seeds.push_back(o.first_seed + static_cast<std::uint64_t>(t));
   }
   if (seeds.empty() || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
-  std::vector<RandomTaskRun> runs =
-      on_random_data_sets<RandomTaskRun>(seeds, o.draws, o.methods.size(), o.threads, o.progress,
-                                         [&](const RandomTask& task, size_t m, RandomTaskRun& run) {
-                                           run = describe(task, o.methods[m]);
-                                           learn(task, o.methods[m], run);
-                                         });
+  RandomTaskOverrides overrides;
+  overrides.controlled = o.controlled;
+  std::vector<RandomTaskRun> runs = on_random_data_sets<RandomTaskRun>(
+      seeds, o.draws, o.methods.size(), o.threads, o.progress,
+      [&](const RandomTask& task, size_t m, RandomTaskRun& run) {
+        run = describe(task, o.methods[m]);
+        learn(task, o.methods[m], run);
+      },
+      overrides);
   for (size_t i = 0; i < runs.size(); ++i) runs[i].method = o.methods[i % o.methods.size()].key;  // a failed task's too
   return runs;
 }
@@ -429,6 +449,8 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "posterior_end_sensor");
   compare("posterior_end_sensor", "posterior_end");
   compare("posterior_end_sensor", "oracle_end_sensor");
+  compare("posterior", "oracle_o");
+  compare("oracle_o", "oracle_sensor");
 }
 
 // Does the default's answer depend on c?

@@ -68,9 +68,12 @@ Eigen::MatrixXd read_probability_rows(const JsonNode& list, Eigen::Index rows, i
 const detail::JsonShape& sensor_shape() {
   using detail::JsonShape;
   static const JsonShape subject = JsonShape::list(detail::kSubjectObservationTuple),
-                         confounder = JsonShape::list(detail::kConfounderObservationTuple);
+                         confounder = JsonShape::list(detail::kConfounderObservationTuple),
+                         end = JsonShape::list(detail::kEndObservationTuple);
   static const JsonShape shape = JsonShape::object({{"subject_observation", &subject},
                                                     {"confounder_observation", &confounder},
+                                                    {"end_observation", &end},
+                                                    {"end_reports", nullptr},
                                                     {"observations_per_step", nullptr},
                                                     {"eta", nullptr},
                                                     {"occlusion", nullptr},
@@ -119,6 +122,24 @@ SensorSpec read_sensor(const JsonNode& node, const DomainSpec& domain, std::vect
     s.confounder_o = read_probability_rows(
         *list, elements, symbols, detail::kConfounderObservationTuple,
         [elements](const JsonNode& e) { return static_cast<Eigen::Index>(e[0].as_int(0, elements - 1)); });
+  }
+  // The end sensor (docs/MODEL.md "Sensors that see the end"): its true O_end per terminal
+  // state (unlisted ones uniform) and how many reports each ending gets.
+  const int end_symbols = domain.observation_model->num_end_symbols();
+  for (const char* key : {"end_observation", "end_reports"}) {
+    if (auto given = node.find(key); given && end_symbols == 0)
+      given->fail("needs observation_model.end_sensor (the end sensor's alphabet)");
+  }
+  if (end_symbols > 0) {
+    static const nlohmann::json kNoRows = nlohmann::json::array();
+    s.end_o = read_probability_rows(node.find("end_observation").value_or(JsonNode(kNoRows, "")), mdp.num_states,
+                                    end_symbols, detail::kEndObservationTuple, [&mdp](const JsonNode& e) {
+                                      const int st = static_cast<int>(e[0].as_int(0, mdp.num_states - 1));
+                                      if (!mdp.is_terminal(st))
+                                        e[0].fail("state " + std::to_string(st) + " is not terminal");
+                                      return static_cast<Eigen::Index>(st);
+                                    });
+    if (auto n = node.find("end_reports")) s.end_reports = static_cast<int>(n->as_int(1, 1000));
   }
   if (auto n = node.find("observations_per_step")) s.observations_per_step = static_cast<int>(n->as_int(1, kMaxCount));
   if (auto e = node.find("eta")) {

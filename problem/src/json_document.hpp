@@ -36,6 +36,7 @@ inline constexpr TupleList kEndAlphaTuple{3, "[terminal_state, symbol, alpha]"};
 inline constexpr TupleList kTruthTuple{2, "[state, action]"};
 inline constexpr TupleList kSubjectObservationTuple{4, "[state, action, symbol, probability]"};
 inline constexpr TupleList kConfounderObservationTuple{3, "[element, symbol, probability]"};
+inline constexpr TupleList kEndObservationTuple{3, "[terminal_state, symbol, probability]"};
 
 // What the readers know of a value. Where the value has another type than its shape
 // expects, the shape is not applied and the reader reports the type.

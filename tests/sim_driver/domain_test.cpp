@@ -157,6 +157,46 @@ TEST(Domains, FileSensorSimulatesWhatItsFileSays) {
   EXPECT_NE(domain->simulate(options)->observed(60).symbols, run->observed(60).symbols);
 }
 
+// A domain file's end sensor (sensor.end_observation, end_reports): each demonstration that
+// entered the terminal state carries end_reports reports drawn from its row of O_end, the
+// cut-off ones and the controlled run none; the rest of the run is as without it.
+TEST(Domains, FileSensorReportsEndingsAsItsFileSays) {
+  std::string text = tiny_domain("tiny", "true", 0.25);
+  const std::string model = R"("num_confounders": 1})";
+  text.replace(text.find(model), model.size(), R"("num_confounders": 1, "end_sensor": {"num_symbols": 2}})");
+  text.replace(text.find(R"("observations_per_step")"), 0,
+               R"("end_observation": [[2, 0, 0.8], [2, 1, 0.2]], "end_reports": 3, )");
+  const TempFile file("tiny.json", text);
+  const auto domain = open_domain(file.path);
+  SimulationOptions options;
+  options.seed = 5;
+  const auto run = domain->simulate(options);
+  EXPECT_EQ(run->num_end_symbols, 2);
+  const TempFile plain_file("tiny.json", tiny_domain("tiny", "true", 0.25));
+  const auto plain = open_domain(plain_file.path)->simulate(options);
+  double zeros = 0, reports = 0;
+  for (int id = 0; id < static_cast<int>(run->episodes.size()); ++id) {
+    const auto& e = run->episodes[static_cast<size_t>(id)];
+    const ObservedTrajectory& o = run->observed(id);
+    EXPECT_EQ(o.symbols, plain->observed(id).symbols);  // the same run besides
+    EXPECT_EQ(o.end_symbols.size(), e.ends_in_terminal && !e.controlled ? 3u : 0u) << id;
+    for (int w : o.end_symbols) zeros += w == 0;
+    reports += static_cast<double>(o.end_symbols.size());
+  }
+  ASSERT_GT(reports, 600);
+  EXPECT_NEAR(zeros / reports, 0.8, 5 * std::sqrt(0.16 / reports));
+  // Without an end sensor in the observation model there is nothing to report with.
+  std::string orphan = tiny_domain("tiny", "true", 0.25);
+  orphan.replace(orphan.find(R"("observations_per_step")"), 0, R"("end_reports": 2, )");
+  const TempFile orphan_file("tiny.json", orphan);
+  try {
+    open_domain(orphan_file.path);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), orphan_file.path + ": sensor.end_reports");
+  }
+}
+
 TEST(Domains, PlausibleEtaFavoursTheTrueSourceFourTimesInFive) {
   const TempFile file("plausible.json", tiny_domain("tiny", "plausible", 0.0));
   const auto run = open_domain(file.path)->simulate({});

@@ -54,5 +54,42 @@ TEST(GridworldObservations, EtaKinds) {
   EXPECT_DOUBLE_EQ(obs.trajectories[0].eta(7, 0), 1.0);
 }
 
+// calibrated_eta is what a plausible eta says of the true source: against the frequencies of
+// assign_eta's own draws, sources drawn from an uneven mixture (each favoured source's
+// column of true sources, 20000 observations, binomial bounds at 5 standard errors).
+TEST(GridworldObservations, CalibratedEtaIsTheTrueSourcesFrequencyGivenTheStatedEta) {
+  Rng rng(11);
+  const int sources = 3;
+  Eigen::RowVectorXd mixture(sources);
+  mixture << 0.5, 0.3, 0.2;
+  GridworldObservations obs;
+  ObservedTrajectory t;
+  std::vector<int> truth;
+  for (int n = 0; n < 20000; ++n) {
+    t.symbols.push_back(0);
+    truth.push_back(rng.categorical(mixture.transpose()));
+  }
+  t.step_begin = {0, static_cast<int>(t.symbols.size())};
+  obs.trajectories.push_back(t);
+  obs.true_sources.push_back(truth);
+  assign_eta(obs, sources, EtaKind::kPlausible, rng);
+  Eigen::MatrixXd counts = Eigen::MatrixXd::Zero(sources, sources);  // favoured x true
+  for (int n = 0; n < static_cast<int>(truth.size()); ++n) {
+    Eigen::Index favoured = 0;
+    obs.trajectories[0].eta.row(n).maxCoeff(&favoured);
+    counts(favoured, truth[static_cast<size_t>(n)]) += 1.0;
+  }
+  for (int j = 0; j < sources; ++j) {
+    Eigen::RowVectorXd stated = Eigen::RowVectorXd::Constant(sources, 0.2);
+    stated[j] = 0.6;
+    const Eigen::RowVectorXd p = calibrated_eta(stated, mixture, EtaKind::kPlausible);
+    const double total = counts.row(j).sum();
+    for (int z = 0; z < sources; ++z) {
+      EXPECT_NEAR(counts(j, z) / total, p[z], 5 * std::sqrt(p[z] * (1 - p[z]) / total)) << j << " " << z;
+    }
+  }
+  EXPECT_EQ(calibrated_eta(Eigen::RowVectorXd::Constant(sources, 1.0 / 3), mixture, EtaKind::kUniform), mixture);
+}
+
 }  // namespace
 }  // namespace hbirl

@@ -116,6 +116,15 @@ TEST(RandomTask, OverridesFixWhatTheySay) {
   for (const auto& obs : t.observed.trajectories) {
     for (int step = 0; step < obs.length(); ++step) EXPECT_EQ(obs.observations_at(step), t.per_step);  // never occluded
   }
+  // The controlled run's size alone: the demonstrations and what was seen of them as drawn.
+  RandomTaskOverrides bigger;
+  bigger.controlled = 40;
+  const RandomTask drawn = make_random_task(3, 0), more = make_random_task(3, 0, bigger);
+  EXPECT_EQ(more.controlled.size(), 40u);
+  EXPECT_NE(drawn.controlled.size(), 40u);
+  EXPECT_EQ(more.demonstrations, drawn.demonstrations);
+  EXPECT_EQ(more.observed.trajectories[0].symbols, drawn.observed.trajectories[0].symbols);
+  EXPECT_EQ(more.end_reports, drawn.end_reports);
   o.eta = "sometimes";
   EXPECT_THROW(make_random_task(3, 0, o), InputError);
 }

@@ -11,8 +11,9 @@
 //                      which the posterior update does not use: the answer must not change)
 //   posterior_r4       the default with 4 restarts instead of 1 (do restarts change the answer?)
 //   oracle_sensor      what the simulator used, nothing learned: the true subject O and element
-//                      O's, every observation's eta the simulator's source mixture -- the
-//                      best learning from observations could reach with this model
+//                      O's, every observation's eta what its stated eta says of the true
+//                      source under the simulator's rules (calibrated_eta) -- the best
+//                      learning from observations could reach with this model
 //   oracle_sensor_end  the same, also told which terminal state each trajectory entered when
 //                      it entered one (a goal or a trap): the part of the gap to
 //                      true_trajectories that a sensor seeing which would close
@@ -23,6 +24,9 @@
 //                      "end"): 1-3 reports per ending, O_end learned from the controlled
 //                      run's prior (docs/MODEL.md "Sensors that see the end")
 //   oracle_end_sensor  oracle_sensor with the same reports and the true O_end
+//   oracle_o           the true subject O and element O's held fixed, eta learned as the
+//                      default learns it: the default's gap to oracle_sensor split into
+//                      what O's estimate costs and what eta's does
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -39,7 +43,7 @@ namespace hbirl {
 
 struct RandomTaskMethod {
   std::string key;   // as above
-  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle"
+  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
@@ -57,6 +61,7 @@ struct RandomTasksOptions {
   std::uint64_t first_seed = 1;
   std::vector<std::uint64_t> seeds;  // these task seeds instead, when not empty
   int draws = 3;                     // data sets per task
+  int controlled = -1;               // trajectories of every task's controlled run (-1: as drawn, 5-30)
   std::vector<RandomTaskMethod> methods = all_random_task_methods();
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads
@@ -89,13 +94,15 @@ struct RandomTaskRun {
 // `variants` runs on each data set (task seed, draw) of random tasks (on_data_sets).
 template <class Run, class Learn>
 std::vector<Run> on_random_data_sets(const std::vector<std::uint64_t>& seeds, int draws, size_t variants, int threads,
-                                     const std::function<void(int, int)>& progress, const Learn& learn) {
+                                     const std::function<void(int, int)>& progress, const Learn& learn,
+                                     const RandomTaskOverrides& overrides = {}) {
   std::vector<DataSetId> ids;
   for (std::uint64_t seed : seeds) {
     for (int d = 0; d < draws; ++d) ids.push_back({seed, d});
   }
   return on_data_sets<Run>(
-      ids, variants, threads, progress, [](const DataSetId& id) { return make_random_task(id.seed, id.draw); }, learn);
+      ids, variants, threads, progress,
+      [&overrides](const DataSetId& id) { return make_random_task(id.seed, id.draw, overrides); }, learn);
 }
 
 std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& options);

@@ -25,6 +25,10 @@ struct SensorSpec {
   int length = 10;                   // at most this many steps each (fewer when a terminal state is entered)
   int controlled_trajectories = 20;  // the controlled run: the subject alone, true steps known
   double step_seconds = 1.0;         // sim time per step (the messages' utime)
+  // With an end sensor (observation_model.end_sensor): its true O_end, one row per state
+  // (terminal rows as listed, else uniform), and the reports of each ending.
+  Eigen::MatrixXd end_o;
+  int end_reports = 1;
 };
 
 struct DomainSpec {

@@ -40,12 +40,15 @@ class SensorSimulation final : public SensorRun {
     if (!expert.converged) throw InputError("true_weights", "the soft expert's value iteration did not converge");
     Rng rng(seed);
     Rng expert_rng = rng.split(0), sensor_rng = rng.split(1);
+    std::vector<int> entered;  // per episode, the terminal state it entered (-1: cut off)
     const auto demonstrate = [&](int count, std::vector<char>& ended) {
       std::vector<Trajectory> out;
       for (int i = 0; i < count; ++i) {
         bool terminal = false;
-        out.push_back(sample_trajectory(mdp, expert.policy, s.length, expert_rng, &terminal));
+        int state = -1;
+        out.push_back(sample_trajectory(mdp, expert.policy, s.length, expert_rng, &terminal, &state));
         ended.push_back(terminal ? 1 : 0);
+        entered.push_back(state);
       }
       return out;
     };
@@ -68,7 +71,22 @@ class SensorSimulation final : public SensorRun {
     watch.eta = eta_kind(s.eta);
     GridworldObservations seen = observe_gridworld(mdp, demonstrations, s.subject_o, s.confounder_o, watch, sensor_rng);
     for (auto& t : seen.trajectories) run.trajectories.push_back(std::move(t));
+    report_ends(s, entered, controlled.size(), run.trajectories, rng.split(2));
     add_episodes(controlled, demonstrations, std::move(run.trajectories), ended);
+  }
+
+ private:
+  // The end sensor's reports of each demonstration that entered a terminal state (its own
+  // stream: the rest of the run is the same with or without it).
+  void report_ends(const SensorSpec& s, const std::vector<int>& entered, size_t controlled,
+                   std::vector<ObservedTrajectory>& observed, Rng rng) {
+    num_end_symbols = static_cast<int>(s.end_o.cols());
+    if (num_end_symbols == 0) return;
+    for (size_t i = controlled; i < observed.size(); ++i) {
+      if (entered[i] < 0) continue;
+      for (int k = 0; k < s.end_reports; ++k)
+        observed[i].end_symbols.push_back(rng.categorical(s.end_o.row(entered[i]).transpose()));
+    }
   }
 };
 

@@ -352,7 +352,8 @@ RandomTask make_random_task(std::uint64_t seed, int draw, const RandomTaskOverri
   // The data: the same task watched again for every draw.
   Rng data = root.split(0xDA7A0000ull + static_cast<std::uint64_t>(draw));
   const int demonstrations = overrides.demonstrations > 0 ? overrides.demonstrations : uniform_between(data, 5, 40);
-  const int controlled = uniform_between(data, 5, 30);
+  const int drawn_controlled = uniform_between(data, 5, 30);  // (drawn either way: the same stream)
+  const int controlled = overrides.controlled > 0 ? overrides.controlled : drawn_controlled;
   const SoftSolution expert = soft_value_iteration(task.mdp, task.mdp.reward(task.true_weights));
   if (!expert.converged) throw std::runtime_error("soft value iteration did not converge");
   std::vector<char> ended;

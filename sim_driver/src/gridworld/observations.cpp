@@ -61,6 +61,13 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
   return out;
 }
 
+namespace {
+// assign_eta's plausible rule: the true source is favoured with this probability (else a
+// source drawn evenly is), and the favoured source gets this much of eta.
+constexpr double kPlausibleAccuracy = 0.8;
+constexpr double kPlausibleMass = 0.6;
+}  // namespace
+
 void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng) {
   const int E = sources - 1;
   for (size_t i = 0; i < observations.trajectories.size(); ++i) {
@@ -85,14 +92,36 @@ void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, 
             observed.eta(row, 0) = 1.0;
             break;
           }
-          const int favoured = rng.uniform() < 0.8 ? truth[static_cast<size_t>(row)] : rng.uniform_int(sources);
-          observed.eta.row(row).setConstant(0.4 / E);
-          observed.eta(row, favoured) = 0.6;
+          const int favoured =
+              rng.uniform() < kPlausibleAccuracy ? truth[static_cast<size_t>(row)] : rng.uniform_int(sources);
+          observed.eta.row(row).setConstant((1.0 - kPlausibleMass) / E);
+          observed.eta(row, favoured) = kPlausibleMass;
           break;
         }
       }
     }
   }
+}
+
+Eigen::RowVectorXd calibrated_eta(const Eigen::RowVectorXd& stated, const Eigen::RowVectorXd& mixture, EtaKind kind) {
+  switch (kind) {
+    case EtaKind::kTrue:
+    case EtaKind::kSubject:
+      return stated;
+    case EtaKind::kUniform:
+      return mixture;
+    case EtaKind::kPlausible: {
+      const Eigen::Index sources = stated.size();
+      if (sources == 1) return stated;
+      Eigen::Index favoured = 0;
+      stated.maxCoeff(&favoured);
+      // Pr(favoured | z) = accuracy [favoured = z] + (1 - accuracy) / sources.
+      Eigen::RowVectorXd p = mixture * ((1.0 - kPlausibleAccuracy) / static_cast<double>(sources));
+      p[favoured] += mixture[favoured] * kPlausibleAccuracy;
+      return p / p.sum();
+    }
+  }
+  return stated;
 }
 
 namespace {

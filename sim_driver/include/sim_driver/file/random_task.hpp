@@ -52,7 +52,8 @@ struct RandomTaskOverrides {
   int confounders = -1;
   double occlusion = -1.0;
   int demonstrations = -1;
-  std::string eta;  // "plausible" or "uniform"
+  int controlled = -1;  // trajectories of the controlled run (the rest of the data as drawn)
+  std::string eta;      // "plausible" or "uniform"
 };
 
 struct RandomTask {

@@ -50,6 +50,13 @@ GridworldObservations observe_gridworld(const Mdp& mdp, const std::vector<Trajec
 // only for kPlausible.
 void assign_eta(GridworldObservations& observations, int sources, EtaKind kind, Rng& rng);
 
+// What an eta that assign_eta stated says of the true source, when the sources are drawn
+// from `mixture` (1 + |E| entries): Pr(source | stated eta), by Bayes' rule over assign_eta's
+// own draw (kPlausible: the favoured source is the true one with probability 0.8, else any
+// source evenly; kUniform says nothing; kTrue everything). The most a learner could read
+// from the labeller: the oracles' eta (random_tasks_experiment.hpp).
+Eigen::RowVectorXd calibrated_eta(const Eigen::RowVectorXd& stated, const Eigen::RowVectorXd& mixture, EtaKind kind);
+
 // A labeller that claims more (or less) than it knows (docs/results/eta_sensitivity): it
 // picks the true source with probability `accuracy`, else one of the other sources evenly,
 // and gives its pick `mass` of eta and the other sources the rest evenly. The pick is the
