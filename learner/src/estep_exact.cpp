@@ -191,11 +191,27 @@ void ExactEngine::end_evidence(const ObservedTrajectory& trajectory, const Eigen
 
 void ExactEngine::entered_state_posterior() {
   const int S = mdp_.num_states;
+  entered_.resize(S);
+  if (!scaled_) {
+    // In log space, as the passes were: log q(s) = log e(s) + log sum_r gamma(r) T(s | r) /
+    // beta_T(r), with log beta_T (log_beta_'s last row) the log of sum_s T(s | r) e(s) --
+    // exact when the end's evidence spans more than a double's range.
+    const Eigen::Index last = log_beta_.rows() - 1;
+    previous_.resize(mdp_.num_pairs());
+    for (int r = 0; r < mdp_.num_pairs(); ++r) {
+      previous_[r] = marginal_[r] > 0.0 ? std::log(marginal_[r]) - log_beta_(last, r) : kNegInf;
+    }
+    for (int s = 0; s < S; ++s) {
+      const double log_q =
+          end_log_[s] == kNegInf ? kNegInf : end_log_[s] + log_sum_exp_row(log_incoming_, s, previous_.data());
+      entered_[s] = log_q == kNegInf ? 0.0 : std::exp(log_q);
+    }
+    return;
+  }
   // e shifted by its maximum: the ratios below do not change, nothing underflows that matters.
   scratch_.head(S) = shifted_exp(end_log_);
   const Eigen::VectorXd exit = mdp_.transitions * scratch_.head(S);  // per pair: sum_s T(s | r) e(s)
   ratio_ = (marginal_.array() > 0.0).select(marginal_.array() / exit.array(), 0.0);
-  entered_.resize(S);
   sparse_times(incoming_, ratio_.data(), entered_.data());
   entered_.array() *= scratch_.head(S).array();
 }
@@ -485,6 +501,9 @@ template <typename PerObservation>
 void ExactEngine::add_marginals(const ObservedTrajectory& trajectory, double ll, EStepStatistics& out, bool watch,
                                 PerObservation&& per_observation) {
   if (watch) out.watched_log_likelihood = ll;
+  // A block with end reports answers with end counts (zero when it is all impossible).
+  if (!trajectory.end_symbols.empty() && out.alpha_dot.end.size() == 0)
+    out.alpha_dot.end = Eigen::MatrixXd::Zero(mdp_.num_states, end_symbols_);
   if (ll == kNegInf) {
     ++out.impossible;
     return;

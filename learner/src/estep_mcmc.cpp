@@ -25,7 +25,7 @@ class Chain {
         policy_(policy),
         model_(model),
         tr_(tr),
-        end_(shifted_exp(end_log_evidence(mdp, tr, model.end))),  // (a constant the ratios do not see)
+        end_log_(end_log_evidence(mdp, tr, model.end)),
         T_(tr.length()),
         Z_(1 + model.num_confounders()) {
     s_.assign(static_cast<size_t>(T_), 0);
@@ -87,25 +87,38 @@ class Chain {
   // summed over s exactly (Rao-Blackwellised) rather than sampled.
   void add_end_counts(AlphaCounts& out) const {
     const int r = pair(T_ - 1);
-    const double total = std::exp(log_exit(r));
-    if (!(total > 0.0)) return;
+    const double total = log_exit(r);
+    if (total == kNegInf) return;
     for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) {
-      const double q = it.value() * end_[it.col()] / total;
-      if (q > 0.0) {
-        for (int w : tr_.end_symbols) out.end(it.col(), w) += q;
-      }
+      const double log_q = safe_log(it.value()) + end_log_[it.col()] - total;
+      if (log_q == kNegInf) continue;
+      for (int w : tr_.end_symbols) out.end(it.col(), w) += std::exp(log_q);
     }
   }
 
  private:
   double log_transition(int r, int next) const { return safe_log(mdp_.transitions.coeff(r, next)); }
 
-  // log of what the end says given the last pair r: sum_s T(s | r) Pr(end | s)
-  // (end_log_evidence), up to a constant.
+  // log of what the end says given the last pair r: log sum_s T(s | r) Pr(end | s)
+  // (end_log_evidence), by log-sum-exp: reports far apart cannot underflow it.
   double log_exit(int r) const {
-    double p = 0.0;
-    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) p += it.value() * end_[it.col()];
-    return safe_log(p);
+    if (tr_.end_symbols.empty()) {  // the evidence is 1 or 0: summed plainly (the bits of before)
+      double p = 0.0;
+      for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) {
+        if (end_log_[it.col()] != kNegInf) p += it.value();
+      }
+      return safe_log(p);
+    }
+    double m = kNegInf;
+    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it)
+      m = std::max(m, safe_log(it.value()) + end_log_[it.col()]);
+    if (m == kNegInf) return kNegInf;
+    double sum = 0.0;
+    for (SparseRowMatrix::InnerIterator it(mdp_.transitions, r); it; ++it) {
+      const double x = safe_log(it.value()) + end_log_[it.col()];
+      if (x != kNegInf) sum += std::exp(x - m);
+    }
+    return m + std::log(sum);
   }
 
   // sum over step t's observations labelled subject of log O_r(w).
@@ -236,7 +249,7 @@ class Chain {
   const SoftSolution& policy_;
   const ObservationModel& model_;
   const ObservedTrajectory& tr_;
-  const Eigen::VectorXd end_;  // Pr(end | s) up to a constant (end_log_evidence)
+  const Eigen::VectorXd end_log_;  // log Pr(end | s) (end_log_evidence)
   int T_;
   int Z_;
   std::vector<int> s_;
@@ -369,6 +382,9 @@ void McmcEngine::accumulate(const SoftSolution& policy, const ObservationModel& 
   RowMatrix sources;
   AlphaCounts alpha_dot;
   McmcDiagnostics diagnostics;
+  // A block with end reports answers with end counts (zero when it is all impossible).
+  if (!trajectory.end_symbols.empty() && out.alpha_dot.end.size() == 0)
+    out.alpha_dot.end = Eigen::MatrixXd::Zero(mdp_.num_states, model.end.cols());
   if (ll == kNegInf || !sample(policy, model, trajectory, rng, marginals, sources, alpha_dot, diagnostics)) {
     ++out.impossible;
     return;

@@ -423,11 +423,12 @@ void read_end_sensor(const JsonNode& node, const Mdp& mdp, ObservationPrior& pri
   if (std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) == mdp.terminal.end())
     node.fail("is given, but the MDP has no terminal states for it to see");
   const JsonNode count = node.at("num_symbols");
-  const int K = static_cast<int>(count.as_int(1, 1 << 16));
+  const int K = static_cast<int>(count.as_int(1, kMaxEndSymbols));
   if (static_cast<long long>(mdp.num_states) * K > kMaxFeatureCells)
     count.fail("num_states * num_symbols is more than the " + std::to_string(kMaxFeatureCells) + " cells allowed");
   double fallback = 1.0;
   if (auto d = node.find("alpha_default")) fallback = d->as_number(0.0, 1e300);
+  prior.end_alpha_base = fallback;
   prior.end_alpha = Eigen::MatrixXd::Zero(mdp.num_states, K);
   for (int s = 0; s < mdp.num_states; ++s) {
     if (mdp.is_terminal(s)) prior.end_alpha.row(s).setConstant(fallback);
@@ -683,6 +684,7 @@ void read_end(const JsonNode& item, const Problem& problem, DemonstratedTrajecto
     if (!node) continue;
     if (!trajectory.steps) node->fail("needs \"steps\": it is what was observed of the end");
     if (!trajectory.ends_in_terminal) node->fail("is given, but the trajectory does not end in a terminal state");
+    if (trajectory.controlled) node->fail("a controlled run's end is not used (give it in a demonstration)");
   }
   if (state) {
     const int s = static_cast<int>(state->as_int(0, problem.mdp.num_states - 1));
@@ -698,8 +700,9 @@ void read_end(const JsonNode& item, const Problem& problem, DemonstratedTrajecto
   if (symbols) {
     const int K = problem.observation_model ? problem.observation_model->num_end_symbols() : 0;
     if (K == 0) symbols->fail("is given, but observation_model has no \"end_sensor\"");
-    if (trajectory.controlled)
-      symbols->fail("a controlled run's end reports are not used (give them in a demonstration)");
+    if (symbols->size() > static_cast<size_t>(kMaxEndReports))
+      symbols->fail("has " + std::to_string(symbols->size()) + " reports, more than the " +
+                    std::to_string(kMaxEndReports) + " one ending may have");
     for (size_t k = 0; k < symbols->size(); ++k)
       trajectory.steps->end_symbols.push_back(static_cast<int>((*symbols)[k].as_int(0, K - 1)));
   }
@@ -749,7 +752,6 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
       }
     }
     if (!trajectory.steps && !trajectory.truth) item.fail("has neither \"steps\" nor \"truth\"");
-    read_end(item, problem, trajectory);
     if (auto c = item.find("controlled")) {
       trajectory.controlled = c->as_bool();
       if (trajectory.controlled && (!trajectory.steps || !trajectory.truth)) {
@@ -757,6 +759,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
             "a controlled-run trajectory needs both \"steps\" and \"truth\" (its prior counts symbols per true step)");
       }
     }
+    read_end(item, problem, trajectory);  // (after "controlled": a controlled run's end is not read)
     if (trajectory.steps && trajectory.truth &&
         static_cast<size_t>(trajectory.steps->length()) != trajectory.truth->size()) {
       item.at("truth").fail("has " + std::to_string(trajectory.truth->size()) + " steps but \"steps\" has " +
@@ -882,7 +885,7 @@ OrderedJson observation_model_to_json(const ObservationPrior& p, const Mdp& mdp)
       if (!mdp.is_terminal(s)) continue;
       for (int w = 0; w < p.num_end_symbols(); ++w) alpha.push_back({s, w, p.end_alpha(s, w)});
     }
-    om["end_sensor"] = J{{"num_symbols", p.num_end_symbols()}, {"alpha", alpha}};
+    om["end_sensor"] = J{{"num_symbols", p.num_end_symbols()}, {"alpha", alpha}, {"alpha_default", p.end_alpha_base}};
   }
   return om;
 }

@@ -51,8 +51,9 @@ std::pair<int, std::vector<int>> seen_end(const hbirl::episode_marker_t& m,
                                           const std::optional<std::pair<std::vector<char>, int>>& expected) {
   std::pair<int, std::vector<int>> out{m.end_state_known ? m.end_state : -1,
                                        std::vector<int>(m.end_report.begin(), m.end_report.end())};
-  if (m.num_end_reports > 0 && m.controlled)
-    throw InputError("episode_marker.num_end_reports", "a controlled run's end reports are not used");
+  if (m.controlled && (m.num_end_reports > 0 || m.end_state_known))
+    throw InputError(m.end_state_known ? "episode_marker.end_state_known" : "episode_marker.num_end_reports",
+                     "a controlled run's end is not used");
   if (!expected) return out;
   const auto& [terminal, end_symbols] = *expected;
   if (out.first >= 0 && (out.first >= static_cast<int>(terminal.size()) || !terminal[static_cast<size_t>(out.first)]))
@@ -189,6 +190,14 @@ void DatasetBuilder::on_end_episode(const hbirl::episode_marker_t& m) {
     contradicted("episode " + std::to_string(m.episode) + " ended twice, differently (" + std::to_string(e.num_steps) +
                  " then " + std::to_string(m.num_steps) + " steps)");
   }
+  // The reports count against --max-dataset-mb as frames do (a marker may hold 1000).
+  const std::int64_t report_bytes =
+      4 * (static_cast<std::int64_t>(end_reports.size()) - static_cast<std::int64_t>(e.end_reports.size()));
+  if (report_bytes > 0 && bytes_ + report_bytes > max_bytes_) {
+    throw InputError("episode_marker.num_end_reports", "the run's data would take more than --max-dataset-mb " +
+                                                           std::to_string(max_bytes_ >> 20) + " MB: marker not kept");
+  }
+  bytes_ += report_bytes;
   e.ends_in_terminal = m.ends_in_terminal;
   e.end_state = end_state;
   e.end_reports = std::move(end_reports);

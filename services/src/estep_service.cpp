@@ -338,15 +338,19 @@ std::vector<EStepStatistics> BusBlockExecutor::run(const ObservationEStep& estep
   if (eta && eta->rows() > options_.max_contexts) return compute_here(estep, policy, model, seed, eta);
   const int blocks = estep.num_blocks();
   pass_ = Pass{};
-  pass_.shape = {blocks,
-                 estep.mdp().num_pairs(),
-                 model.num_symbols(),
-                 model.num_confounders(),
-                 eta ? static_cast<int>(eta->rows()) : 0,
-                 estep.options().watch,
-                 0};
+  pass_.shape = ResultShape{};
+  pass_.shape.blocks = blocks;
+  pass_.shape.pairs = estep.mdp().num_pairs();
+  pass_.shape.symbols = model.num_symbols();
+  pass_.shape.confounders = model.num_confounders();
+  pass_.shape.contexts = eta ? static_cast<int>(eta->rows()) : 0;
+  pass_.shape.watch = estep.options().watch;
   pass_.shape.end_rows = static_cast<int>(model.end.rows());
   pass_.shape.end_symbols = static_cast<int>(model.end.cols());
+  pass_.shape.end_reported.assign(static_cast<size_t>(blocks), 0);
+  for (size_t i = 0; i < estep.trajectories().size(); ++i) {
+    if (!estep.trajectories()[i].end_symbols.empty()) pass_.shape.end_reported[i / ObservationEStep::kBlockSize] = 1;
+  }
   if (pass_.shape.watch >= 0)
     pass_.shape.watch_steps = estep.trajectories()[static_cast<size_t>(pass_.shape.watch)].length();
   pass_.received.assign(static_cast<size_t>(blocks), std::nullopt);

@@ -171,8 +171,11 @@ void check_shape(const hbirl::estep_result_t& m, const ResultShape& shape) {
   if (m.num_pairs != shape.pairs || m.num_symbols != shape.symbols || m.num_confounders != shape.confounders) {
     throw InputError("estep_result.num_pairs", "the statistics have the wrong shape");
   }
-  if (m.num_end_rows != 0 && (m.num_end_rows != shape.end_rows || m.num_end_symbols != shape.end_symbols))
-    throw InputError("estep_result.num_end_rows", "the end sensor's counts have the wrong shape");
+  // End counts exactly from the blocks whose trajectories have end reports, in O_end's shape.
+  const bool reported =
+      static_cast<size_t>(m.block) < shape.end_reported.size() && shape.end_reported[static_cast<size_t>(m.block)];
+  if (m.num_end_rows != (reported ? shape.end_rows : 0) || (reported && m.num_end_symbols != shape.end_symbols))
+    throw InputError("estep_result.num_end_rows", "the end sensor's counts have the wrong shape for this block");
   if (!std::isfinite(m.log_likelihood) && m.log_likelihood != -std::numeric_limits<double>::infinity()) {
     throw InputError("estep_result.log_likelihood", "is NaN or +inf");
   }

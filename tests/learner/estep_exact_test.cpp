@@ -447,6 +447,20 @@ TEST(ExactEngine, ExtremeProbabilitiesStayExact) {
                 1e-12 * std::max(1.0, std::abs(ref.log_likelihood)))
         << "trial " << trial;
     expect_marginals(ref, post, trial);
+    if (!tr.end_symbols.empty()) {
+      // The state entered, from the definitions: log q(s) = logsumexp_r (log alpha_T(r) +
+      // log T(s | r)) + sum_k log O_end(s, w_k) - log-likelihood.
+      const auto last = static_cast<size_t>(tr.length()) - 1;
+      for (int s = 0; s < mdp.num_states; ++s) {
+        std::vector<double> in;
+        for (int r = 0; r < mdp.num_pairs(); ++r)
+          in.push_back(ref.la[last][static_cast<size_t>(r)] + std::log(mdp.transitions.coeff(r, s)));
+        double log_q = reference_lse(in);
+        for (int w : tr.end_symbols) log_q += std::log(model.end(s, w));
+        const double q = mdp.is_terminal(s) && log_q > -INFINITY ? std::exp(log_q - ref.log_likelihood) : 0.0;
+        EXPECT_NEAR(post.end_states[s], q, 1e-9) << "trial " << trial << " state " << s;
+      }
+    }
   }
   // Both kinds of passes were exercised, the log-space ones with a seen end too.
   EXPECT_GE(scaled, 50);

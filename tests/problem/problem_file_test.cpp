@@ -123,6 +123,12 @@ TEST(ProblemFile, EndSensorAndWhatWasSeenOfTheEndRoundTrip) {
   EXPECT_EQ(q.demonstration[0].steps->end_symbols, steps.end_symbols);
   EXPECT_EQ(q.demonstration[0].steps->end_state, 3);
   EXPECT_EQ(problem_to_json(q).dump(), problem_to_json(p).dump());
+  // alpha_default is the pseudo-count of a state nobody counted reports of (weighed_end_prior).
+  json d = with_end_sensor();
+  d["observation_model"]["end_sensor"]["alpha_default"] = 5.0;
+  const Problem five = parse_problem(d.dump());
+  EXPECT_DOUBLE_EQ(five.observation_model->end_alpha_base, 5.0);
+  EXPECT_DOUBLE_EQ(parse_problem(problem_to_json(five).dump()).observation_model->end_alpha_base, 5.0);
 }
 
 TEST(ProblemFile, WhatWasSeenOfTheEndIsChecked) {
@@ -140,6 +146,8 @@ TEST(ProblemFile, WhatWasSeenOfTheEndIsChecked) {
   expect_end_error([](json& d) { d["demonstration"][0]["end_symbols"][1] = 2; }, "demonstration[0].end_symbols[1]", "");
   expect_end_error([](json& d) { d["demonstration"][0]["end_state"] = 1; }, "demonstration[0].end_state",
                    "state 1 is not terminal");
+  expect_end_error([](json& d) { d["demonstration"][0]["controlled"] = true; }, "demonstration[0].end_state",
+                   "a controlled run's end is not used");
   expect_end_error([](json& d) { d["demonstration"][0]["ends_in_terminal"] = false; }, "demonstration[0].end_state",
                    "does not end in a terminal state");
   expect_end_error([](json& d) { d["demonstration"][0].erase("steps"); }, "demonstration[0].end_state",

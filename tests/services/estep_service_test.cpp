@@ -111,6 +111,31 @@ struct Optimiser {
   std::shared_ptr<BusBlockExecutor> executor;
 };
 
+// An answer carries end counts exactly when its block's trajectories have end reports, in
+// O_end's shape: a worker that leaves them out (or adds them) is refused, naming the field.
+TEST(EStepService, EndCountsComeFromTheBlocksWithEndReports) {
+  ResultShape shape;
+  shape.blocks = 2;
+  shape.pairs = 3;
+  shape.symbols = 2;
+  shape.end_rows = 4;
+  shape.end_symbols = 2;
+  shape.end_reported = {1, 0};
+  hbirl::estep_result_t m{};
+  m.num_pairs = 3;
+  m.num_symbols = 2;
+  m.block = 0;
+  m.num_end_rows = 4;
+  m.num_end_symbols = 2;
+  EXPECT_NO_THROW(check_shape(m, shape));
+  m.num_end_rows = 0;
+  hbirl::testing::expect_refused([&] { check_shape(m, shape); }, "estep_result.num_end_rows");
+  m.block = 1;
+  EXPECT_NO_THROW(check_shape(m, shape));
+  m.num_end_rows = 4;
+  hbirl::testing::expect_refused([&] { check_shape(m, shape); }, "estep_result.num_end_rows");
+}
+
 TEST(EStepService, TrajectoriesRoundTrip) {
   const auto& observed = task().observed;
   std::vector<ObservedTrajectory> back;
@@ -785,6 +810,7 @@ TEST(EStepService, FakeWorkersWithoutAKeyCostABoundedNumberOfPasses) {
   Optimiser opt(hub, options);
   ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
   std::atomic<bool> stop{false};
+  std::atomic<int> rounds{0};  // of ghosts published
   std::thread forging([&] {
     MemoryBus forger(hub);
     Counters fc = quiet("forger");
@@ -801,8 +827,14 @@ TEST(EStepService, FakeWorkersWithoutAKeyCostABoundedNumberOfPasses) {
         ghost.seq = seq;
         publish(forger, channels::kStatus, ghost, fc);
       }
+      if (real.num_held_blocks > 0) ++rounds;
     }
   });
+  // A first run gives the worker its blocks (the ghosts copy what it holds); the ghosts are
+  // heard before the run that counts, however slowly a loaded machine schedules them.
+  learn(opt.executor);
+  for (int waited = 0; rounds < 2 && waited < 1000; ++waited)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const LearnResult result = learn(opt.executor);
   stop = true;
   forging.join();

@@ -169,6 +169,11 @@ struct ObservationPrior {
   static constexpr double kMaxStrength = 1e3;
 };
 
+// An end sensor's alphabet at most (its reports travel as int16) and its reports of one
+// ending at most: every reader (problem files, the bus) takes these bounds.
+constexpr int kMaxEndSymbols = 1 << 15;
+constexpr int kMaxEndReports = 1000;
+
 // Largest explicit context id + 1 (a problem file's [symbol, eta, context]).
 constexpr int kMaxContexts = 1 << 16;
 

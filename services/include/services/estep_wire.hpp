@@ -45,6 +45,7 @@ struct ResultShape {
   int blocks = 0, pairs = 0, symbols = 0, confounders = 0, contexts = 0;
   int watch = -1, watch_steps = 0;    // the watched trajectory and its length (-1: none)
   int end_rows = 0, end_symbols = 0;  // the end sensor's O_end (0: none)
+  std::vector<char> end_reported;     // per block: its trajectories have end reports (its answer, end counts)
 };
 // InputError unless the answer's statistics have the request's shape and a log-likelihood
 // that is a number or -inf.

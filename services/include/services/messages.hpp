@@ -22,8 +22,6 @@ constexpr int kMaxSteps = 100000;         // per episode
 constexpr int kMaxFramesPerStep = 10000;  // e.g. 60 s steps at 120 fps
 constexpr int kMaxFeatures = 100000;      // of the true weights a ground truth carries
 constexpr int kMaxFrameSide = 4096;       // a camera frame's width and height, in pixels
-constexpr int kMaxEndSymbols = 1 << 15;   // an end sensor's alphabet (its reports are int16)
-constexpr int kMaxEndReports = 1000;      // an end sensor's reports of one episode's end
 
 // At least one symbol and one source; episode, step and frame in range; every symbol in
 // the alphabet; every eta a distribution (normalise_eta's tolerance); contexts none or one
