@@ -64,6 +64,7 @@ std::vector<ObservedTrajectory> ml_observations(const std::vector<ObservedTrajec
     ObservedTrajectory kept;
     kept.ends_in_terminal = o.ends_in_terminal;
     kept.end_state = o.end_state;
+    kept.end_symbols = o.end_symbols;
     for (int t = 0; t < o.length(); ++t) {
       for (int n = o.step_begin[static_cast<size_t>(t)]; n < o.step_begin[static_cast<size_t>(t) + 1]; ++n) {
         const double subject = o.eta(n, 0);
