@@ -113,6 +113,10 @@ void check_prior_fits(const Mdp& mdp, const ObservationPrior& prior) {
     throw InputError("prior", "was made for another MDP (" + std::to_string(prior.subject_alpha.rows()) +
                                   " state-action pairs, this one " + std::to_string(mdp.num_pairs()) + ")");
   }
+  if (prior.num_end_symbols() > 0 && prior.end_alpha.rows() != mdp.num_states) {
+    throw InputError("prior", "its end sensor was made for another MDP (" + std::to_string(prior.end_alpha.rows()) +
+                                  " states, this one " + std::to_string(mdp.num_states) + ")");
+  }
 }
 
 EngineFactory engine_factory(const LearnSettings& settings) {

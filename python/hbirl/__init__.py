@@ -91,9 +91,16 @@ class Observations:
     ends_in_terminal (trajectories,) bool, optional: the trajectory's last action led into a
         terminal state (rather than being cut off). Default as in a problem file: true when
         the MDP has terminal states.
+    end_symbols (trajectories,) list of 1-D int arrays, optional: what an end sensor reported
+        of the terminal state each trajectory's last action entered (docs/MODEL.md "Sensors
+        that see the end"), symbols in [0, K) of the prior's num_end_symbols; an empty array:
+        no report. Only for trajectories that end in a terminal state.
+    end_state (trajectories,) int, optional: the terminal state each trajectory entered,
+        when known for certain; -1: not known.
     """
 
-    def __init__(self, symbols, eta, step_index, lengths, contexts=None, ends_in_terminal=None):
+    def __init__(self, symbols, eta, step_index, lengths, contexts=None, ends_in_terminal=None, end_symbols=None,
+                 end_state=None):
         self.symbols = _int_array(symbols, "observations.symbols")
         try:
             self.eta = np.ascontiguousarray(eta, dtype=np.float64)
@@ -103,12 +110,15 @@ class Observations:
         self.lengths = _int_array(lengths, "observations.lengths")
         self.contexts = None if contexts is None else _int_array(contexts, "observations.contexts")
         self.ends_in_terminal = None if ends_in_terminal is None else [bool(x) for x in ends_in_terminal]
+        self.end_symbols = _end_symbols(end_symbols)
+        self.end_state = None if end_state is None else _int_array(end_state, "observations.end_state")
 
     @classmethod
-    def from_list(cls, trajectories, ends_in_terminal=None):
+    def from_list(cls, trajectories, ends_in_terminal=None, end_symbols=None, end_state=None):
         """From a list of trajectories, each a list of steps, each (symbols, eta) or
         (symbols, eta, contexts): symbols (n,), eta (n, J), contexts (n,); n may be 0.
-        ends_in_terminal: as in Observations (the list form cannot carry it)."""
+        ends_in_terminal, end_symbols, end_state: as in Observations (the list form cannot
+        carry them)."""
         if isinstance(trajectories, Observations):
             return trajectories
         symbols, eta, steps, contexts, lengths = [], [], [], [], []
@@ -168,11 +178,14 @@ class Observations:
             np.asarray(lengths, dtype=np.int64),
             cat(contexts, np.int64) if with_contexts else None,
             ends_in_terminal,
+            end_symbols,
+            end_state,
         )
 
     def to_list(self):
         """The list form: trajectories of steps of (symbols, eta[, contexts]); it cannot
-        carry ends_in_terminal (keep this object, or pass it to from_list)."""
+        carry ends_in_terminal, end_symbols or end_state (keep this object, or pass them to
+        from_list)."""
         out = []
         first = 0
         for length in self.lengths:
@@ -198,11 +211,26 @@ class Observations:
         return (_int_array(self.symbols, "observations.symbols"), np.ascontiguousarray(self.eta, dtype=np.float64),
                 _int_array(self.step_index, "observations.step_index"), _int_array(self.lengths, "observations.lengths"),
                 None if self.contexts is None else _int_array(self.contexts, "observations.contexts"),
-                None if self.ends_in_terminal is None else [bool(x) for x in self.ends_in_terminal])
+                None if self.ends_in_terminal is None else [bool(x) for x in self.ends_in_terminal],
+                _end_symbols(self.end_symbols),
+                None if self.end_state is None else _int_array(self.end_state, "observations.end_state"))
 
     @classmethod
     def _of(cls, parts):
         return cls(*parts)
+
+
+def _end_symbols(end_symbols):
+    """Each trajectory's end reports as a 1-D int array (None: no end sensor)."""
+    if end_symbols is None:
+        return None
+    if isinstance(end_symbols, (str, bytes)):
+        raise ValueError("observations.end_symbols: must be a list, one array of reports per trajectory")
+    try:
+        items = list(end_symbols)
+    except TypeError:
+        raise ValueError("observations.end_symbols: must be a list, one array of reports per trajectory") from None
+    return [_int_array(r, f"observations.end_symbols[{i}]") for i, r in enumerate(items)]
 
 
 def _as_observations(observations):
@@ -409,8 +437,9 @@ class HierarchicalIRL(_Estimator):
     strength stands), "prior_strength" (that strength, chosen from the data between EM
     runs, docs/MODEL.md; NaN unless O is learned by the posterior update), "theta"
     (n_iter_, K)), observation_model_ (dict: "subject" (S, A, W), "confounders"
-    (E', W), the Dirichlet mean of the learned parameters; E' counts the unlisted
-    catch-all when the prior asks for one), prior_ (the learned Dirichlet parameters, an
+    (E', W), "end" (S, K) the end sensor's O_end over terminal states or None, the
+    Dirichlet mean of the learned parameters; E' counts the unlisted catch-all when the
+    prior asks for one), prior_ (the learned Dirichlet parameters, an
     ObservationPrior), learned_eta_ (None, or dict: per context "stated" (C, J'),
     "learned" (C, J'), "observations" (C,)), mcmc_diagnostics_ (MCMC only: worst R-hat and
     bulk ESS over the pair marginals), posterior_ (None unless posterior_samples > 0: what
@@ -442,6 +471,7 @@ class HierarchicalIRL(_Estimator):
         self.observation_model_ = {
             "subject": subject.reshape(mdp.num_states, mdp.num_actions, subject.shape[1]),
             "confounders": fit.confounders,
+            "end": fit.end,
         }
         self.prior_ = fit.refined
         self.learned_eta_ = fit.learned_eta

@@ -46,6 +46,7 @@ class ObservationPrior:
         num_confounders: int,
         subject_alpha: Union[float, npt.ArrayLike] = ...,  # number or (S, A, W)
         confounder_alpha: Union[float, npt.ArrayLike] = ...,  # number or (E, W)
+        subject_alpha_default: Optional[float] = ...,
         update: str = ...,  # "posterior" or "paper"
         c: float = ...,
         prior_strength: Union[str, float] = ...,  # "auto" or a number
@@ -53,6 +54,9 @@ class ObservationPrior:
         learn_eta: Optional[bool] = ...,
         eta_strength: float = ...,
         unlisted_eta: float = ...,
+        num_end_symbols: int = ...,  # the end sensor's alphabet; 0: none
+        end_alpha: Union[float, npt.ArrayLike] = ...,  # number (every terminal state) or (S, K)
+        end_alpha_default: Optional[float] = ...,
     ) -> None: ...
     @property
     def num_symbols(self) -> int: ...
@@ -60,6 +64,10 @@ class ObservationPrior:
     def num_confounders(self) -> int: ...
     @property
     def confounder_alpha(self) -> np.ndarray: ...  # (E, W)
+    @property
+    def num_end_symbols(self) -> int: ...
+    @property
+    def end_alpha(self) -> Optional[np.ndarray]: ...  # (S, K), or None: no end sensor
     def subject_alpha(self, mdp: Mdp) -> np.ndarray: ...  # (S, A, W)
     @property
     def update(self) -> str: ...

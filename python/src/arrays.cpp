@@ -128,6 +128,53 @@ void add_observation(ObservedTrajectory& t, const FlatView& in, py::ssize_t m, p
   }
 }
 
+// What was seen of each trajectory's end (end_state, end_symbols), checked against the MDP's
+// terminal states and the prior's end sensor and added to `out` (ends_in_terminal set).
+void add_ends(const FlatObservations& flat, const ObservationPrior& prior, const Mdp& mdp,
+              std::vector<ObservedTrajectory>& out) {
+  const auto trajectories = static_cast<py::ssize_t>(out.size());
+  const auto needs_terminal_end = [&](const char* field, py::ssize_t i) {
+    if (!out[static_cast<size_t>(i)].ends_in_terminal)
+      throw InputError(field, "trajectory " + std::to_string(i) +
+                                  ": given, but the trajectory does not end in a terminal state (ends_in_terminal)");
+  };
+  if (flat.end_state) {
+    if (flat.end_state->ndim() != 1 || flat.end_state->shape(0) != trajectories)
+      throw InputError("observations.end_state", "must be a 1-D array, one state (or -1) per trajectory");
+    const auto v = flat.end_state->unchecked<1>();
+    for (py::ssize_t i = 0; i < trajectories; ++i) {
+      if (v(i) == -1) continue;
+      if (v(i) < 0 || v(i) >= mdp.num_states || !mdp.is_terminal(static_cast<int>(v(i))))
+        throw InputError("observations.end_state", "trajectory " + std::to_string(i) + ": " + std::to_string(v(i)) +
+                                                       " is not a terminal state of the MDP (or -1: not seen)");
+      needs_terminal_end("observations.end_state", i);
+      out[static_cast<size_t>(i)].end_state = static_cast<int>(v(i));
+    }
+  }
+  if (!flat.end_symbols) return;
+  if (static_cast<py::ssize_t>(flat.end_symbols->size()) != trajectories)
+    throw InputError("observations.end_symbols", "must have one entry (reports, maybe none) per trajectory");
+  const int K = prior.num_end_symbols();
+  for (py::ssize_t i = 0; i < trajectories; ++i) {
+    const IntArray& reports = (*flat.end_symbols)[static_cast<size_t>(i)];
+    const std::string where = "observations.end_symbols[" + std::to_string(i) + "]";
+    if (reports.ndim() != 1) throw InputError(where, "must be a 1-D array of the end sensor's symbols");
+    if (reports.shape(0) == 0) continue;
+    if (K == 0) throw InputError(where, "reports given, but the prior has no end sensor (num_end_symbols)");
+    if (reports.shape(0) > kMaxEndReports)
+      throw InputError(where, "has " + std::to_string(reports.shape(0)) + " reports, more than the " +
+                                  std::to_string(kMaxEndReports) + " one ending may have");
+    needs_terminal_end(where.c_str(), i);
+    const auto r = reports.unchecked<1>();
+    std::vector<int>& symbols = out[static_cast<size_t>(i)].end_symbols;
+    for (py::ssize_t k = 0; k < reports.shape(0); ++k) {
+      if (r(k) < 0 || r(k) >= K)
+        throw InputError(where, "symbol " + std::to_string(r(k)) + " is not in [0, " + std::to_string(K - 1) + "]");
+      symbols.push_back(static_cast<int>(r(k)));
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
@@ -171,6 +218,7 @@ std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& fl
     for (; step < end_step; ++step) t.step_begin.push_back(static_cast<int>(k - begin));
     first_step = end_step;
   }
+  add_ends(flat, prior, mdp, out);
   if (k < n) {
     throw InputError("observations.step_index", "entry " + std::to_string(k) + " (" + std::to_string(steps(k)) +
                                                     ") is not a step of the " + std::to_string(total_steps) +
@@ -198,15 +246,27 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
   auto et = eta.mutable_unchecked<2>();
   auto co = contexts.mutable_unchecked<1>();
   std::vector<bool> terminal;
+  bool any_end_state = false, any_end_symbols = false;
+  for (const auto& t : trajectories) {
+    any_end_state = any_end_state || t.end_state >= 0;
+    any_end_symbols = any_end_symbols || !t.end_symbols.empty();
+  }
+  IntArray end_state(any_end_state ? static_cast<py::ssize_t>(trajectories.size()) : 0);
+  auto es = end_state.mutable_unchecked<1>();
+  py::list end_symbols;
   py::ssize_t k = 0;
   long long first_step = 0;
   for (size_t i = 0; i < trajectories.size(); ++i) {
     const ObservedTrajectory& t = trajectories[i];
-    if (t.end_state >= 0) throw InputError("end_state", "the flat form cannot carry the terminal state seen yet");
-    if (!t.end_symbols.empty())
-      throw InputError("end_symbols", "the flat form cannot carry an end sensor's reports yet");
     le(static_cast<py::ssize_t>(i)) = t.length();
     terminal.push_back(t.ends_in_terminal);
+    if (any_end_state) es(static_cast<py::ssize_t>(i)) = t.end_state;
+    if (any_end_symbols) {
+      IntArray reports(static_cast<py::ssize_t>(t.end_symbols.size()));
+      auto r = reports.mutable_unchecked<1>();
+      for (size_t j = 0; j < t.end_symbols.size(); ++j) r(static_cast<py::ssize_t>(j)) = t.end_symbols[j];
+      end_symbols.append(reports);
+    }
     for (int s = 0; s < t.length(); ++s) {
       for (int m = t.step_begin[static_cast<size_t>(s)]; m < t.step_begin[static_cast<size_t>(s) + 1]; ++m, ++k) {
         sy(k) = t.symbols[static_cast<size_t>(m)];
@@ -218,15 +278,18 @@ py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories)
     first_step += t.length();
   }
   return py::make_tuple(symbols, eta, step_index, lengths, any_context ? py::object(contexts) : py::object(py::none()),
-                        terminal);
+                        terminal, any_end_symbols ? py::object(end_symbols) : py::object(py::none()),
+                        any_end_state ? py::object(end_state) : py::object(py::none()));
 }
 
 FlatObservations flat_of(const py::tuple& t) {
-  if (t.size() != 6) throw InputError("observations", "internal: expected 6 parts");
-  FlatObservations f{t[0].cast<IntArray>(), t[1].cast<Array>(), t[2].cast<IntArray>(),
-                     t[3].cast<IntArray>(), std::nullopt,       std::nullopt};
+  if (t.size() != 8) throw InputError("observations", "internal: expected 8 parts");
+  FlatObservations f{t[0].cast<IntArray>(), t[1].cast<Array>(), t[2].cast<IntArray>(), t[3].cast<IntArray>(),
+                     std::nullopt,          std::nullopt,       std::nullopt,          std::nullopt};
   if (!t[4].is_none()) f.contexts = t[4].cast<IntArray>();
   if (!t[5].is_none()) f.ends_in_terminal = t[5].cast<std::vector<bool>>();
+  if (!t[6].is_none()) f.end_symbols = t[6].cast<std::vector<IntArray>>();
+  if (!t[7].is_none()) f.end_state = t[7].cast<IntArray>();
   return f;
 }
 

@@ -23,7 +23,9 @@ using IntArray = py::array_t<long long, py::array::c_style | py::array::forcecas
 // symbols[n], source distribution eta[n] (1 + |E| entries, summing to 1) and optional
 // context contexts[n]; it was made at step step_index[n] (nondecreasing, counting the
 // steps of every trajectory in turn); trajectory i has lengths[i] steps, the last one
-// leading into a terminal state when ends_in_terminal[i].
+// leading into a terminal state when ends_in_terminal[i]. Of that end, end_state[i] is the
+// terminal state entered when known (-1: not) and end_symbols[i] an end sensor's reports
+// (docs/MODEL.md "Sensors that see the end").
 struct FlatObservations {
   IntArray symbols;
   Array eta;
@@ -31,15 +33,18 @@ struct FlatObservations {
   IntArray lengths;
   std::optional<IntArray> contexts;
   std::optional<std::vector<bool>> ends_in_terminal;
+  std::optional<std::vector<IntArray>> end_symbols;
+  std::optional<IntArray> end_state;
 };
 
 // The trajectories of `flat`, checked against `prior` (symbols, sources) with eta rows
 // normalised as a problem file's are (within 1e-6 of summing to 1); ends_in_terminal
 // defaults as in a problem file (true when the MDP has terminal states); a context of -1
-// is none (for a whole trajectory).
+// is none (for a whole trajectory); end reports are checked against the prior's end sensor.
 std::vector<ObservedTrajectory> observed_trajectories(const FlatObservations& flat, const ObservationPrior& prior,
                                                       const Mdp& mdp);
-// And back: (symbols, eta, step_index, lengths, contexts or None, ends_in_terminal).
+// And back: (symbols, eta, step_index, lengths, contexts or None, ends_in_terminal,
+// end_symbols or None, end_state or None).
 py::tuple flat_observations(const std::vector<ObservedTrajectory>& trajectories);
 // The flat form from that tuple (the package passes observations so).
 FlatObservations flat_of(const py::tuple& t);

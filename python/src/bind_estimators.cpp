@@ -183,6 +183,10 @@ void bind_hierarchical(py::module_& m) {
                              })
       .def_property_readonly("subject", [](const FittedHierarchical& f) { return f.model.subject; })
       .def_property_readonly("confounders", [](const FittedHierarchical& f) { return f.model.confounders; })
+      .def_property_readonly("end",
+                             [](const FittedHierarchical& f) -> py::object {
+                               return f.model.end.size() == 0 ? py::none() : py::cast(f.model.end);
+                             })
       .def_property_readonly("learned_eta",
                              [](const FittedHierarchical& f) -> py::object {
                                if (!f.learned_eta) return py::none();

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -112,6 +113,51 @@ void check_alphas(const ObservationPrior& prior, const Mdp& mdp) {
   }
 }
 
+// The end sensor's prior (docs/MODEL.md "Sensors that see the end"): num_end_symbols
+// symbols (0: none) and alpha per terminal state, a number (every terminal state's every
+// symbol; its own base, as a problem file's alpha_default) or an (S, K) array whose
+// non-terminal rows are 0; checked as a problem file's end_sensor is.
+void set_end_alpha(ObservationPrior& prior, const Mdp& mdp, int num_end_symbols, const py::object& end_alpha,
+                   std::optional<double> end_alpha_default) {
+  if (num_end_symbols == 0) return;
+  const int K = num_end_symbols;
+  if (K < 0 || K > kMaxEndSymbols)
+    throw InputError("num_end_symbols", "must be in [0, " + std::to_string(kMaxEndSymbols) + "] (0: no end sensor)");
+  if (std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) == mdp.terminal.end())
+    throw InputError("num_end_symbols", "is given, but the MDP has no terminal states for an end sensor to see");
+  if (static_cast<long long>(mdp.num_states) * K > (1LL << 28))
+    throw InputError("num_end_symbols", "num_states * num_end_symbols is more than an end sensor may take (2^28)");
+  if (const std::optional<double> a = number_of(end_alpha, "end_alpha")) {
+    if (!(*a > 0.0) || !std::isfinite(*a)) throw InputError("end_alpha", "must be > 0 and finite");
+    prior.end_alpha = Eigen::MatrixXd::Zero(mdp.num_states, K);
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (mdp.is_terminal(s)) prior.end_alpha.row(s).setConstant(*a);
+    }
+    prior.end_alpha_base = *a;
+  } else {
+    const Array m = array_of(end_alpha, "end_alpha");
+    if (m.ndim() != 2 || m.shape(0) != mdp.num_states || m.shape(1) != K)
+      throw InputError("end_alpha", "must be an (S, K) array with the MDP's S = " + std::to_string(mdp.num_states) +
+                                        " and K = num_end_symbols = " + std::to_string(K));
+    prior.end_alpha = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        m.data(), m.shape(0), m.shape(1));
+  }
+  if (end_alpha_default) {
+    if (!(*end_alpha_default >= 0.0) || !std::isfinite(*end_alpha_default))
+      throw InputError("end_alpha_default", "must be >= 0 and finite");
+    prior.end_alpha_base = *end_alpha_default;
+  }
+  if (!prior.end_alpha.allFinite() || (prior.end_alpha.array() < 0.0).any())
+    throw InputError("end_alpha", "must be finite and >= 0");
+  for (int s = 0; s < mdp.num_states; ++s) {
+    const double sum = prior.end_alpha.row(s).sum();
+    if (mdp.is_terminal(s) && !(sum > 0.0))
+      throw InputError("end_alpha", "alpha of terminal state " + std::to_string(s) + " sums to 0");
+    if (!mdp.is_terminal(s) && sum != 0.0)
+      throw InputError("end_alpha", "state " + std::to_string(s) + " is not terminal; the end sensor sees only those");
+  }
+}
+
 // "auto", or a number in the range the strength may take.
 void set_prior_strength(ObservationPrior& prior, const py::object& prior_strength) {
   if (py::isinstance<py::str>(prior_strength)) {
@@ -137,11 +183,13 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
                             const py::object& confounder_alpha, std::optional<double> subject_alpha_default,
                             const std::string& update, double c, const py::object& prior_strength,
                             std::optional<bool> learn, std::optional<bool> learn_eta, double eta_strength,
-                            double unlisted_eta) {
+                            double unlisted_eta, int num_end_symbols, const py::object& end_alpha,
+                            std::optional<double> end_alpha_default) {
   ObservationPrior prior = sized_prior(mdp, num_symbols, num_confounders);
   set_subject_alpha(prior, mdp, subject_alpha, subject_alpha_default);
   set_confounder_alpha(prior, confounder_alpha);
   check_alphas(prior, mdp);
+  set_end_alpha(prior, mdp, num_end_symbols, end_alpha, end_alpha_default);
   AlphaUpdate u;
   if (!parse_alpha_update(update, u)) throw InputError("update", "'" + update + "' is not posterior or paper");
   use_alpha_update(prior, u);
@@ -169,10 +217,18 @@ void bind_observation_prior(py::module_& m) {
            py::arg("subject_alpha") = 1.0, py::arg("confounder_alpha") = 1.0,
            py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1,
            py::arg("prior_strength") = "auto", py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(),
-           py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0)
+           py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0, py::arg("num_end_symbols") = 0,
+           py::arg("end_alpha") = 1.0, py::arg("end_alpha_default") = py::none())
       .def_property_readonly("num_symbols", [](const ObservationPrior& p) { return p.num_symbols; })
       .def_property_readonly("num_confounders", [](const ObservationPrior& p) { return p.num_confounders; })
       .def_property_readonly("confounder_alpha", [](const ObservationPrior& p) { return p.confounder_alpha; })
+      .def_property_readonly("num_end_symbols", [](const ObservationPrior& p) { return p.num_end_symbols(); })
+      .def_property_readonly(
+          "end_alpha",
+          [](const ObservationPrior& p) -> py::object {
+            return p.num_end_symbols() == 0 ? py::none() : py::cast(p.end_alpha);
+          },
+          "The end sensor's alpha as an (S, K) array (rows of terminal states), or None: no end sensor.")
       .def(
           "subject_alpha",
           [](const ObservationPrior& p, const Mdp& mdp) {

@@ -519,3 +519,140 @@ def test_the_posterior_is_hbirl_learns(grid):
     fitted = hbirl.MaxCausalEntIRL(posterior_samples=30, prior_scale=2).fit(problem.mdp, problem.truth_trajectories())
     assert fitted.posterior_ == truth["posterior"]
     assert hbirl.HierarchicalIRL().fit(problem.mdp, problem.observations(), problem.observation_prior).posterior_ is None
+
+
+def end_task(rng, S=3, A=2, W=2, K=3):
+    """A random MDP of S states and two terminal ones (a goal and a trap, say) that every
+    action may enter, a subject sensor and an end sensor over the terminal states."""
+    n = S + 2
+    T = np.zeros((n, A, n))
+    T[:S] = rng.random((S, A, n)) + 0.05
+    T[:S] /= T[:S].sum(axis=2, keepdims=True)
+    mdp = hbirl.Mdp(T, rng.normal(size=(n, A, 2)), start=np.r_[np.full(S, 1.0 / S), 0, 0], terminal=[S, S + 1],
+                    discount=0.9)
+    subject = rng.random((n, A, W)) + 0.1
+    subject /= subject.sum(axis=2, keepdims=True)
+    end = np.zeros((n, K))
+    end[S:] = rng.random((2, K)) + 0.1
+    end[S:] /= end[S:].sum(axis=1, keepdims=True)
+    return T, mdp, subject, end
+
+
+def test_end_reports_match_brute_force_enumeration():
+    # An end sensor's reports (docs/MODEL.md "Sensors that see the end") through the Python
+    # form: the posterior and score against summing over every (s, a) path and every
+    # terminal state the last action may enter, by hand. O is fixed at the prior's mean.
+    rng = np.random.default_rng(23)
+    T, mdp, subject, end = end_task(rng)
+    n, A, W = subject.shape
+    S = n - 2
+    scale = 1e6
+    prior = hbirl.ObservationPrior(mdp, W, 0, subject_alpha=subject * scale, num_end_symbols=end.shape[1],
+                                   end_alpha=end * scale, learn=False, learn_eta=False)
+    steps = [[(rng.integers(0, W, 2), np.ones((2, 1))), (rng.integers(0, W, 1), np.ones((1, 1)))] for _ in range(2)]
+    reports, known = [[0, 2], [1]], [-1, S + 1]
+    obs = hbirl.Observations.from_list(steps, end_symbols=reports, end_state=known)
+    model = hbirl.HierarchicalIRL(max_em_iterations=3).fit(mdp, obs, prior)
+    np.testing.assert_allclose(model.observation_model_["end"][S:], end[S:], rtol=0, atol=1e-5)  # terminal rows
+    pi = mdp.soft_policy(model.theta_)
+    O_s = model.observation_model_["subject"]
+    O_end = model.observation_model_["end"]
+    marginals, _ = model.posterior(obs)
+    score = 0.0
+    for i, trajectory in enumerate(steps):
+        total, marg = 0.0, np.zeros((2, n, A))
+        for path in itertools.product(range(n * A), repeat=2):
+            (s0, a0), (s1, a1) = divmod(path[0], A), divmod(path[1], A)
+            p = mdp.start[s0] * pi[s0, a0] * T[s0, a0, s1] * pi[s1, a1]
+            for t, (s, a) in enumerate([(s0, a0), (s1, a1)]):
+                p *= np.prod(O_s[s, a, trajectory[t][0]])
+            entered = [g for g in (S, S + 1) if known[i] in (-1, g)]
+            p *= sum(T[s1, a1, g] * np.prod(O_end[g, reports[i]]) for g in entered)
+            total += p
+            marg[0, s0, a0] += p
+            marg[1, s1, a1] += p
+        np.testing.assert_allclose(marginals[i], marg / total, rtol=0, atol=1e-12)
+        score += np.log(total)
+    assert model.score(obs) == pytest.approx(score, rel=1e-12)
+    # The reports matter: without them the posterior is another one.
+    bare, _ = model.posterior(hbirl.Observations.from_list(steps))
+    assert not np.allclose(bare[0], marginals[0], atol=1e-3)
+
+
+def test_an_end_sensor_problem_fits_as_hbirl_learn_and_round_trips(tmp_path):
+    path = str(tmp_path / "ended.json")
+    cli("generate", "random-task", "--seed", "3", "--end-sensor", "--demonstrations", "12", "-o", path)
+    out = json.loads(cli("learn", "--problem", path))
+    problem = hbirl.load_problem(path)
+    obs = problem.observations()
+    assert obs.end_symbols is not None and sum(len(r) for r in obs.end_symbols) > 0
+    prior = problem.observation_prior
+    assert prior.num_end_symbols > 0 and prior.end_alpha.shape == (problem.mdp.num_states, prior.num_end_symbols)
+    model = hbirl.HierarchicalIRL().fit(problem.mdp, obs, prior)
+    assert model.theta_.tolist() == out["weights"]  # the same doubles, reports and all
+    for s, row in out["observation_model"]["end_sensor"]:
+        assert model.observation_model_["end"][s].tolist() == row
+    # Through the list form, given back what it cannot carry: the same data.
+    again = hbirl.Observations.from_list(obs.to_list(), end_symbols=obs.end_symbols, end_state=obs.end_state)
+    assert hbirl.HierarchicalIRL().fit(problem.mdp, again, prior).theta_.tolist() == out["weights"]
+    saved = str(tmp_path / "saved.json")
+    problem.save(saved)
+    reread = hbirl.load_problem(saved).observations()
+    assert [r.tolist() for r in reread.end_symbols] == [r.tolist() for r in obs.end_symbols]
+    # Without the reports the answer is another one (they are used, not just carried).
+    bare = hbirl.Observations.from_list(obs.to_list())
+    assert hbirl.HierarchicalIRL().fit(problem.mdp, bare, prior).theta_.tolist() != out["weights"]
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(end_state=[0, -1]), "observations.end_state"),  # not terminal
+    (dict(end_state=[3]), "observations.end_state"),  # one per trajectory
+    (dict(end_symbols=[[0], [5]]), "observations.end_symbols[1]"),  # not in [0, K)
+    (dict(end_symbols=[[0]]), "observations.end_symbols"),  # one per trajectory
+    (dict(end_symbols=[[[0]], []]), "observations.end_symbols[0]"),  # not 1-D
+    (dict(end_symbols=[[0.5], []]), "observations.end_symbols[0]"),
+    (dict(end_symbols=[list(range(3)) * 400, []]), "observations.end_symbols[0]"),  # more than an ending may have
+    (dict(end_symbols=[[0], []], ends_in_terminal=[False, True]), "observations.end_symbols[0]"),
+    (dict(end_state=[3, -1], ends_in_terminal=[False, True]), "observations.end_state"),
+    (dict(end_symbols="01"), "observations.end_symbols"),
+])
+def test_bad_end_reports_are_refused_naming_the_field(change, field):
+    _, mdp, subject, end = end_task(np.random.default_rng(1))
+    prior = hbirl.ObservationPrior(mdp, 2, 0, num_end_symbols=3)
+    steps = [[(np.array([0]), np.ones((1, 1)))]] * 2
+    with pytest.raises(ValueError) as e:
+        hbirl.HierarchicalIRL(max_em_iterations=2).fit(mdp, hbirl.Observations.from_list(steps, **change), prior)
+    assert str(e.value).startswith(field), str(e.value)
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=-1), "num_end_symbols"),
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=1 << 20), "num_end_symbols"),
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha=np.ones((5, 2))), "end_alpha"),
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha=np.ones((5, 3))), "end_alpha"),  # non-terminal rows
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha=0.0), "end_alpha"),
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha=np.r_[np.zeros((4, 3)), np.ones((1, 3))]),
+     "end_alpha"),  # terminal state 3's row sums to 0
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha_default=-1.0), "end_alpha_default"),
+    (lambda m: hbirl.ObservationPrior(hbirl.Mdp(np.ones((2, 1, 2)) / 2, np.zeros((2, 1, 1))), 2, 0, num_end_symbols=3),
+     "num_end_symbols"),  # no terminal states to see
+    (lambda m: hbirl.HierarchicalIRL().fit(hbirl.Mdp(np.ones((2, 1, 2)) / 2, np.zeros((2, 1, 1))),
+                                           [[(np.array([0]), np.ones((1, 1)))]],
+                                           hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3)), "prior"),
+])
+def test_a_bad_end_sensor_prior_is_refused_naming_the_field(make, field):
+    _, mdp, _, _ = end_task(np.random.default_rng(1))
+    with pytest.raises(ValueError) as e:
+        make(mdp)
+    assert str(e.value).startswith(field), str(e.value)
+
+
+def test_the_end_sensor_prior_reads_back():
+    _, mdp, _, end = end_task(np.random.default_rng(2))
+    assert hbirl.ObservationPrior(mdp, 2, 0).end_alpha is None
+    prior = hbirl.ObservationPrior(mdp, 2, 0, num_end_symbols=3, end_alpha=2.5)
+    expected = np.zeros((5, 3))
+    expected[3:] = 2.5
+    assert prior.num_end_symbols == 3 and prior.end_alpha.tolist() == expected.tolist()
+    assert hbirl.ObservationPrior(mdp, 2, 0, num_end_symbols=3, end_alpha=end).end_alpha.tolist() == end.tolist()
