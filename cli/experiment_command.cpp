@@ -748,9 +748,10 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       "true trajectories, with O fixed at the controlled run's prior, with the paper's update (c = 0.5, 0.1) and\n"
       "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts); and the information limit's oracles\n"
       "(the true O's and each eta read as the simulator's rules say, nothing learned; also told which terminal\n"
-      "state each trajectory entered; the true O's with eta learned), the default with a sensor that sees which,\n"
-      "and the default and the oracle with the\n"
-      "task's noisy end sensor (1-3 reports of the terminal state entered). Writes random_tasks_runs.csv (one row\n"
+      "state each trajectory entered; the true O's, or the subject's (all of it, or where the controlled run saw\n"
+      "it) or the elements' alone, with the rest learned; the default with the prior strength fixed at 1, 1000),\n"
+      "the default with a sensor that sees which, and the default and the oracle with the task's noisy end\n"
+      "sensor (1-3 reports of the terminal state entered). Writes random_tasks_runs.csv (one row\n"
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
       "method, by confounders, occlusion, sensor informativeness and eta; paired comparisons; dependence on c;\n"
       "restarts) and random_tasks.png/.svg to --out. The numbers do not depend on --threads.");

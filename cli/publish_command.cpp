@@ -16,6 +16,7 @@ namespace {
 
 struct PublishArgs {
   std::string problem;
+  std::string name;
   std::string url;
   std::string key_file;
   double rate = 100.0;
@@ -25,13 +26,13 @@ struct PublishArgs {
 
 int run_publish(const PublishArgs& args) {
   const Problem problem = load_problem(args.problem);
-  // The markers carry the name the optimiser knows the domain by (the file's "name", else its stem).
-  std::string name;
-  try {
-    name = read_domain_file(args.problem).name;
-  } catch (const InputError& e) {
-    throw in_file(args.problem, e);
-  }
+  // The markers carry the name the optimiser knows the domain by: --name, else the file's
+  // "name", else its stem. The optimiser refuses every episode of another name.
+  const std::string name = !args.name.empty()      ? args.name
+                           : !problem.name.empty() ? problem.name
+                                                   : stem_name(args.problem);
+  if (const std::string wrong = domain_name_problem(name); !wrong.empty())
+    throw InputError(args.name.empty() ? "--problem" : "--name", "the domain name '" + name + "' " + wrong);
   std::unique_ptr<Simulation> run;
   try {
     run = recorded_run(problem);
@@ -79,6 +80,10 @@ Command add_publish(CLI::App& app) {
   auto args = std::make_shared<PublishArgs>();
   CLI::App* cmd = app.add_subcommand(kPublish.name, kPublish.description);
   cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
+  cmd->add_option(
+      "--name", args->name,
+      "The domain's name the episodes carry: the optimiser's (launch.sh --domain F: F's \"name\", else its\n"
+      "stem). Default: the problem file's \"name\", else its stem");
   cmd->add_option("--url", args->url, "LCM URL (default: LCM's)");
   cmd->add_option("--key", args->key_file,
                   "The run's key file (services/launch.sh --key writes OUT/run.key): sign every message for its run,\n"

@@ -468,10 +468,26 @@ check_services() {
     failed=1
   done
 }
+# A service that refused the first messages of a sensor's kind, every one (another domain's
+# name, another alphabet: Counters::all_refused in services/typed.hpp writes this line),
+# cannot make the run: said at once, with the first reason, rather than at --timeout.
+refused_all() {
+  grep -h -m1 -F -- "refused every message on " "$out"/logs/*.log "$out"/logs/*.err 2>/dev/null | head -n 1 || true
+}
 deadline=$((SECONDS + timeout))
+next_refusal_check=0
 while [ "$optimiser_done" = 0 ]; do
   check_services
   if [ "$failed" = 1 ]; then break; fi
+  if [ "$SECONDS" -ge "$next_refusal_check" ]; then
+    next_refusal_check=$((SECONDS + 1))
+    refusal="$(refused_all)"
+    if [ -n "$refusal" ]; then
+      echo "launch.sh: $refusal; stopping (logs: $out/logs)" >&2
+      failed=1
+      break
+    fi
+  fi
   if [ "$SECONDS" -ge "$deadline" ]; then
     echo "launch.sh: no result after $timeout s (--timeout); stopping" >&2
     failed=1

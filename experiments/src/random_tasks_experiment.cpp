@@ -82,13 +82,36 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
 // The prior that holds O at the truth while eta is learned (oracle_o): the true O's as
 // Dirichlet parameters of 10^6 pseudo-counts a row (what a demonstration's counts move by
 // less than 10^-4), every row counted (a base of 0) and weighed as given (strength 1).
-void hold_at_true_o(const RandomTask& task, ObservationPrior& prior) {
-  constexpr double kPseudoCounts = 1e6;
+// oracle_subject_o and oracle_elements_o hold one of the two (the elements' prior is not
+// weighed by the strength: holding them leaves the subject's learning as the default's).
+constexpr double kPseudoCounts = 1e6;
+
+void hold_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
   prior.subject_alpha = kPseudoCounts * task.subject_o;
-  prior.confounder_alpha = kPseudoCounts * task.confounder_o;
   prior.subject_alpha_base = 0.0;
   prior.automatic_strength = false;
   prior.strength = 1.0;
+}
+
+// oracle_seen_subject_o: the true subject O held only on the pairs the controlled run
+// visited (rows with counts); the others keep the prior's mean, as the default keeps them.
+void hold_seen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
+  const Eigen::MatrixXd& alpha = task.prior.subject_alpha;
+  for (Eigen::Index r = 0; r < alpha.rows(); ++r) {
+    if ((alpha.row(r).array() > task.prior.subject_alpha_base).any())
+      prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
+  }
+  prior.automatic_strength = false;
+  prior.strength = 1.0;
+}
+
+void hold_elements_at_true_o(const RandomTask& task, ObservationPrior& prior) {
+  prior.confounder_alpha = kPseudoCounts * task.confounder_o;
+}
+
+void hold_at_true_o(const RandomTask& task, ObservationPrior& prior) {
+  hold_subject_at_true_o(task, prior);
+  hold_elements_at_true_o(task, prior);
 }
 
 // What was seen of each trajectory's end (RandomTaskMethod::End) added to `observed`.
@@ -124,9 +147,16 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     ObservationPrior prior = task.prior;
     if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_alpha;
     if (method.kind == "oracle_o") hold_at_true_o(task, prior);
+    if (method.kind == "oracle_subject_o") hold_subject_at_true_o(task, prior);
+    if (method.kind == "oracle_elements_o") hold_elements_at_true_o(task, prior);
+    if (method.kind == "oracle_seen_subject_o") hold_seen_subject_at_true_o(task, prior);
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
     prior.c = method.c;
+    if (method.strength > 0.0) {
+      prior.automatic_strength = false;
+      prior.strength = method.strength;
+    }
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = 1;
     const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, task.observed.trajectories), prior,
@@ -254,6 +284,11 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_end_sensor", "posterior", 0.1, 1, RandomTaskMethod::End::kSensor},
       {"oracle_end_sensor", "oracle", 0.1, 1, RandomTaskMethod::End::kSensor},
       {"oracle_o", "oracle_o", 0.1, 1},
+      {"oracle_subject_o", "oracle_subject_o", 0.1, 1},
+      {"oracle_elements_o", "oracle_elements_o", 0.1, 1},
+      {"posterior_s1", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 1.0},
+      {"oracle_seen_subject_o", "oracle_seen_subject_o", 0.1, 1},
+      {"posterior_s1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 1000.0},
   };
   return methods;
 }
@@ -451,6 +486,8 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior_end_sensor", "oracle_end_sensor");
   compare("posterior", "oracle_o");
   compare("oracle_o", "oracle_sensor");
+  compare("posterior", "oracle_subject_o");
+  compare("posterior", "oracle_elements_o");
 }
 
 // Does the default's answer depend on c?

@@ -16,17 +16,6 @@ constexpr double kSumTolerance = 1e-6;  // as for problem files: rounded probabi
 constexpr int kMaxCount = 100000;
 constexpr double kMaxObservations = 1e8;
 
-// A marker's domain field: short, printable, no spaces (it names the run on the bus).
-std::string read_name(const JsonNode& node) {
-  const std::string name = node.as_string();
-  if (name.empty() || name.size() > 64) node.fail("must have 1 to 64 characters");
-  for (const char c : name) {
-    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
-    if (!ok) node.fail("may hold letters, digits, '_', '-' and '.' only");
-  }
-  return name;
-}
-
 // Rows of probabilities given as tuples (key..., symbol, p); listed rows must sum to 1,
 // unlisted rows stay uniform. `key_of` maps a tuple to its row, validating the key.
 template <typename KeyOf>
@@ -182,7 +171,7 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
   d.action_names = std::move(names.action_names);
   d.feature_names = std::move(names.feature_names);
   if (auto n = root.find("name")) {
-    d.name = read_name(*n);
+    d.name = detail::read_domain_name(*n);
   } else {
     d.name = default_name;
     if (d.name.empty()) root.fail("has no \"name\"");
@@ -203,7 +192,17 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
   return d;
 }
 
-// A name for a file: its stem, kept to the characters a domain name may hold.
+}  // namespace
+
+std::string domain_name_problem(const std::string& name) {
+  if (name.empty() || name.size() > 64) return "must have 1 to 64 characters";
+  for (const char c : name) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
+      return "may hold letters, digits, '_', '-' and '.' only";
+  }
+  return "";
+}
+
 std::string stem_name(const std::string& path) {
   std::string stem = std::filesystem::path(path).stem().string();
   for (char& c : stem) {
@@ -211,8 +210,6 @@ std::string stem_name(const std::string& path) {
   }
   return stem.substr(0, 64);
 }
-
-}  // namespace
 
 DomainSpec parse_domain(const std::string& text, const std::string& default_name, std::vector<std::string>* warnings) {
   return parse_domain_document(detail::parse_json_text(text, domain_shape()), default_name, warnings);

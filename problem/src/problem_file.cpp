@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "json_document.hpp"
+#include "problem/domain_file.hpp"
 #include "problem/json_node.hpp"
 #include "readers.hpp"
 
@@ -135,7 +136,8 @@ const JsonShape& trajectory_shape() {
 
 const JsonShape& problem_shape() {
   static const JsonShape demonstration = JsonShape::list(trajectory_shape());
-  static const JsonShape shape = JsonShape::object({{"mdp", &mdp_shape()},
+  static const JsonShape shape = JsonShape::object({{"name", nullptr},
+                                                    {"mdp", &mdp_shape()},
                                                     {"observation_model", &observation_model_shape()},
                                                     {"demonstration", &demonstration},
                                                     {"true_weights", nullptr}});
@@ -145,6 +147,12 @@ const JsonShape& problem_shape() {
 }  // namespace
 
 void expect_tuple(const JsonNode& node, const TupleList& tuple) { node.expect_tuple(tuple.size, tuple.shape); }
+
+std::string read_domain_name(const JsonNode& node) {
+  const std::string name = node.as_string();
+  if (const std::string wrong = domain_name_problem(name); !wrong.empty()) node.fail(wrong);
+  return name;
+}
 
 std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what) {
   const size_t n = node.size();
@@ -713,6 +721,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
   if (!doc.is_object()) root.fail("the problem file must be a JSON object");
   root.check_keys(detail::problem_shape().keys(), warnings);
   Problem problem;
+  if (auto n = root.find("name")) problem.name = detail::read_domain_name(*n);
   problem.mdp = read_mdp(root.at("mdp"), problem, warnings);
   if (auto om = root.find("observation_model")) {
     problem.observation_model = read_observation_model(*om, problem.mdp, warnings);
@@ -928,6 +937,7 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
   using J = nlohmann::ordered_json;
   const Mdp& mdp = problem.mdp;
   J doc;
+  if (!problem.name.empty()) doc["name"] = problem.name;
   doc["mdp"] = mdp_to_json(problem);
   if (problem.observation_model) doc["observation_model"] = observation_model_to_json(*problem.observation_model, mdp);
   J demo = J::array();

@@ -13,6 +13,8 @@ namespace hbirl::detail {
 
 // A list of exactly `expected` names, one per `what`.
 std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what);
+// "name": what EPISODE markers carry (short, printable, no spaces: it names the run on the bus).
+std::string read_domain_name(const JsonNode& node);
 // "mdp": the MDP, and its state, action and feature names into `problem`.
 Mdp read_mdp(const JsonNode& node, Problem& problem, std::vector<std::string>* warnings);
 // "observation_model": the Dirichlet priors and how they are learned.

@@ -58,6 +58,13 @@ void Counters::bad(const std::string& channel, const std::string& why) {
   }
 }
 
+void Counters::all_refused(const std::string& channel, std::int64_t refused, const std::string& first_reason) {
+  const std::string report = std::string(kAllRefusedMarker) + printable(channel) + ": the first " +
+                             std::to_string(refused) + ", none accepted; the first: " + printable(first_reason);
+  if (all_refused_report.empty()) all_refused_report = report;
+  if (!quiet) std::fprintf(stderr, "%s: %s\n", service.empty() ? "hbirl" : service.c_str(), report.c_str());
+}
+
 void Counters::note(const std::string& what) const {
   if (!quiet) std::fprintf(stderr, "%s: %s\n", service.empty() ? "hbirl" : service.c_str(), printable(what).c_str());
 }

@@ -18,15 +18,17 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   counters_ = &counters;
   // A whole run's messages may be waiting when a replay starts or a slow learner catches up.
   constexpr int kQueue = 1 << 20;
-  subs_.add(bus,
-            services::subscribe(
-                bus, channels::kEpisode, counters, [this](const auto& m, const Message&) { on_marker(m); }, kQueue));
+  // A sensor whose every episode or observation is refused cannot make a run: watched.
+  const Refusals watched = Refusals::kWatched;
+  subs_.add(bus, services::subscribe(
+                     bus, channels::kEpisode, counters, [this](const auto& m, const Message&) { on_marker(m); }, kQueue,
+                     watched));
   subs_.add(bus, services::subscribe(
                      bus, channels::kObservations, counters,
-                     [this](const auto& m, const Message&) { on_observations(m); }, kQueue));
-  subs_.add(bus,
-            services::subscribe(
-                bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
+                     [this](const auto& m, const Message&) { on_observations(m); }, kQueue, watched));
+  subs_.add(bus, services::subscribe(
+                     bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); },
+                     kQueue, watched));
 }
 
 void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states,

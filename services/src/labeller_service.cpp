@@ -8,9 +8,10 @@ namespace hbirl::services {
 
 LabellerService::LabellerService(Bus& bus, Counters& counters, const perception::CameraView& camera, bool uniform_eta)
     : bus_(bus), counters_(counters), camera_(camera), uniform_eta_(uniform_eta) {
-  subs_.add(bus_, subscribe(
-                      bus_, channels::kDetections, counters_,
-                      [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000));
+  subs_.add(bus_,
+            subscribe(
+                bus_, channels::kDetections, counters_,
+                [this](const hbirl::detections_t& m, const Message&) { on_detections(m); }, 2000, Refusals::kWatched));
 }
 
 void LabellerService::on_detections(const hbirl::detections_t& m) {

@@ -9,9 +9,10 @@ namespace hbirl::services {
 
 PerceptionService::PerceptionService(Bus& bus, Counters& counters) : bus_(bus), counters_(counters) {
   // Frames come at camera rate; a queue of a few seconds' worth rides out a slow moment.
-  subs_.add(bus_, subscribe(
-                      bus_, channels::kCamera, counters_,
-                      [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000));
+  subs_.add(bus_,
+            subscribe(
+                bus_, channels::kCamera, counters_,
+                [this](const hbirl::camera_frame_t& m, const Message&) { on_frame(m); }, 2000, Refusals::kWatched));
 }
 
 void PerceptionService::on_frame(const hbirl::camera_frame_t& m) {

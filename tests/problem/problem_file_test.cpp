@@ -93,6 +93,23 @@ TEST(ProblemFile, RoundTripsThroughJson) {
   EXPECT_EQ(*p.demonstration[0].truth, *q.demonstration[0].truth);
 }
 
+// "name": what hbirl publish's episodes carry (the domain's name), read with a domain
+// file's rules and written back; a file without one has none (publish uses its stem).
+TEST(ProblemFile, TheDomainNameRoundTripsAndIsChecked) {
+  EXPECT_EQ(parse_problem(spec_example().dump()).name, "");
+  json d = spec_example();
+  d["name"] = "vacuum-2.b";
+  std::vector<std::string> warnings;
+  const Problem p = parse_problem(d.dump(), &warnings);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();  // a known key, not "ignored"
+  EXPECT_EQ(p.name, "vacuum-2.b");
+  EXPECT_EQ(parse_problem(problem_to_json(p).dump()).name, "vacuum-2.b");
+  expect_error([](json& doc) { doc["name"] = "two words"; }, "name", "letters, digits");
+  expect_error([](json& doc) { doc["name"] = ""; }, "name", "1 to 64");
+  expect_error([](json& doc) { doc["name"] = std::string(65, 'a'); }, "name", "1 to 64");
+  expect_error([](json& doc) { doc["name"] = 3; }, "name", "");
+}
+
 // The spec example with a terminal state 3 that (2, 0) enters, an end sensor of two
 // symbols and a trajectory that says what was seen of its end (README "Problem files").
 json with_end_sensor() {

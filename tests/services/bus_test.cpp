@@ -228,6 +228,40 @@ TEST(MemoryBus, BadMessagesAreCountedNotFatal) {
   EXPECT_NE(c.last_problem.find("OBSERVATIONS"), std::string::npos);
 }
 
+// A watched subscription (a sensor's data) says once, after kAllRefusedAfter refusals with
+// none accepted, that it refused them all and why the first was refused; a counted one
+// never does, and neither does a watched one that accepted a message first.
+TEST(TypedSubscribe, AWatchedChannelSaysWhenItRefusedEveryMessage) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub);
+  Counters watched = quiet_counters(), counted = quiet_counters(), after_one = quiet_counters(), out = quiet_counters();
+  const auto refuse_all = [](const hbirl::observations_t& m, const Message&) {
+    if (m.seq > 1) throw InputError("observations.domain", "'sensed' is not the domain learned on ('vacuum')");
+  };
+  subscribe(bus, channels::kObservations, watched, refuse_all, 0, Refusals::kWatched);
+  subscribe(bus, channels::kObservations, counted, refuse_all);
+  for (int s = 2; s <= kAllRefusedAfter; ++s) publish(bus, channels::kObservations, observations(s, 1), out);
+  bus.handle(0);
+  EXPECT_EQ(watched.all_refused_report, "");  // not yet: one short
+  for (int s = 1; s <= 11; ++s) publish(bus, channels::kObservations, observations(100 + s, 1), out);
+  bus.handle(0);
+  EXPECT_EQ(watched.all_refused_report, std::string(kAllRefusedMarker) +
+                                            "OBSERVATIONS: the first 10, none accepted; the first: OBSERVATIONS: " +
+                                            "observations.domain: 'sensed' is not the domain learned on ('vacuum')");
+  EXPECT_EQ(watched.bad_messages, 20);
+  EXPECT_EQ(counted.bad_messages, 20);
+  EXPECT_EQ(counted.all_refused_report, "");
+
+  // A subscription that accepted one message first never says it.
+  MemoryBus other(std::make_shared<MemoryHub>());
+  subscribe(other, channels::kObservations, after_one, refuse_all, 0, Refusals::kWatched);
+  publish(other, channels::kObservations, observations(1, 1), out);  // seq 1: accepted
+  for (int s = 2; s <= 20; ++s) publish(other, channels::kObservations, observations(s, 1), out);
+  other.handle(0);
+  EXPECT_EQ(after_one.messages_in, 1);
+  EXPECT_EQ(after_one.all_refused_report, "");
+}
+
 // A full subscription queue drops its oldest message (LCM's rule), and the hub counts it.
 TEST(MemoryBus, QueueCapacityDropsTheOldest) {
   auto hub = std::make_shared<MemoryHub>();

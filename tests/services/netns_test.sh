@@ -251,6 +251,41 @@ PY
       echo "hbirl publish ($case) into a live optimiser: the theta of hbirl learn"
     done
     ;;
+  refused_sensor)
+    # A sensor whose every episode the optimiser refuses (its domain name, here the problem
+    # file's stem, is not the domain's) fails the run in seconds, in one line with the
+    # reason, instead of waiting for --timeout; the problem file's "name" or hbirl publish
+    # --name make the same data a run (the theta of hbirl learn).
+    domain="$repo/examples/corridor.json"
+    cp "$domain" "$tmp/sensed.json"
+    python3 - "$domain" "$tmp/named.json" <<'PY'
+import json, sys
+p = json.load(open(sys.argv[1]))
+p["name"] = "corridor"
+json.dump(p, open(sys.argv[2], "w"))
+PY
+    sensor() { printf '%q ' "$build/hbirl" publish --problem "$1" --rate 0 "${@:2}"; }
+    start=$SECONDS
+    status=0
+    "$repo/services/launch.sh" --build "$build" --out "$tmp/refused" --domain "$domain" --no-sim --no-dashboard \
+      --sensor "$(sensor "$tmp/sensed.json")" --timeout 200 >"$tmp/refused.out" 2>&1 || status=$?
+    took=$((SECONDS - start))
+    [ "$status" != 0 ] || { cat "$tmp/refused.out"; fail "a run whose every episode was refused succeeded"; }
+    grep -q "refused every message on EPISODE.*'sensed' is not the domain learned on ('corridor')" "$tmp/refused.out" ||
+      { cat "$tmp/refused.out"; fail "the refusal's reason is not in launch.sh's output"; }
+    [ "$took" -lt 60 ] || fail "the refused run took $took s to fail"
+    echo "every episode refused: launch.sh failed after $took s: $(grep -m1 'refused every' "$tmp/refused.out")"
+    "$build/hbirl" learn --problem "$domain" --out "$tmp/offline.json"
+    for how in "named.json" "sensed.json --name corridor"; do
+      read -r file extra <<<"$how"
+      # shellcheck disable=SC2086  # extra: the --name option and its value
+      "$repo/services/launch.sh" --build "$build" --out "$tmp/${file%.json}" --domain "$domain" --no-sim --no-dashboard \
+        --sensor "$(sensor "$tmp/$file" $extra)" --timeout 200 >"$tmp/${file%.json}.out" 2>&1 ||
+        { cat "$tmp/${file%.json}.out"; fail "$how: launch.sh failed"; }
+      same_theta "$tmp/${file%.json}/result.json" "$tmp/offline.json" || fail "$how: another theta than hbirl learn"
+      echo "published as $how: the theta of hbirl learn"
+    done
+    ;;
   example_sensor)
     # examples/sensor/corridor_sensor, a sensor written outside hbirl (LCM and the message
     # types only), feeds an optimiser and a worker learning on examples/corridor.json:

@@ -27,6 +27,14 @@
 //   oracle_o           the true subject O and element O's held fixed, eta learned as the
 //                      default learns it: the default's gap to oracle_sensor split into
 //                      what O's estimate costs and what eta's does
+//   oracle_subject_o   the true subject O held, the elements' O's and eta learned as the
+//                      default learns them; oracle_elements_o: the true element O's held,
+//                      the subject's O and eta learned: O's part split between the two
+//   oracle_seen_subject_o  the true subject O held on the pairs the controlled run saw
+//                      only (the others kept at the prior's mean, as the default keeps them)
+//   posterior_s1, posterior_s1000  the default with the subject prior's strength fixed
+//                      at 1 (the counts at face value) or 1000 (the controlled run's O
+//                      held) instead of chosen by held-out likelihood
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -43,13 +51,15 @@ namespace hbirl {
 
 struct RandomTaskMethod {
   std::string key;   // as above
-  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o"
+  std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o",
+                     // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
   // state entered (ObservedTrajectory::end_state), or the task's end sensor's reports.
   enum class End { kUnseen, kState, kSensor };
   End end = End::kUnseen;
+  double strength = 0.0;  // the subject prior's strength; 0: chosen from the data (the default)
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();

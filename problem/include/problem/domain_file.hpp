@@ -31,6 +31,12 @@ struct SensorSpec {
   int end_reports = 1;
 };
 
+// Why `name` cannot name a domain on the bus (empty: it can): 1 to 64 letters, digits, '_',
+// '-' and '.' (EPISODE markers carry it; a problem or domain file's "name").
+std::string domain_name_problem(const std::string& name);
+// A domain name for a file: its stem, kept to those characters (a file without "name").
+std::string stem_name(const std::string& path);
+
 struct DomainSpec {
   std::string name;  // "name", else the file's stem; what EPISODE markers carry
   Mdp mdp;

@@ -28,6 +28,9 @@ struct DemonstratedTrajectory {
 };
 
 struct Problem {
+  // "name": the domain's name EPISODE markers carry when `hbirl publish` sends it (a domain
+  // file's "name"); empty: none given (publish then uses the file's stem).
+  std::string name;
   Mdp mdp;
   std::vector<std::string> state_names;  // empty when the file gives none
   std::vector<std::string> action_names;
