@@ -16,6 +16,7 @@ Command add_learn(CLI::App& app);
 Command add_posterior(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_generate(CLI::App& app);
+Command add_summary(CLI::App& app);
 Command add_experiment(CLI::App& app);
 Command add_render(CLI::App& app);
 Command add_report(CLI::App& app);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "app/learn.hpp"
+#include "app/output.hpp"
 #include "commands.hpp"
 #include "learner/controlled_prior.hpp"
 #include "learner/estep_observations.hpp"
@@ -295,6 +296,8 @@ int run_learn(const LearnArgs& given) {
   out["em_evaluations"] = best.em_evaluations;
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
   if (problem.true_weights) add_true_weight_metrics(out, problem, learned.theta, args);
+  out["policy"] =
+      app::policy_json<nlohmann::ordered_json>(mdp, learned.theta, problem.state_names, problem.action_names);
   if (observed != nullptr) out["observation_model"] = learned_observation_model_json(mdp, learned_all, best);
   if (learned_all.posterior) {
     out["posterior"] = app::posterior_summary(learned_all);

@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   remember(hbirl::cli::add_learn(app));
   remember(hbirl::cli::add_posterior(app));
   remember(hbirl::cli::add_generate(app));
+  remember(hbirl::cli::add_summary(app));
 #ifdef HBIRL_FULL
   remember(hbirl::cli::add_validate(app));
   remember(hbirl::cli::add_experiment(app));

@@ -503,8 +503,9 @@ stop_all
 trap - INT TERM EXIT
 
 if [ "$failed" = 0 ] && [ -f "$out/result.json" ]; then
-  echo "launch.sh: learned (also in $out/result.json):"
-  cat "$out/result.json"
+  # A summary a person reads (hbirl summary); the full record stays in result.json.
+  "$build/hbirl" summary "$out/result.json" || cat "$out/result.json"
+  echo "launch.sh: the full result: $out/result.json; logs: $out/logs"
   if grep -q '"incomplete":' "$out/result.json"; then
     missing="$(sed -n 's/^ *"incomplete": "\(.*\)",*$/\1/p' "$out/result.json")"
     if [ "$allow_incomplete" = 1 ]; then

@@ -91,16 +91,18 @@ std::string format_json(const nlohmann::ordered_json& value) {
 
 // Per context (the file's or the sensor's, else each distinct stated eta): stated and
 // learned source distributions and how many observations the context covers.
-nlohmann::ordered_json learned_eta_json(const LearnedEta& eta) {
+nlohmann::ordered_json learned_eta_json(const LearnedEta& eta, const std::vector<std::string>& names) {
   nlohmann::ordered_json contexts = nlohmann::ordered_json::array();
   const auto row = [](const RowMatrix& m, Eigen::Index r) {
     return std::vector<double>(m.row(r).begin(), m.row(r).end());
   };
   for (Eigen::Index c = 0; c < eta.learned.rows(); ++c) {
-    contexts.push_back({{"context", c},
-                        {"stated", row(eta.stated, c)},
-                        {"learned", row(eta.learned, c)},
-                        {"observations", eta.observations[c]}});
+    nlohmann::ordered_json item = {{"context", c}};
+    if (static_cast<size_t>(c) < names.size()) item["name"] = names[static_cast<size_t>(c)];
+    item["stated"] = row(eta.stated, c);
+    item["learned"] = row(eta.learned, c);
+    item["observations"] = eta.observations[c];
+    contexts.push_back(std::move(item));
   }
   return contexts;
 }

@@ -84,7 +84,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, HelpForEveryCommand) {
   for (const char* args : {"--help", "learn --help", "validate --help", "generate --help", "generate gridworld --help",
-                           "report --help", "publish --help", "export --help"}) {
+                           "report --help", "publish --help", "export --help", "summary --help"}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.status, 0) << args;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << args;
@@ -166,6 +166,44 @@ TEST_F(Cli, BothOptimisersRecoverTheCorridorPolicy) {
     const json out = json::parse(r.out);
     EXPECT_EQ(out["optimizer"], optimizer);
     EXPECT_EQ(out["policy_agreement"].get<double>(), 1.0);
+  }
+}
+
+// The learned policy by state and action names -- what a robot would do -- is in the
+// output, and hbirl summary prints a result for a person. The corridor's expert walks
+// right to the exit in every cell (solved by hand: the exit is the only reward).
+TEST_F(Cli, ThePolicyAndASummaryAPersonReads) {
+  const fs::path out = dir_ / "learned.json";
+  ASSERT_EQ(run("learn --problem '" + example("corridor.json") + "' --out '" + out.string() + "'").status, 0);
+  const json learned = json::parse(slurp(out));
+  ASSERT_EQ(learned["policy"].size(), 3u);  // c0, c1, c2; the exit is terminal
+  for (size_t s = 0; s < 3; ++s) {
+    EXPECT_EQ(learned["policy"][s]["state"], "c" + std::to_string(s));
+    EXPECT_EQ(learned["policy"][s]["action"], "right");
+    const double p = learned["policy"][s]["probability"];
+    EXPECT_GT(p, 0.5);
+    EXPECT_LE(p, 1.0);
+  }
+  const Outcome r = run("summary '" + out.string() + "' --states 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  for (const char* shown :
+       {"weights: take_exit ", "true weights: take_exit 1", "ILE 0 (0% of the optimal value)", "\n    c0 ", "\n    c1 ",
+        "1 more states: all in", "learned eta", "context 0: 0.7 0.3 -> "}) {
+    EXPECT_NE(r.out.find(shown), std::string::npos) << shown << "\n" << r.out;
+  }
+  EXPECT_EQ(r.out.find("\n    c2 "), std::string::npos) << r.out;  // --states 2
+  size_t rights = 0;
+  for (size_t at = r.out.find("-> right"); at != std::string::npos; at = r.out.find("-> right", at + 1)) ++rights;
+  EXPECT_EQ(rights, 2u) << r.out;
+  EXPECT_LT(std::count(r.out.begin(), r.out.end(), '\n'), 20);  // fits a screen
+  // Anything else is refused in one line naming it.
+  for (const std::string& bad : {write("other.json", "{\"mdp\": 1}").string(), write("x.txt", "[1, 2").string(),
+                                 std::string("/dev/zero"), (dir_ / "missing.json").string()}) {
+    const Outcome refused = run("summary '" + bad + "'");
+    EXPECT_EQ(refused.status, 2) << bad;
+    EXPECT_EQ(refused.err_lines(), 1) << refused.err;
+    EXPECT_NE(refused.err.find("FILE: '" + bad + "'"), std::string::npos) << refused.err;
   }
 }
 

@@ -20,16 +20,16 @@ small=(--sorts 4 --controlled-sorts 6 --fps 5 --max-fps 250)
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 # The learned theta, exactly as printed (shortest round-trip doubles: equal text = equal bits).
-theta() { awk '/"theta": \[/{on=1; next} on && /\]/{exit} on{gsub(/[ ,]/, ""); printf "%s ", $0}' "$1"; }
+theta() { awk '/"weights": \[/{on=1; next} on && /\]/{exit} on{gsub(/[ ,]/, ""); printf "%s ", $0}' "$1"; }
 ile() { sed -n 's/^ *"ile": \([^,]*\),*$/\1/p' "$1"; }
 # What a result learned from, for failure messages.
-# Two JSON results' learned theta ("theta" or "weights") equal to the last bit.
+# Two JSON results' learned weights equal to the last bit.
 same_theta() {
   python3 - "$1" "$2" <<'PY'
 import json, sys
 def theta(path):
     d = json.load(open(path))
-    return d.get("theta", d.get("weights"))
+    return d.get("weights")
 a, b = theta(sys.argv[1]), theta(sys.argv[2])
 print("theta", a, "vs", b)
 sys.exit(0 if a is not None and a == b else 1)
@@ -116,7 +116,7 @@ PY
 import json, sys, hbirl
 run = hbirl.read_log(sys.argv[1], key=sys.argv[2])
 model = hbirl.HierarchicalIRL().fit(run.mdp, run.observations(), run.observation_prior)
-live = json.load(open(sys.argv[3]))["theta"]
+live = json.load(open(sys.argv[3]))["weights"]
 assert model.theta_.tolist() == live, (model.theta_.tolist(), live)
 try:
     hbirl.read_log(sys.argv[1])  # a signed run without its key
@@ -283,6 +283,13 @@ PY
         --sensor "$(sensor "$tmp/$file" $extra)" --timeout 200 >"$tmp/${file%.json}.out" 2>&1 ||
         { cat "$tmp/${file%.json}.out"; fail "$how: launch.sh failed"; }
       same_theta "$tmp/${file%.json}/result.json" "$tmp/offline.json" || fail "$how: another theta than hbirl learn"
+      # The result says what a robot would do, by the domain's names; launch.sh printed it.
+      python3 - "$tmp/${file%.json}/result.json" <<'PY' || fail "$how: the result's policy is not the corridor's"
+import json, sys
+policy = json.load(open(sys.argv[1]))["policy"]
+assert [(p["state"], p["action"]) for p in policy] == [("c0", "right"), ("c1", "right"), ("c2", "right")], policy
+PY
+      grep -q -- "c0 .*-> right" "$tmp/${file%.json}.out" || { cat "$tmp/${file%.json}.out"; fail "$how: no summary"; }
       echo "published as $how: the theta of hbirl learn"
     done
     ;;

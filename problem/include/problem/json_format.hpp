@@ -4,6 +4,7 @@
 // to round-trip exactly.
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "learner/estep_observations.hpp"
 
@@ -12,7 +13,8 @@ namespace hbirl {
 std::string format_json(const nlohmann::ordered_json& value);
 
 // Learned eta as hbirl learn and hbirl-optimiser print it: per context, its id, the
-// stated and learned source distributions and how many observations it covers.
-nlohmann::ordered_json learned_eta_json(const LearnedEta& eta);
+// stated and learned source distributions and how many observations it covers; and its
+// name when `names` has one for it (a domain's labeller rules, DomainNames::contexts).
+nlohmann::ordered_json learned_eta_json(const LearnedEta& eta, const std::vector<std::string>& names = {});
 
 }  // namespace hbirl

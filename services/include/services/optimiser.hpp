@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "app/output.hpp"
 #include "hbirl/em_progress_t.hpp"
 #include "hbirl/estimate_t.hpp"
 #include "hbirl/frame_request_t.hpp"
@@ -124,14 +125,15 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
   const auto vector = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
   j["domain"] = r.data.domain;
   const std::shared_ptr<const Domain> learned_in = domain_of(r.data, std::move(domain));
-  j["feature_names"] = learned_in->names(1).features;
-  j["theta"] = vector(r.learned.theta);
+  const DomainNames names = learned_in->names(1);
+  j["feature_names"] = names.features;
+  j["weights"] = vector(r.learned.theta);
   if (r.data.true_weights) j["true_weights"] = vector(*r.data.true_weights);
   if (r.learned.ile) j["ile"] = *r.learned.ile;
   j["log_likelihood"] = r.learned.log_likelihood;
   j["em_iterations"] = r.learned.em_iterations;
   if (r.learned.confidence) j["confidence"] = *r.learned.confidence;  // with posterior draws (hbirl learn --log)
-  if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta);
+  if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta, names.contexts);
   if (r.learned.end_sensor.size() > 0) {  // the learned O_end per terminal state: [state, probabilities]
     const Mdp& mdp = learned_in->mdp();
     Json end = Json::array();
@@ -140,6 +142,7 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
     }
     j["end_sensor"] = end;
   }
+  j["policy"] = app::policy_json<Json>(learned_in->mdp(), r.learned.theta, names.states, names.actions);
   j["demonstrations"] = r.learned.trajectories;
   j["controlled_episodes"] = r.data.controlled_observed.size();
   j["dataset_digest"] = r.learned.digest;

@@ -1,0 +1,42 @@
+#pragma once
+// What a person reads of a learned reward, the same in every output (hbirl learn,
+// hbirl-optimiser's result.json, hbirl learn --log; README "What hbirl prints"): the
+// policy a robot would follow, by state and action names.
+#include <string>
+#include <vector>
+
+#include "learner/mdp.hpp"
+
+namespace hbirl::app {
+
+// The learned reward's policy in one state that is not terminal: the action its optimal
+// policy takes (value iteration; the lowest-numbered among ties, as the ILE metric's) and
+// the probability the soft policy -- MaxCausalEnt's model of the expert -- gives it.
+struct PolicyStep {
+  int state = 0;
+  int action = 0;
+  double probability = 0.0;
+};
+std::vector<PolicyStep> learned_policy(const Mdp& mdp, const Eigen::VectorXd& weights);
+
+// learned_policy as [{"state": s, "action": a, "probability": p}, ...], states and actions
+// by name when `state_names` / `action_names` give them (empty: by number). Json:
+// nlohmann::json or ordered_json.
+template <class Json>
+Json policy_json(const Mdp& mdp, const Eigen::VectorXd& weights, const std::vector<std::string>& state_names,
+                 const std::vector<std::string>& action_names) {
+  const auto name = [](const std::vector<std::string>& names, int i) {
+    return static_cast<size_t>(i) < names.size() ? Json(names[static_cast<size_t>(i)]) : Json(i);
+  };
+  Json out = Json::array();
+  for (const PolicyStep& p : learned_policy(mdp, weights)) {
+    Json step = Json::object();
+    step["state"] = name(state_names, p.state);
+    step["action"] = name(action_names, p.action);
+    step["probability"] = p.probability;
+    out.push_back(std::move(step));
+  }
+  return out;
+}
+
+}  // namespace hbirl::app

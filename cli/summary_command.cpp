@@ -1,0 +1,141 @@
+// hbirl summary: what a learned result says, for a person (README "What hbirl prints"):
+// the weights by feature name, how right they are when the truth is known, the policy by
+// state and action names, learned eta by the labeller's rule. Reads hbirl-optimiser's
+// result.json (services/launch.sh prints this at the end of a run), hbirl learn's output
+// and hbirl learn --log's.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.hpp"
+#include "learner/input_error.hpp"
+
+namespace hbirl::cli {
+
+namespace {
+
+using nlohmann::json;
+
+// A result is a few MB at most (a 200 x 200 Gridworld's policy is ~3 MB): refused above
+// this before it is read.
+constexpr std::uintmax_t kMaxResultBytes = std::uintmax_t{64} << 20;
+
+json read_result(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError("FILE", "'" + path + "' is not a file it can read");
+  if (std::filesystem::file_size(path, ec) > kMaxResultBytes)
+    throw InputError("FILE", "'" + path + "' is larger than a result can be (64 MiB)");
+  std::ifstream in(path);
+  json j = json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw InputError("FILE", "'" + path + "' is not a JSON result of hbirl learn or hbirl-optimiser");
+  if (!j.contains("weights") || !j["weights"].is_array())
+    throw InputError("FILE", "'" + path + "' has no \"weights\": not a result of hbirl learn or hbirl-optimiser");
+  return j;
+}
+
+std::string number(const json& v) {
+  if (!v.is_number()) return v.is_string() ? v.get<std::string>() : v.dump();
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v.get<double>());
+  return buf;
+}
+
+std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+std::string count(const json& v) { return v.is_number() ? std::to_string(std::llround(v.get<double>())) : text(v); }
+
+// "name 1.23, other -0.5": values by name, names from `names` when it has them all.
+std::string by_name(const json& values, const json& names) {
+  std::string out;
+  const bool named = names.is_array() && names.size() == values.size();
+  for (size_t k = 0; k < values.size(); ++k) {
+    out += (k ? ", " : "") + (named ? text(names[k]) : "#" + std::to_string(k)) + " " + number(values[k]);
+  }
+  return out;
+}
+
+std::string vector_text(const json& v) {
+  std::string out;
+  for (size_t k = 0; k < v.size(); ++k) out += (k ? " " : "") + number(v[k]);
+  return out;
+}
+
+void print_policy(std::ostream& out, const json& policy, size_t shown, const std::string& path) {
+  if (!policy.is_array() || policy.empty()) return;
+  size_t width = 5;
+  for (size_t i = 0; i < std::min(shown, policy.size()); ++i) width = std::max(width, text(policy[i]["state"]).size());
+  out << "  policy (the learned reward's: the action a robot would take, and how likely the expert takes it):\n";
+  for (size_t i = 0; i < std::min(shown, policy.size()); ++i) {
+    const std::string state = text(policy[i]["state"]);
+    out << "    " << state << std::string(width - state.size() + 2, ' ') << "-> " << text(policy[i]["action"]) << "  ("
+        << number(policy[i]["probability"]) << ")\n";
+  }
+  if (policy.size() > shown)
+    out << "    ... " << policy.size() - shown << " more states: all in " << path << " \"policy\"\n";
+}
+
+void print_eta(std::ostream& out, const json& eta) {
+  if (!eta.is_array() || eta.empty()) return;
+  out << "  learned eta (per labeller rule, the subject first): stated -> learned (observations)\n";
+  for (const json& c : eta) {
+    const std::string name = c.contains("name") ? text(c["name"]) : "context " + text(c["context"]);
+    out << "    " << name << ": " << vector_text(c["stated"]) << " -> " << vector_text(c["learned"]) << " ("
+        << count(c["observations"]) << ")\n";
+  }
+}
+
+int run_summary(const std::string& path, size_t states) {
+  const json r = read_result(path);
+  std::ostream& out = std::cout;
+  out << "Learned";
+  if (r.contains("domain")) out << " on " << text(r["domain"]);
+  if (r.contains("demonstrations")) out << " from " << text(r["demonstrations"]) << " demonstrations";
+  if (r.contains("controlled_episodes")) out << " (and " << text(r["controlled_episodes"]) << " controlled episodes)";
+  out << ":\n";
+  const json names = r.value("feature_names", json());
+  out << "  weights: " << by_name(r["weights"], names) << "\n";
+  if (r.contains("true_weights")) out << "  true weights: " << by_name(r["true_weights"], names) << "\n";
+  if (r.contains("ile")) {
+    out << "  ILE " << number(r["ile"]);
+    if (r.contains("ile_relative")) out << " (" << number(r["ile_relative"].get<double>() * 100.0) << "% of the optimal value)";
+    out << ": what the learned policy loses against the expert's, under the true reward\n";
+  }
+  const json confidence = r.contains("posterior") ? r["posterior"].value("confidence", json()) : json();
+  if (confidence.is_number())
+    out << "  confidence " << number(confidence) << " that the learned policy is within 5% of optimal\n";
+  print_policy(out, r.value("policy", json()), states, path);
+  print_eta(out, r.contains("learned_eta") ? r["learned_eta"]
+                                           : r.value("observation_model", json::object()).value("learned_eta", json()));
+  if (r.contains("incomplete")) out << "  INCOMPLETE: " << text(r["incomplete"]) << "\n";
+  return 0;
+}
+
+}  // namespace
+
+Command add_summary(CLI::App& app) {
+  struct Args {
+    std::string path;
+    size_t states = 20;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand(
+      "summary",
+      "What a learned result says, for a person: the weights by feature name (and the true ones, the ILE\n"
+      "when known), the confidence when drawn, the learned policy by state and action names, learned eta\n"
+      "by the labeller's rule. FILE: hbirl-optimiser's result.json (services/launch.sh prints this at the\n"
+      "end of a run) or what hbirl learn wrote.");
+  cmd->add_option("FILE", args->path, "The result (JSON)")->required();
+  cmd->add_option("--states", args->states, "Show the policy in this many states at most")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  return [args] { return run_summary(args->path, args->states); };
+}
+
+}  // namespace hbirl::cli
