@@ -104,7 +104,8 @@ int run_summary(const std::string& path, size_t states) {
   if (r.contains("true_weights")) out << "  true weights: " << by_name(r["true_weights"], names) << "\n";
   if (r.contains("ile")) {
     out << "  ILE " << number(r["ile"]);
-    if (r.contains("ile_relative")) out << " (" << number(r["ile_relative"].get<double>() * 100.0) << "% of the optimal value)";
+    if (r.contains("ile_relative"))
+      out << " (" << number(r["ile_relative"].get<double>() * 100.0) << "% of the optimal value)";
     out << ": what the learned policy loses against the expert's, under the true reward\n";
   }
   const json confidence = r.contains("posterior") ? r["posterior"].value("confidence", json()) : json();

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Starts hbirl's service set -- simulator, perception and labeller (a camera's domain),
-# sampler workers, optimiser -- and the dashboard, waits for the optimiser to learn, prints the
-# learned reward, writes the report and shuts everything down (also on Ctrl-C). Exits
+# sampler workers, optimiser -- and the dashboard, waits for the optimiser to learn (showing
+# its progress), prints a summary of the learned reward (hbirl summary), writes the report and
+# shuts everything down (also on Ctrl-C). Exits
 # non-zero if any service failed, or if the run is incomplete (unless --allow-incomplete).
 #
 # LCM talks UDP multicast. Where multicast to loopback is not routed (the usual case in
@@ -474,6 +475,16 @@ check_services() {
 refused_all() {
   grep -h -m1 -F -- "refused every message on " "$out"/logs/*.log "$out"/logs/*.err 2>/dev/null | head -n 1 || true
 }
+# The optimiser's progress (its "progress:" lines on stderr: collecting, then each EM
+# iteration's log-likelihood), the newest shown every few seconds while the run lasts.
+shown_progress=""
+show_progress() {
+  local line
+  line="$(tail -n 40 "$out/logs/optimiser.err" 2>/dev/null | grep -F "hbirl-optimiser: progress: " | tail -n 1 || true)"
+  [ -n "$line" ] && [ "$line" != "$shown_progress" ] || return 0
+  shown_progress="$line"
+  echo "launch.sh: ${line#hbirl-optimiser: progress: }"
+}
 deadline=$((SECONDS + timeout))
 next_refusal_check=0
 while [ "$optimiser_done" = 0 ]; do
@@ -481,6 +492,7 @@ while [ "$optimiser_done" = 0 ]; do
   if [ "$failed" = 1 ]; then break; fi
   if [ "$SECONDS" -ge "$next_refusal_check" ]; then
     next_refusal_check=$((SECONDS + 1))
+    show_progress
     refusal="$(refused_all)"
     if [ -n "$refusal" ]; then
       echo "launch.sh: $refusal; stopping (logs: $out/logs)" >&2

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <memory>
+#include <sstream>
 
 #include "app/learn.hpp"
 #include "learner/input_error.hpp"
@@ -16,6 +17,10 @@ namespace hbirl::services {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+// The optimiser's progress lines on stderr start so (services/launch.sh shows the latest),
+// at most this often.
+constexpr const char* kProgress = "progress: ";
+constexpr auto kProgressEvery = std::chrono::seconds(2);
 }  // namespace
 
 namespace {
@@ -146,9 +151,21 @@ class RunCollector {
         announced_end_ = true;
       }
       ask_for_lost_frames();
+      report_progress();
       if (quiet_too_long()) break;
     }
     return true;
+  }
+
+  // A progress line (kProgress) every few seconds while frames come: what a person waiting
+  // for the run sees (services/launch.sh shows the latest).
+  void report_progress() {
+    const auto now = Clock::now();
+    if (builder_.frames() == 0 || now - last_progress_ < kProgressEvery) return;
+    last_progress_ = now;
+    say(std::string(kProgress) + "collecting: " + std::to_string(builder_.episodes()) + " episodes begun, " +
+        std::to_string(builder_.complete_demonstrations()) + " demonstrations complete, " +
+        std::to_string(builder_.frames()) + " frames");
   }
 
   // Frames lost on the way: ask for them again (a few hundred per request), once a second.
@@ -222,6 +239,7 @@ class RunCollector {
   Clock::time_point last_request_ = Clock::now();
   int frame_requests_ = 0;
   bool announced_end_ = false;
+  Clock::time_point last_progress_ = Clock::now();
   std::string incomplete_;
   bool ended_ = false;  // the bus has (a log at its end)
 };
@@ -451,6 +469,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   if (!truth) say("no true weights that fit the domain's features: no ILE");
   const auto start = Clock::now();
   const std::int64_t utime = result.data.last_utime;
+  auto last_progress = start - kProgressEvery;
   try {
     result.learned = learn_from_dataset(
         *domain, result.data, final_settings(options.learning), executor,
@@ -460,6 +479,13 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
           if (options.beat) options.beat("learning");
           publish_model(bus, counters, mdp, result.data, utime, iteration, alpha, estep, eta);
           publish_progress(bus, counters, mdp, utime, iteration, ll, theta, alpha, truth, *executor, start);
+          if (Clock::now() - last_progress >= kProgressEvery) {
+            last_progress = Clock::now();
+            std::ostringstream line;
+            line << kProgress << "learning: EM iteration " << iteration << ", log-likelihood " << ll;
+            if (truth) line << ", ILE " << inverse_learning_error(mdp, *truth, theta).ile;
+            say(line.str());
+          }
         });
   } catch (const Stopped&) {
     say("stopped while learning");
