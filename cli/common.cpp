@@ -93,7 +93,8 @@ CLI::Option* add_alpha_update_option(CLI::App* cmd, AlphaUpdate& update) {
   return cmd
       ->add_option("--alpha-update", update, app::learn_setting("alpha_update").help)  // hbirl learn's words
       ->transform(CLI::CheckedTransformer(names))
-      ->default_str("posterior");
+      ->default_str("posterior")
+      ->option_text("{posterior,paper}=posterior");  // not CLI11's "ENUM:value in {paper->1,...}"
 }
 
 }  // namespace hbirl::cli

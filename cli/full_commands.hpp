@@ -41,7 +41,8 @@ inline constexpr FullCommand kExport{
     "Turn a recorded run (services/launch.sh --record) into a problem file: the domain's MDP and names,\n"
     "the demonstrations as the optimiser received them, and the observation prior it learned from (the\n"
     "controlled run's counts included). `hbirl learn --problem OUT` then learns the live run's theta bit\n"
-    "for bit, and `hbirl posterior` shows what the optimiser inferred."};
+    "for bit (and prints the learned observation model and eta); `hbirl posterior --weights W` shows each\n"
+    "step's posterior under the prior's O and the stated eta, not the learned ones."};
 inline constexpr FullCommand kKeygen{
     "keygen",
     "Write a fresh key (32 random bytes as 64 hexadecimal digits) to a new file with mode 0600: a key\n"

@@ -1,8 +1,13 @@
 // hbirl validate: check a problem file or a domain file and summarise it.
+#include <cstdio>
+#include <iostream>
+
 #include "commands.hpp"
 #include "full_commands.hpp"
 #include "sim_driver/registry/domain.hpp"
 #include "problem/domain_file.hpp"
+#include "learner/soft_value_iteration.hpp"
+#include "learner/trajectory.hpp"
 #include "problem/json_format.hpp"
 
 namespace hbirl::cli {
@@ -53,6 +58,24 @@ int run_validate(const std::string& path) {
   return 0;
 }
 
+// How often the simulated expert (the soft policy of true_weights, as the domain's simulator
+// draws it) enters a terminal state within the sensor's `length` steps; a warning when it
+// is less than half of its trajectories: the demonstrations then rarely show where it was
+// going, and the run learns a reward of about 0 (a larger length, or a start nearer).
+void warn_if_the_expert_rarely_ends(const std::string& path, const DomainSpec& d, nlohmann::ordered_json& sensor) {
+  const SoftSolution expert = soft_value_iteration(d.mdp, d.mdp.reward(*d.true_weights));
+  if (!expert.converged) return;  // the services refuse it, saying so
+  const double p = probability_of_ending_within(d.mdp, expert.policy, d.sensor->length);
+  sensor["expert_ends_within_length"] = p;
+  if (p >= 0.5) return;
+  char share[32];
+  std::snprintf(share, sizeof share, "%.1f%%", 100.0 * p);
+  std::cerr << "hbirl: warning: " << path << ": sensor.length: the expert (true_weights' soft policy) enters a "
+            << "terminal state within " << d.sensor->length << " steps in only " << share
+            << " of its trajectories: the demonstrations will rarely show where it is going (a larger length, or "
+               "a start nearer the goal)\n";
+}
+
 // A domain file (README.md "Your own task"): its sizes, names and sensor.
 int run_validate_domain(const std::string& path) {
   std::vector<std::string> warnings;
@@ -89,6 +112,7 @@ int run_validate_domain(const std::string& path) {
                      {"trajectories", s.trajectories},
                      {"length", s.length},
                      {"controlled_trajectories", s.controlled_trajectories}};
+    if (d.true_weights && terminal > 0) warn_if_the_expert_rarely_ends(path, d, out["sensor"]);
   } else {
     out["sensor"] = nullptr;
   }

@@ -36,6 +36,7 @@ RecordedProblem read_recorded_problem(const services::RecordedRun& run, std::sha
   if (r.data.observed.empty()) throw InputError(run.path, "the log holds no demonstrations");
   RecordedProblem out;
   Problem& problem = out.problem;
+  problem.name = domain->name();  // hbirl publish of the file then marks its episodes as the run's
   problem.mdp = domain->mdp();
   const DomainNames names = domain->names(r.data.num_sources);
   problem.state_names = names.states;
@@ -46,6 +47,7 @@ RecordedProblem read_recorded_problem(const services::RecordedRun& run, std::sha
   problem.demonstration = demonstrations_of(r.data);
   problem.true_weights = services::true_weights_of(*domain, r.data);
   out.domain = domain->name();
+  out.source_names = names.sources;
   out.controlled_episodes = static_cast<int>(r.data.controlled_observed.size());
   out.missing_frames = r.missing_frames;
   out.bad_messages = counters.bad_messages;

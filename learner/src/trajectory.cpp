@@ -28,6 +28,31 @@ Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int 
   return trajectory;
 }
 
+double probability_of_ending_within(const Mdp& mdp, const Eigen::VectorXd& policy, int length) {
+  Eigen::VectorXd occupied = mdp.start;  // over states not yet ended
+  double ended = 0.0;
+  for (int t = 0; t < length; ++t) {
+    Eigen::VectorXd next = Eigen::VectorXd::Zero(mdp.num_states);
+    for (int s = 0; s < mdp.num_states; ++s) {
+      if (occupied[s] == 0.0 || mdp.is_terminal(s)) continue;
+      for (int a = 0; a < mdp.num_actions; ++a) {
+        const double p = occupied[s] * policy[mdp.pair(s, a)];
+        if (p == 0.0) continue;
+        for (SparseRowMatrix::InnerIterator it(mdp.transitions, mdp.pair(s, a)); it; ++it) {
+          const auto to = static_cast<int>(it.col());
+          if (mdp.is_terminal(to)) {
+            ended += p * it.value();
+          } else {
+            next[to] += p * it.value();
+          }
+        }
+      }
+    }
+    occupied = std::move(next);
+  }
+  return ended;
+}
+
 Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories) {
   Eigen::VectorXd counts = Eigen::VectorXd::Zero(mdp.num_pairs());
   for (const auto& trajectory : trajectories) {

@@ -226,6 +226,17 @@ TEST_F(Cli, ValidatesDomainFiles) {
   EXPECT_EQ(out["name"], "warehouse");
   EXPECT_EQ(out["num_sources"], 3);
   EXPECT_EQ(out["sensor"]["eta"], "plausible");
+  EXPECT_GT(out["sensor"]["expert_ends_within_length"].get<double>(), 0.5);
+  EXPECT_EQ(r.err, "");
+  {  // an expert that seldom reaches its goal within the sensor's length: valid, with a warning
+    json short_run = json::parse(std::ifstream(example("warehouse.json")));
+    short_run["sensor"]["length"] = 2;
+    const Outcome w = run("validate --domain '" + write("short.json", short_run.dump()).string() + "'");
+    ASSERT_EQ(w.status, 0) << w.err;
+    EXPECT_LT(json::parse(w.out)["sensor"]["expert_ends_within_length"].get<double>(), 0.5);
+    EXPECT_EQ(w.err_lines(), 1) << w.err;
+    EXPECT_NE(w.err.find("short.json: sensor.length: the expert"), std::string::npos) << w.err;
+  }
   std::ifstream in(example("warehouse.json"));
   json bad = json::parse(in);
   bad["sensor"]["occlusion"] = 1.5;

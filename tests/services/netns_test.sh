@@ -235,6 +235,27 @@ assert got == want, (got, want)
 assert exported["observation_model"]["end_sensor"]["num_symbols"] == 2
 print(f"  the end reports of {len(got)} demonstrations recorded and exported as given")
 PY
+        # ... and as CSV for pandas (the format from the name): one row per observation, one
+        # per step without any, in the order and with the symbols, eta and contexts given.
+        "$build/hbirl" export --log "$tmp/ended/run.lcmlog" --domain "$problem" --out "$tmp/ended/exported.csv"
+        python3 - "$problem" "$tmp/ended/exported.csv" <<'PY' || fail "$case: the CSV export is not the observations"
+import csv, json, sys
+given = json.load(open(sys.argv[1]))
+rows = list(csv.DictReader(open(sys.argv[2])))
+want = []
+for i, t in enumerate(given["demonstration"]):
+    for k, step in enumerate(t.get("steps", [])):
+        obs = step["observations"] or [None]
+        for o in obs:
+            want.append((str(i), str(k), "" if o is None else str(o[0]),
+                         [] if o is None else [float(x) for x in o[1]], "" if o is None or len(o) < 3 else str(o[2])))
+etas = [c for c in rows[0] if c.startswith("eta ")]
+got = [(r["trajectory"], r["step"], r["symbol"], [float(r[c]) for c in etas] if r["symbol"] else [],
+        r["context"]) for r in rows]
+assert [g[:3] for g in got] == [w[:3] for w in want], (got[:3], want[:3])
+assert all(abs(a - b) < 1e-12 for g, w in zip(got, want) for a, b in zip(g[3], w[3]))
+print(f"  {len(rows)} CSV rows, the observations as given")
+PY
       fi
       "$build/hbirl" learn --problem "$problem" --eta "$eta" --out "$tmp/offline.json"
       same_theta "$tmp/live.json" "$tmp/offline.json" || fail "$case: published and learned live: another theta than hbirl learn"

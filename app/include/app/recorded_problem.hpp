@@ -17,10 +17,11 @@ namespace hbirl::app {
 
 struct RecordedProblem {
   Problem problem;
-  std::string domain;               // the run's domain, by name
-  int controlled_episodes = 0;      // in problem.observation_model's subject prior
-  std::int64_t missing_frames = 0;  // never received, even when asked for again
-  std::int64_t bad_messages = 0;    // refused by a reader (counted, not fatal)
+  std::string domain;                     // the run's domain, by name
+  std::vector<std::string> source_names;  // the subject's, then each element's (empty: none given)
+  int controlled_episodes = 0;            // in problem.observation_model's subject prior
+  std::int64_t missing_frames = 0;        // never received, even when asked for again
+  std::int64_t bad_messages = 0;          // refused by a reader (counted, not fatal)
 };
 
 // The problem of a recorded run. `given`: the run's domain when it ran on a domain file

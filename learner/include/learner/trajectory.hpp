@@ -22,6 +22,11 @@ using Trajectory = std::vector<StateAction>;
 Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
                              bool* entered_terminal = nullptr, int* entered_state = nullptr);
 
+// The probability that a trajectory sample_trajectory draws enters a terminal state within
+// `length` steps, computed exactly: the start distribution carried forward under `policy`,
+// the mass that enters a terminal state taken out at each step.
+double probability_of_ending_within(const Mdp& mdp, const Eigen::VectorXd& policy, int length);
+
 // N(s,a): how often each pair is visited, one entry per pair.
 Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories);
 
