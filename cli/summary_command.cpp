@@ -1,4 +1,4 @@
-// hbirl summary: what a learned result says, for a person (README "What hbirl prints"):
+// hbirl summary: what a learned result says, for a person (README "Commands"):
 // the weights by feature name, how right they are when the truth is known, the policy by
 // state and action names, learned eta by the labeller's rule. Reads hbirl-optimiser's
 // result.json (services/launch.sh prints this at the end of a run), hbirl learn's output
@@ -24,13 +24,13 @@ using nlohmann::json;
 
 // A result is a few MB at most (a 200 x 200 Gridworld's policy is ~3 MB): refused above
 // this before it is read.
-constexpr std::uintmax_t kMaxResultBytes = std::uintmax_t{64} << 20;
+constexpr std::uintmax_t kMaxResultBytes = std::uintmax_t{16} << 20;
 
 json read_result(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError("FILE", "'" + path + "' is not a file it can read");
   if (std::filesystem::file_size(path, ec) > kMaxResultBytes)
-    throw InputError("FILE", "'" + path + "' is larger than a result can be (64 MiB)");
+    throw InputError("FILE", "'" + path + "' is larger than a result can be (16 MiB)");
   std::ifstream in(path);
   json j = json::parse(in, nullptr, false);
   if (j.is_discarded() || !j.is_object())
@@ -56,26 +56,27 @@ std::string by_name(const json& values, const json& names) {
   std::string out;
   const bool named = names.is_array() && names.size() == values.size();
   for (size_t k = 0; k < values.size(); ++k) {
-    out += (k ? ", " : "") + (named ? text(names[k]) : "#" + std::to_string(k)) + " " + number(values[k]);
+    out += (k ? ", " : "") + (named ? text(names.at(k)) : "#" + std::to_string(k)) + " " + number(values.at(k));
   }
   return out;
 }
 
 std::string vector_text(const json& v) {
   std::string out;
-  for (size_t k = 0; k < v.size(); ++k) out += (k ? " " : "") + number(v[k]);
+  for (size_t k = 0; k < v.size(); ++k) out += (k ? " " : "") + number(v.at(k));
   return out;
 }
 
 void print_policy(std::ostream& out, const json& policy, size_t shown, const std::string& path) {
   if (!policy.is_array() || policy.empty()) return;
   size_t width = 5;
-  for (size_t i = 0; i < std::min(shown, policy.size()); ++i) width = std::max(width, text(policy[i]["state"]).size());
+  for (size_t i = 0; i < std::min(shown, policy.size()); ++i)
+    width = std::max(width, text(policy.at(i).at("state")).size());
   out << "  policy (the learned reward's: the action a robot would take, and how likely the expert takes it):\n";
   for (size_t i = 0; i < std::min(shown, policy.size()); ++i) {
-    const std::string state = text(policy[i]["state"]);
-    out << "    " << state << std::string(width - state.size() + 2, ' ') << "-> " << text(policy[i]["action"]) << "  ("
-        << number(policy[i]["probability"]) << ")\n";
+    const std::string state = text(policy.at(i).at("state"));
+    out << "    " << state << std::string(width - state.size() + 2, ' ') << "-> " << text(policy.at(i).at("action"))
+        << "  (" << number(policy.at(i).at("probability")) << ")\n";
   }
   if (policy.size() > shown)
     out << "    ... " << policy.size() - shown << " more states: all in " << path << " \"policy\"\n";
@@ -85,36 +86,48 @@ void print_eta(std::ostream& out, const json& eta) {
   if (!eta.is_array() || eta.empty()) return;
   out << "  learned eta (per labeller rule, the subject first): stated -> learned (observations)\n";
   for (const json& c : eta) {
-    const std::string name = c.contains("name") ? text(c["name"]) : "context " + text(c["context"]);
-    out << "    " << name << ": " << vector_text(c["stated"]) << " -> " << vector_text(c["learned"]) << " ("
-        << count(c["observations"]) << ")\n";
+    const std::string name = c.contains("name") ? text(c.at("name")) : "context " + text(c.at("context"));
+    out << "    " << name << ": " << vector_text(c.at("stated")) << " -> " << vector_text(c.at("learned")) << " ("
+        << count(c.at("observations")) << ")\n";
   }
 }
 
-int run_summary(const std::string& path, size_t states) {
-  const json r = read_result(path);
-  std::ostream& out = std::cout;
+void print_summary(std::ostream& out, const json& r, const std::string& path, size_t states) {
   out << "Learned";
-  if (r.contains("domain")) out << " on " << text(r["domain"]);
-  if (r.contains("demonstrations")) out << " from " << text(r["demonstrations"]) << " demonstrations";
-  if (r.contains("controlled_episodes")) out << " (and " << text(r["controlled_episodes"]) << " controlled episodes)";
+  if (r.contains("domain")) out << " on " << text(r.at("domain"));
+  if (r.contains("demonstrations")) out << " from " << text(r.at("demonstrations")) << " demonstrations";
+  if (r.contains("controlled_episodes"))
+    out << " (and " << text(r.at("controlled_episodes")) << " controlled episodes)";
   out << ":\n";
   const json names = r.value("feature_names", json());
-  out << "  weights: " << by_name(r["weights"], names) << "\n";
-  if (r.contains("true_weights")) out << "  true weights: " << by_name(r["true_weights"], names) << "\n";
+  out << "  weights: " << by_name(r.at("weights"), names) << "\n";
+  if (r.contains("true_weights")) out << "  true weights: " << by_name(r.at("true_weights"), names) << "\n";
   if (r.contains("ile")) {
-    out << "  ILE " << number(r["ile"]);
+    out << "  ILE " << number(r.at("ile"));
     if (r.contains("ile_relative"))
-      out << " (" << number(r["ile_relative"].get<double>() * 100.0) << "% of the optimal value)";
+      out << " (" << number(r.at("ile_relative").get<double>() * 100.0) << "% of the optimal value)";
     out << ": what the learned policy loses against the expert's, under the true reward\n";
   }
-  const json confidence = r.contains("posterior") ? r["posterior"].value("confidence", json()) : json();
+  const json confidence = r.contains("posterior") ? r.at("posterior").value("confidence", json()) : json();
   if (confidence.is_number())
     out << "  confidence " << number(confidence) << " that the learned policy is within 5% of optimal\n";
   print_policy(out, r.value("policy", json()), states, path);
-  print_eta(out, r.contains("learned_eta") ? r["learned_eta"]
+  print_eta(out, r.contains("learned_eta") ? r.at("learned_eta")
                                            : r.value("observation_model", json::object()).value("learned_eta", json()));
-  if (r.contains("incomplete")) out << "  INCOMPLETE: " << text(r["incomplete"]) << "\n";
+  if (r.contains("incomplete")) out << "  INCOMPLETE: " << text(r.at("incomplete")) << "\n";
+}
+
+// The summary, or one line naming the file when a field is missing or of another type
+// (a hand-edited or foreign file): printed whole or not at all.
+int run_summary(const std::string& path, size_t states) {
+  const json r = read_result(path);
+  std::ostringstream text;
+  try {
+    print_summary(text, r, path, states);
+  } catch (const json::exception& e) {
+    throw InputError("FILE", "'" + path + "' is not a result hbirl wrote (" + e.what() + ")");
+  }
+  std::cout << text.str();
   return 0;
 }
 

@@ -337,9 +337,10 @@ run_service() {  # run_service INDEX: (re)start it in the background
   pids[i]=$!
   echo "$name ${pids[$i]}" >>"$out/logs/pids"
 }
-start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log
+start() {  # start NAME COMMAND...: in the background, output to logs/NAME.log (emptied first: not an earlier run's)
   local name="$1"; shift
   local i="${#names[@]}"
+  : >"$out/logs/$name.log"
   names[i]="$name"
   cmds[i]="$(printf '%q ' "$@")"
   restarts[i]=0
@@ -472,8 +473,9 @@ check_services() {
 # A service that refused the first messages of a sensor's kind, every one (another domain's
 # name, another alphabet: Counters::all_refused in services/typed.hpp writes this line),
 # cannot make the run: said at once, with the first reason, rather than at --timeout.
-refused_all() {
-  grep -h -m1 -F -- "refused every message on " "$out"/logs/*.log "$out"/logs/*.err 2>/dev/null | head -n 1 || true
+refused_all() {  # only the watching services' own lines (a message's text cannot begin a line: it is escaped)
+  grep -h -m1 -E -- "^(optimiser|perception|labeller): refused every message on [A-Z_]+: the first [0-9]+, none accepted; " \
+    "$out/logs/optimiser.err" "$out/logs/perception.log" "$out/logs/labeller.log" 2>/dev/null | head -n 1 || true
 }
 # The optimiser's progress (its "progress:" lines on stderr: collecting, then each EM
 # iteration's log-likelihood), the newest shown every few seconds while the run lasts.

@@ -32,11 +32,14 @@ RecordedProblem read_recorded_problem(const services::RecordedRun& run, std::sha
   counters.service = reader;
   counters.quiet = true;
   const services::OptimiserResult r = services::collect_from_log(run, counters);
+  const bool on_a_file = given != nullptr;  // a domain file's name is one a problem file may carry
   const std::shared_ptr<const Domain> domain = services::domain_of(r.data, std::move(given));
   if (r.data.observed.empty()) throw InputError(run.path, "the log holds no demonstrations");
   RecordedProblem out;
   Problem& problem = out.problem;
-  problem.name = domain->name();  // hbirl publish of the file then marks its episodes as the run's
+  // hbirl publish of the file then marks its episodes as the run's. Not a built-in domain's
+  // ("onion", "gridworld:7"): a problem file may not take those names.
+  if (on_a_file) problem.name = domain->name();
   problem.mdp = domain->mdp();
   const DomainNames names = domain->names(r.data.num_sources);
   problem.state_names = names.states;

@@ -1,5 +1,7 @@
 #include "learner/trajectory.hpp"
 
+#include <algorithm>
+
 namespace hbirl {
 
 Trajectory sample_trajectory(const Mdp& mdp, const Eigen::VectorXd& policy, int length, Rng& rng,
@@ -49,8 +51,9 @@ double probability_of_ending_within(const Mdp& mdp, const Eigen::VectorXd& polic
       }
     }
     occupied = std::move(next);
+    if (occupied.sum() < 1e-15) break;  // every trajectory has ended
   }
-  return ended;
+  return std::min(ended, 1.0);  // (rounding)
 }
 
 Eigen::VectorXd visit_counts(const Mdp& mdp, const std::vector<Trajectory>& trajectories) {

@@ -120,6 +120,9 @@ class Observations:
         ends_in_terminal, end_symbols, end_state: as in Observations (the list form cannot
         carry them)."""
         if isinstance(trajectories, Observations):
+            if ends_in_terminal is not None or end_symbols is not None or end_state is not None:
+                raise ValueError("observations: an Observations already says how its trajectories ended; "
+                                 "set its ends_in_terminal, end_symbols or end_state instead")
             return trajectories
         symbols, eta, steps, contexts, lengths = [], [], [], [], []
         sources = None  # columns of eta: from the first observation, else from an empty step's (0, J) eta
@@ -220,6 +223,9 @@ class Observations:
         return cls(*parts)
 
 
+_MAX_END_REPORTS = _hbirl._MAX_END_REPORTS
+
+
 def _end_symbols(end_symbols):
     """Each trajectory's end reports as a 1-D int array (None: no end sensor)."""
     if end_symbols is None:
@@ -230,6 +236,10 @@ def _end_symbols(end_symbols):
         items = list(end_symbols)
     except TypeError:
         raise ValueError("observations.end_symbols: must be a list, one array of reports per trajectory") from None
+    for i, r in enumerate(items):  # bounded before anything is converted (the C++ side checks each again)
+        if hasattr(r, "__len__") and len(r) > _MAX_END_REPORTS:
+            raise ValueError(f"observations.end_symbols[{i}]: has {len(r)} reports, more than the "
+                             f"{_MAX_END_REPORTS} one ending may have")
     return [_int_array(r, f"observations.end_symbols[{i}]") for i, r in enumerate(items)]
 
 

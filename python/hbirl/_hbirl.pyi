@@ -55,7 +55,7 @@ class ObservationPrior:
         eta_strength: float = ...,
         unlisted_eta: float = ...,
         num_end_symbols: int = ...,  # the end sensor's alphabet; 0: none
-        end_alpha: Union[float, npt.ArrayLike] = ...,  # number (every terminal state) or (S, K)
+        end_alpha: Union[None, float, npt.ArrayLike] = ...,  # number (every terminal state; default 1) or (S, K)
         end_alpha_default: Optional[float] = ...,
     ) -> None: ...
     @property

@@ -117,9 +117,15 @@ void check_alphas(const ObservationPrior& prior, const Mdp& mdp) {
 // symbols (0: none) and alpha per terminal state, a number (every terminal state's every
 // symbol; its own base, as a problem file's alpha_default) or an (S, K) array whose
 // non-terminal rows are 0; checked as a problem file's end_sensor is.
-void set_end_alpha(ObservationPrior& prior, const Mdp& mdp, int num_end_symbols, const py::object& end_alpha,
+void set_end_alpha(ObservationPrior& prior, const Mdp& mdp, int num_end_symbols, const py::object& given_alpha,
                    std::optional<double> end_alpha_default) {
-  if (num_end_symbols == 0) return;
+  if (num_end_symbols == 0) {
+    if (!given_alpha.is_none() || end_alpha_default)
+      throw InputError(given_alpha.is_none() ? "end_alpha_default" : "end_alpha",
+                       "is given, but num_end_symbols is 0 (no end sensor)");
+    return;
+  }
+  const py::object end_alpha = given_alpha.is_none() ? py::object(py::float_(1.0)) : given_alpha;
   const int K = num_end_symbols;
   if (K < 0 || K > kMaxEndSymbols)
     throw InputError("num_end_symbols", "must be in [0, " + std::to_string(kMaxEndSymbols) + "] (0: no end sensor)");
@@ -218,7 +224,7 @@ void bind_observation_prior(py::module_& m) {
            py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1,
            py::arg("prior_strength") = "auto", py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(),
            py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0, py::arg("num_end_symbols") = 0,
-           py::arg("end_alpha") = 1.0, py::arg("end_alpha_default") = py::none())
+           py::arg("end_alpha") = py::none(), py::arg("end_alpha_default") = py::none())
       .def_property_readonly("num_symbols", [](const ObservationPrior& p) { return p.num_symbols; })
       .def_property_readonly("num_confounders", [](const ObservationPrior& p) { return p.num_confounders; })
       .def_property_readonly("confounder_alpha", [](const ObservationPrior& p) { return p.confounder_alpha; })
@@ -246,6 +252,7 @@ void bind_observation_prior(py::module_& m) {
         return p.automatic_strength ? py::object(py::str("auto")) : py::object(py::float_(p.strength));
       });
 
+  m.attr("_MAX_END_REPORTS") = kMaxEndReports;  // one ending's reports at most (learner/observations.hpp)
   m.def(
       "controlled_run_prior",
       [](const Mdp& mdp, const std::vector<IntArray>& truth, const py::tuple& observations, int num_symbols) {

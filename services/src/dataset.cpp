@@ -19,6 +19,7 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   // A whole run's messages may be waiting when a replay starts or a slow learner catches up.
   constexpr int kQueue = 1 << 20;
   // A sensor whose every episode or observation is refused cannot make a run: watched.
+  // (GROUND_TRUTH is not: a run may have none to accept.)
   const Refusals watched = Refusals::kWatched;
   subs_.add(bus, services::subscribe(
                      bus, channels::kEpisode, counters, [this](const auto& m, const Message&) { on_marker(m); }, kQueue,
@@ -26,9 +27,9 @@ void DatasetBuilder::subscribe(Bus& bus, Counters& counters) {
   subs_.add(bus, services::subscribe(
                      bus, channels::kObservations, counters,
                      [this](const auto& m, const Message&) { on_observations(m); }, kQueue, watched));
-  subs_.add(bus, services::subscribe(
-                     bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); },
-                     kQueue, watched));
+  subs_.add(bus,
+            services::subscribe(
+                bus, channels::kGroundTruth, counters, [this](const auto& m, const Message&) { on_truth(m); }, kQueue));
 }
 
 void DatasetBuilder::expect(const std::string& domain, int num_symbols, int num_sources, int num_states,

@@ -198,8 +198,11 @@ TEST_F(Cli, ThePolicyAndASummaryAPersonReads) {
   EXPECT_EQ(rights, 2u) << r.out;
   EXPECT_LT(std::count(r.out.begin(), r.out.end(), '\n'), 20);  // fits a screen
   // Anything else is refused in one line naming it.
-  for (const std::string& bad : {write("other.json", "{\"mdp\": 1}").string(), write("x.txt", "[1, 2").string(),
-                                 std::string("/dev/zero"), (dir_ / "missing.json").string()}) {
+  for (const std::string& bad :
+       {write("other.json", "{\"mdp\": 1}").string(), write("x.txt", "[1, 2").string(), std::string("/dev/zero"),
+        (dir_ / "missing.json").string(), write("no_state.json", R"({"weights": [1], "policy": [{}]})").string(),
+        write("eta.json", R"({"weights": [1], "learned_eta": [{"context": 0}]})").string(),
+        write("model.json", R"({"weights": [1], "observation_model": 5})").string()}) {
     const Outcome refused = run("summary '" + bad + "'");
     EXPECT_EQ(refused.status, 2) << bad;
     EXPECT_EQ(refused.err_lines(), 1) << refused.err;

@@ -33,7 +33,9 @@ grep -q "the dashboard stays up" "$tmp/launch.out" || fail "the run did not fini
 kill -TERM "$launch"
 wait "$launch" || fail "launch.sh exited non-zero"
 launch=""
-grep -q "launch.sh: the full result: " "$tmp/launch.out" && grep -q "^  weights: " "$tmp/launch.out" || fail "no learned reward"
+if ! grep -q "launch.sh: the full result: " "$tmp/launch.out" || ! grep -q "^  weights: " "$tmp/launch.out"; then
+  fail "no learned reward"
+fi
 for f in index.html state.json camera.png em.svg em.png estimates.svg theta.svg posterior.svg observation_model.svg eta.svg; do
   [ -s "$tmp/run/report/$f" ] || fail "the report has no $f"
 done

@@ -635,6 +635,9 @@ def test_bad_end_reports_are_refused_naming_the_field(change, field):
     (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha=np.r_[np.zeros((4, 3)), np.ones((1, 3))]),
      "end_alpha"),  # terminal state 3's row sums to 0
     (lambda m: hbirl.ObservationPrior(m, 2, 0, num_end_symbols=3, end_alpha_default=-1.0), "end_alpha_default"),
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, end_alpha=np.ones((5, 3))), "end_alpha"),  # no end sensor to give it to
+    (lambda m: hbirl.ObservationPrior(m, 2, 0, end_alpha_default=2.0), "end_alpha_default"),
+    (lambda m: hbirl.Observations.from_list(hbirl.Observations([0], [[1.0]], [0], [1]), end_state=[4]), "observations"),
     (lambda m: hbirl.ObservationPrior(hbirl.Mdp(np.ones((2, 1, 2)) / 2, np.zeros((2, 1, 1))), 2, 0, num_end_symbols=3),
      "num_end_symbols"),  # no terminal states to see
     (lambda m: hbirl.HierarchicalIRL().fit(hbirl.Mdp(np.ones((2, 1, 2)) / 2, np.zeros((2, 1, 1))),

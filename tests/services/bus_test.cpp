@@ -252,6 +252,27 @@ TEST(TypedSubscribe, AWatchedChannelSaysWhenItRefusedEveryMessage) {
   EXPECT_EQ(counted.bad_messages, 20);
   EXPECT_EQ(counted.all_refused_report, "");
 
+  // Garbage counts toward it as well (decoding is the first refusal); a message signed for
+  // another run (a shared bus) does not: it is not this sensor's.
+  MemoryBus garbage_bus(std::make_shared<MemoryHub>());
+  Counters garbled = quiet_counters(), signed_elsewhere = quiet_counters();
+  subscribe(garbage_bus, channels::kObservations, garbled, refuse_all, 0, Refusals::kWatched);
+  const char garbage[] = "definitely not an LCM message";
+  for (int k = 0; k < kAllRefusedAfter; ++k) garbage_bus.publish("OBSERVATIONS", garbage, sizeof garbage);
+  garbage_bus.handle(0);
+  EXPECT_NE(garbled.all_refused_report.find("OBSERVATIONS: the first 10, none accepted"), std::string::npos)
+      << garbled.all_refused_report;
+  MemoryBus signed_bus(std::make_shared<MemoryHub>());
+  subscribe(signed_bus, channels::kObservations, signed_elsewhere, refuse_all, 0, Refusals::kWatched);
+  std::vector<std::uint8_t> other_run = encode(observations(5, 1));
+  other_run.resize(other_run.size() + kTagBytes + kRunBytes, 0x5a);  // a tag and a run identity, then the marker
+  for (const char c : std::string("hbk2")) other_run.push_back(static_cast<std::uint8_t>(c));
+  for (int k = 0; k < 2 * kAllRefusedAfter; ++k)
+    signed_bus.publish("OBSERVATIONS", other_run.data(), static_cast<int>(other_run.size()));
+  signed_bus.handle(0);
+  EXPECT_EQ(signed_elsewhere.signed_unread, 2 * kAllRefusedAfter);
+  EXPECT_EQ(signed_elsewhere.all_refused_report, "");
+
   // A subscription that accepted one message first never says it.
   MemoryBus other(std::make_shared<MemoryHub>());
   subscribe(other, channels::kObservations, after_one, refuse_all, 0, Refusals::kWatched);

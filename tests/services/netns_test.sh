@@ -252,8 +252,10 @@ for i, t in enumerate(given["demonstration"]):
 etas = [c for c in rows[0] if c.startswith("eta ")]
 got = [(r["trajectory"], r["step"], r["symbol"], [float(r[c]) for c in etas] if r["symbol"] else [],
         r["context"]) for r in rows]
-assert [g[:3] for g in got] == [w[:3] for w in want], (got[:3], want[:3])
-assert all(abs(a - b) < 1e-12 for g, w in zip(got, want) for a, b in zip(g[3], w[3]))
+assert len(got) == len(want) and [g[:3] for g in got] == [w[:3] for w in want], (got[:3], want[:3])
+assert len(etas) == len(given["demonstration"][0]["steps"][0]["observations"][0][1]), etas
+assert all(len(g[3]) == len(w[3]) and all(abs(a - b) < 1e-12 for a, b in zip(g[3], w[3])) for g, w in zip(got, want))
+assert [g[4] for g in got] == [w[4] for w in want] or all(w[4] == "" for w in want), "contexts"
 print(f"  {len(rows)} CSV rows, the observations as given")
 PY
       fi

@@ -1,7 +1,8 @@
 #pragma once
-// What a person reads of a learned reward, the same in every output (hbirl learn,
-// hbirl-optimiser's result.json, hbirl learn --log; README "What hbirl prints"): the
-// policy a robot would follow, by state and action names.
+// What a person reads of a learned reward, the same in hbirl learn's output,
+// hbirl-optimiser's result.json and hbirl learn --log's: the policy a robot would follow,
+// by state and action names. (hbirl learn --anytime's one line per estimate keeps the
+// policy as action numbers, one per state: short lines for a stream.)
 #include <string>
 #include <vector>
 

@@ -133,7 +133,14 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
   j["log_likelihood"] = r.learned.log_likelihood;
   j["em_iterations"] = r.learned.em_iterations;
   if (r.learned.confidence) j["confidence"] = *r.learned.confidence;  // with posterior draws (hbirl learn --log)
-  if (r.learned.eta) j["learned_eta"] = learned_eta_json(*r.learned.eta, names.contexts);
+  if (r.learned.eta) {
+    // Rows are the labeller's rules only when every observation came with its context
+    // (none given, or dropped as contexts_note says: each distinct eta is a row).
+    bool by_rule = r.data.contexts_note.empty() && !r.data.observed.empty();
+    for (const ObservedTrajectory& t : r.data.observed) by_rule = by_rule && (t.contexts.size() == t.symbols.size());
+    const std::vector<std::string> no_names;
+    j["learned_eta"] = learned_eta_json(*r.learned.eta, by_rule ? names.contexts : no_names);
+  }
   if (r.learned.end_sensor.size() > 0) {  // the learned O_end per terminal state: [state, probabilities]
     const Mdp& mdp = learned_in->mdp();
     Json end = Json::array();

@@ -52,7 +52,9 @@ inline constexpr const char* kAllRefusedMarker = "refused every message on ";
 // episodes, observations) of which a service refuses every one -- another domain's name,
 // another alphabet -- cannot make a run, and saying so after kAllRefusedAfter messages
 // beats a silent wait for --timeout. Channels where a refusal is part of the protocol
-// (a block another worker holds, a request before its data) are only counted.
+// (a block another worker holds, a request before its data) or where a run may accept
+// nothing (GROUND_TRUTH) are only counted. On an unauthenticated bus another run's
+// unsigned messages count too (README "Data you already have"; a run key prevents it).
 enum class Refusals { kCounted, kWatched };
 inline constexpr std::int64_t kAllRefusedAfter = 10;
 
@@ -144,16 +146,19 @@ SubscriptionId subscribe(Bus& bus, const Channel<T>& channel, Counters& counters
   return bus.subscribe(
       channel.name,
       [&counters, handler, refusals, name = channel.name, tally = Tally{}](const Message& m) mutable {
-        const auto refuse = [&](const std::string& why) {
+        // `other_run`: signed for a run this reader has no key for -- another run's message on a
+        // shared bus, not this sensor's: counted, never tallied.
+        const auto refuse = [&](const std::string& why, bool other_run = false) {
           counters.bad(m.channel, why);
-          if (refusals != Refusals::kWatched || tally.accepted > 0) return;
+          if (refusals != Refusals::kWatched || tally.accepted > 0 || other_run) return;
           if (tally.refused++ == 0) tally.first = m.channel + ": " + why;
           if (tally.refused == kAllRefusedAfter) counters.all_refused(name, tally.refused, tally.first);
         };
         T msg;
         if (const auto why = decode(m, msg)) {
-          counters.signed_unread += has_trailer(m.data, m.size) || has_old_trailer(m.data, m.size);
-          refuse(*why);
+          const bool signed_message = has_trailer(m.data, m.size) || has_old_trailer(m.data, m.size);
+          counters.signed_unread += signed_message;
+          refuse(*why, signed_message);
           return;
         }
         try {
