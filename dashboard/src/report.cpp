@@ -60,6 +60,15 @@ std::vector<std::string> names_or_numbers(const json& names, size_t n, const std
 // The upper end of a heat map's axis of n cells (cells centred on 0 .. n-1).
 double edge(size_t n) { return static_cast<double>(n) - 0.5; }
 
+// Plots the matrix $`name` (rows x cols) as a heat map: gnuplot's image, or, where the
+// image cannot be drawn (it needs 2 x 2 cells at least: a single confounding element's
+// row), a box per cell.
+std::string heat_map(const std::string& name, size_t rows, size_t cols) {
+  if (rows >= 2 && cols >= 2) return "plot $" + name + " matrix with image notitle\n";
+  return "set style fill solid noborder\nplot $" + name +
+         " matrix using 1:2:(0.5):(0.5):3 with boxxy fc palette notitle\n";
+}
+
 // Tics for a heat map's axis: every `every`-th label, at its row or column.
 std::string tics(const std::string& axis, const std::vector<std::string>& labels, size_t every = 1, size_t offset = 0) {
   std::ostringstream s;
@@ -256,13 +265,14 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
        << tics("xtics rotate by -60 font ',7'", symbol_names)
        << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions)) << "set xrange [-0.5:" << edge(symbols)
        << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
-       << "plot $subject matrix with image notitle\n";
+       << heat_map("subject", pairs, symbols);
   if (!confounders.empty()) {
     const std::vector<std::string> sources =
         names_or_numbers(s["names"]["sources"], confounders.size() + 1, "element ");
     plot << "set title 'Confounding elements: O(symbol | element)'\n"
          << tics("ytics font ',8'", std::vector<std::string>(sources.begin() + 1, sources.end()))
-         << "set yrange [-0.5:" << edge(confounders.size()) << "]\nplot $elements matrix with image notitle\n";
+         << "set yrange [-0.5:" << edge(confounders.size()) << "]\n"
+         << heat_map("elements", confounders.size(), symbols);
   }
   plot << "unset multiplot\n";
   const std::string why = run_gnuplot(stem, data.str(), plot.str(), 1200, 700);
