@@ -125,10 +125,10 @@ nlohmann::ordered_json model_json(const Mdp& mdp, const ObservationModel& model)
 }
 
 // With true weights in the file: the ILE, its relative size and the policy agreement of theta.
-void add_true_weight_metrics(nlohmann::ordered_json& out, const Problem& problem, const Eigen::VectorXd& theta,
+void add_true_weight_metrics(nlohmann::ordered_json& out, const Problem& problem, const OptimalPolicy& learned,
                              const LearnArgs& args) {
   const Mdp& mdp = problem.mdp;
-  const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, theta);
+  const PolicyMetrics metrics = policy_metrics(mdp, *problem.true_weights, learned);
   const InverseLearningError& ile = metrics.ile;
   if (!std::isfinite(ile.ile) || !std::isfinite(ile.relative())) {
     throw in_file(args.problem, InputError("true_weights",
@@ -295,9 +295,10 @@ int run_learn(const LearnArgs& given) {
   out["em_iterations"] = best.em_iterations;
   out["em_evaluations"] = best.em_evaluations;
   out["feature_count_error"] = feature_count_error(mdp, counts, estep->trajectory_lengths(), policy.policy);
-  if (problem.true_weights) add_true_weight_metrics(out, problem, learned.theta, args);
-  out["policy"] =
-      app::policy_json<nlohmann::ordered_json>(mdp, learned.theta, problem.state_names, problem.action_names);
+  const OptimalPolicy planned = value_iteration(mdp, mdp.reward(learned.theta));  // for the metrics and "policy"
+  if (problem.true_weights) add_true_weight_metrics(out, problem, planned, args);
+  out["policy"] = app::policy_json<nlohmann::ordered_json>(app::learned_policy(mdp, planned, policy.policy),
+                                                           problem.state_names, problem.action_names);
   if (observed != nullptr) out["observation_model"] = learned_observation_model_json(mdp, learned_all, best);
   if (learned_all.posterior) {
     out["posterior"] = app::posterior_summary(learned_all);

@@ -72,7 +72,8 @@ void print_policy(std::ostream& out, const json& policy, size_t shown, const std
   size_t width = 5;
   for (size_t i = 0; i < std::min(shown, policy.size()); ++i)
     width = std::max(width, text(policy.at(i).at("state")).size());
-  out << "  policy (the learned reward's: the action a robot would take, and how likely the expert takes it):\n";
+  out << "  policy (the learned reward's: the action a robot would take, and the learned model's probability that the "
+         "expert does):\n";
   for (size_t i = 0; i < std::min(shown, policy.size()); ++i) {
     const std::string state = text(policy.at(i).at("state"));
     out << "    " << state << std::string(width - state.size() + 2, ' ') << "-> " << text(policy.at(i).at("action"))

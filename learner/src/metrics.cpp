@@ -56,9 +56,12 @@ double policy_agreement(const Mdp& mdp, const Eigen::VectorXd& true_theta, const
 }
 
 PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta) {
+  return policy_metrics(mdp, true_theta, value_iteration(mdp, mdp.reward(learned_theta)));
+}
+
+PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const OptimalPolicy& learner) {
   const Eigen::VectorXd true_reward = mdp.reward(true_theta);
   const OptimalPolicy expert = value_iteration(mdp, true_reward);
-  const OptimalPolicy learner = value_iteration(mdp, mdp.reward(learned_theta));
   return {ile_of(mdp, true_reward, expert, learner), agreement_of(mdp, expert, learner)};
 }
 

@@ -3,6 +3,8 @@
 #include "app/learn.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "learner/soft_value_iteration.hpp"
+#include "learner/value_iteration.hpp"
 
 namespace hbirl::services {
 
@@ -69,7 +71,13 @@ Learned learn_from_dataset(const Domain& domain, const Dataset& data, const app:
   if (learned.confidence) out.confidence = learned.confidence->near_optimal;
   out.trajectories = static_cast<int>(data.observed.size());
   out.digest = dataset_digest(data.observed);
-  if (const auto truth = true_weights_of(domain, data)) out.ile = inverse_learning_error(mdp, *truth, out.theta).ile;
+  // The learned reward planned once, for the ILE and the policy results show.
+  const OptimalPolicy planned = value_iteration(mdp, mdp.reward(out.theta));
+  out.policy = app::learned_policy(mdp, planned, soft_value_iteration(mdp, mdp.reward(out.theta)).policy);
+  if (const auto truth = true_weights_of(domain, data)) {
+    const Eigen::VectorXd true_reward = mdp.reward(*truth);
+    out.ile = inverse_learning_error(mdp, true_reward, value_iteration(mdp, true_reward), planned).ile;
+  }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "learner/mdp.hpp"
+#include "learner/value_iteration.hpp"
 
 namespace hbirl::app {
 
@@ -18,19 +19,22 @@ struct PolicyStep {
   int action = 0;
   double probability = 0.0;
 };
-std::vector<PolicyStep> learned_policy(const Mdp& mdp, const Eigen::VectorXd& weights);
+// From the learned reward's optimal policy and soft policy (one probability per pair),
+// which the caller has computed for its metrics and output anyway: nothing is planned here.
+std::vector<PolicyStep> learned_policy(const Mdp& mdp, const OptimalPolicy& optimal,
+                                       const Eigen::VectorXd& soft_policy);
 
-// learned_policy as [{"state": s, "action": a, "probability": p}, ...], states and actions
-// by name when `state_names` / `action_names` give them (empty: by number). Json:
+// The policy as [{"state": s, "action": a, "probability": p}, ...], states and actions by
+// name when `state_names` / `action_names` give them (empty: by number). Json:
 // nlohmann::json or ordered_json.
 template <class Json>
-Json policy_json(const Mdp& mdp, const Eigen::VectorXd& weights, const std::vector<std::string>& state_names,
+Json policy_json(const std::vector<PolicyStep>& policy, const std::vector<std::string>& state_names,
                  const std::vector<std::string>& action_names) {
   const auto name = [](const std::vector<std::string>& names, int i) {
     return static_cast<size_t>(i) < names.size() ? Json(names[static_cast<size_t>(i)]) : Json(i);
   };
   Json out = Json::array();
-  for (const PolicyStep& p : learned_policy(mdp, weights)) {
+  for (const PolicyStep& p : policy) {
     Json step = Json::object();
     step["state"] = name(state_names, p.state);
     step["action"] = name(action_names, p.action);

@@ -40,6 +40,9 @@ struct PolicyMetrics {
   double agreement = 0.0;
 };
 PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const Eigen::VectorXd& learned_theta);
+// The same with the learned reward's optimal policy already planned (value_iteration): a
+// caller that also shows that policy plans it once (app/output.hpp).
+PolicyMetrics policy_metrics(const Mdp& mdp, const Eigen::VectorXd& true_theta, const OptimalPolicy& learner);
 
 // E[phi] of a policy (one probability per pair), averaged over rollouts from the start
 // distribution, one rollout per entry of `lengths` (trajectories stop early when they

@@ -7,10 +7,12 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "app/learn_settings.hpp"
+#include "app/output.hpp"
 #include "learner/estep_observations.hpp"
 #include "services/dataset.hpp"
 #include "sim_driver/registry/domain.hpp"
@@ -23,9 +25,10 @@ struct Learned {
   std::optional<double> ile;  // when the ground truth gave the expert's true weights
   int em_iterations = 0;
   int trajectories = 0;
-  std::uint64_t digest = 0;       // of the demonstrations learned from
-  std::optional<LearnedEta> eta;  // when eta was learned
-  Eigen::MatrixXd end_sensor;     // the learned O_end, one row per state (empty: no end sensor)
+  std::uint64_t digest = 0;             // of the demonstrations learned from
+  std::optional<LearnedEta> eta;        // when eta was learned
+  Eigen::MatrixXd end_sensor;           // the learned O_end, one row per state (empty: no end sensor)
+  std::vector<app::PolicyStep> policy;  // the learned reward's, as results show it (app/output.hpp)
   // When posterior draws were asked for (settings.posterior.samples): the posterior
   // probability that the learned policy is within 5% of the optimal value (app::learn).
   std::optional<double> confidence;

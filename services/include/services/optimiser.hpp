@@ -149,7 +149,7 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
     }
     j["end_sensor"] = end;
   }
-  j["policy"] = app::policy_json<Json>(learned_in->mdp(), r.learned.theta, names.states, names.actions);
+  j["policy"] = app::policy_json<Json>(r.learned.policy, names.states, names.actions);
   j["demonstrations"] = r.learned.trajectories;
   j["controlled_episodes"] = r.data.controlled_observed.size();
   j["dataset_digest"] = r.learned.digest;
