@@ -396,6 +396,9 @@ optimiser_args=(--incomplete-after-ms "$((incomplete_after * 1000))")
 # kLiveConfidenceDraws, as the stopping experiment; docs/MODEL.md).
 [ "${#stop_args[@]}" = 0 ] || optimiser_args+=("${stop_args[@]}" --posterior-samples 100)
 [ "$allow_incomplete" = 0 ] || optimiser_args+=(--allow-incomplete)
+# The recording is complete whenever the run is: the optimiser asks again for what
+# lcm-logger lost (a receiver like any other, but one that cannot ask itself).
+[ "$record" = 0 ] || optimiser_args+=(--recording "$out/run.lcmlog")
 start optimiser "$build/hbirl-optimiser" --url "$url" --workers "$workers" "${domain_args[@]}" "${key_args[@]}" "${learn_eta_args[@]}" \
   "${optimiser_args[@]}" --out "$out/result.json"
 optimiser_index=$((${#names[@]} - 1))

@@ -385,7 +385,12 @@ int optimiser(int argc, char** argv) {
   add_collection_options(app, o, max_dataset_mb, no_spot_check);
   app::add_learn_settings(&app, o.learning, app::Front::kOptimiser);
   app.add_option("--out", out, "Also write the result JSON to this file");
+  app.add_option("--recording", o.recording.path,
+                 "The run's lcm-logger recording (services/launch.sh --record): once the run is complete, wait\n"
+                 "until the recording holds it too, asking again for what lcm-logger lost, so that hbirl learn\n"
+                 "--log finds the whole run (read with --key, as its readers read it)");
   CLI11_PARSE(app, argc, argv);
+  o.recording.key_file = c.key_file;
   o.executor.spot_check = !no_spot_check;
   o.max_dataset_bytes = max_dataset_mb << 20;
   check_stop_rule(app, o);

@@ -12,6 +12,7 @@
 #include "services/lcm_arrays.hpp"
 #include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
+#include "services/recording_watch.hpp"
 
 namespace hbirl::services {
 
@@ -21,6 +22,7 @@ using Clock = std::chrono::steady_clock;
 // at most this often.
 constexpr const char* kProgress = "progress: ";
 constexpr auto kProgressEvery = std::chrono::seconds(2);
+constexpr size_t kFramesPerRequest = 500;  // frames asked for in one FRAME_REQUEST
 }  // namespace
 
 namespace {
@@ -105,7 +107,10 @@ class RunCollector {
       if (!collect_until_complete()) return false;
       if (stopped()) return false;
       if (!incomplete_.empty() || ended_) break;  // learning from what came, as allowed (or all there is)
-      if (confirmed()) break;
+      if (confirmed()) {
+        complete_the_recording();
+        if (builder_.complete() || ended_) break;
+      }
       say("the run went on after it seemed complete: collecting on");
     }
     return !stopped();
@@ -172,22 +177,71 @@ class RunCollector {
   void ask_for_lost_frames() {
     if (builder_.run_ended() && Clock::now() - last_frame_ > std::chrono::milliseconds(options_.resend_after_ms) &&
         Clock::now() - last_request_ > std::chrono::milliseconds(options_.resend_after_ms)) {
-      const auto missing = builder_.missing_frame_keys(500);
-      if (!missing.empty()) {
-        hbirl::frame_request_t r{};
-        r.utime = builder_.build_utime();
-        r.requester = "optimiser";
-        r.n = static_cast<std::int32_t>(missing.size());
-        for (const auto& [episode, step, frame] : missing) {
-          r.episode.push_back(episode);
-          r.step.push_back(step);
-          r.frame.push_back(frame);
-        }
-        publish(bus_, channels::kFrameRequest, r, counters_);
-        say("asked for " + std::to_string(missing.size()) + " lost frames again");
-        ++frame_requests_;
-      }
+      ask_again(builder_.missing_frame_keys(kFramesPerRequest), "lost frame(s)");
       last_request_ = Clock::now();
+    }
+  }
+
+  // One FRAME_REQUEST for `missing` (episode, step, frame), if any.
+  void ask_again(const std::vector<std::tuple<int, int, int>>& missing, const std::string& what) {
+    if (missing.empty()) return;
+    hbirl::frame_request_t r{};
+    r.utime = builder_.build_utime();
+    r.requester = "optimiser";
+    r.n = static_cast<std::int32_t>(missing.size());
+    for (const auto& [episode, step, frame] : missing) {
+      r.episode.push_back(episode);
+      r.step.push_back(step);
+      r.frame.push_back(frame);
+    }
+    publish(bus_, channels::kFrameRequest, r, counters_);
+    say("asked again for " + std::to_string(missing.size()) + " " + what);
+    ++frame_requests_;
+  }
+
+  // The run is complete here: until its recording is too (OptimiserOptions::recording),
+  // what lcm-logger lost is asked for again once a second -- the sensor side sends it to
+  // every listener, the logger among them. Given up, and said, once the recording has
+  // gained nothing for recording_patience_ms: the run is learned from all the same.
+  void complete_the_recording() {
+    if (options_.recording.path.empty()) return;
+    if (!recording_) {
+      recording_.emplace(options_.recording.path, options_.recording.key_file, options_.max_dataset_bytes);
+    }
+    RecordingWatch& recording = *recording_;
+    std::int64_t had = -1;
+    int asked = 0;
+    auto last_gain = Clock::now(), last_request = Clock::now();
+    while (!stopped() && !ended_ && builder_.complete()) {
+      try {
+        recording.read();
+      } catch (const InputError& e) {  // not a recording: nothing to complete, the run is
+        say(std::string("the recording cannot be followed: ") + e.what() + "; learning from the complete run");
+        return;
+      }
+      if (recording.complete()) {
+        if (asked > 0) say("the recording holds the whole run now: what lcm-logger lost came again");
+        return;
+      }
+      const auto now = Clock::now();
+      if (recording.frames() != had) {
+        had = recording.frames();
+        last_gain = now;
+      }
+      if (now - last_gain > std::chrono::milliseconds(options_.recording_patience_ms)) {
+        say("the recording " + recording.path() + " lacks " + recording.lacks() +
+            ", which did not come again (lcm-logger stopped?): hbirl learn --log will refuse it; learning from "
+            "the complete run");
+        return;
+      }
+      if (now - last_request > std::chrono::milliseconds(options_.resend_after_ms)) {
+        ask_again(recording.missing_frame_keys(kFramesPerRequest), "frame(s) the recording lacks");
+        ++asked;
+        last_request = now;
+      }
+      if (options_.beat) options_.beat("collecting");
+      ended_ = bus_.handle(50) < 0;
+      check_contradiction();
     }
   }
 
@@ -238,6 +292,7 @@ class RunCollector {
   Clock::time_point last_frame_ = Clock::now();
   Clock::time_point last_request_ = Clock::now();
   int frame_requests_ = 0;
+  std::optional<RecordingWatch> recording_;
   bool announced_end_ = false;
   Clock::time_point last_progress_ = Clock::now();
   std::string incomplete_;

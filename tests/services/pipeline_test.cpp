@@ -15,6 +15,7 @@
 #include <future>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <set>
 #include <cmath>
 #include "perception/image_codec.hpp"
@@ -54,9 +55,12 @@ SimulatorOptions small_run() {
 // The simulator publishes the run once the optimiser listens, then serves FRAME_REQUEST
 // until the optimiser is done; returns what the optimiser learned (and how many frames
 // the simulator sent again).
+// `configure` sets further options; `log` hears what the optimiser says.
 std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> hub, const Domain& domain,
                                                     const SimulatorOptions& run, int resend_after_ms,
-                                                    std::int64_t* resent = nullptr) {
+                                                    std::int64_t* resent = nullptr,
+                                                    const std::function<void(OptimiserOptions&)>& configure = nullptr,
+                                                    const std::function<void(const std::string&)>& log = nullptr) {
   MemoryBus sim_bus(hub);
   Counters sim_counters = quiet("sim_driver");
   Simulator driver(sim_bus, domain, run, sim_counters);
@@ -71,12 +75,57 @@ std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> h
   Counters opt_counters = quiet("optimiser");
   OptimiserOptions options;
   options.resend_after_ms = resend_after_ms;
-  auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
+  if (configure) configure(options);
+  auto result = run_optimiser(opt_bus, options, opt_counters, nullptr, log, [&] { listening.set_value(); });
   done = true;
   sim.join();
   if (resent) *resent = driver.frames_resent();
   return result;
 }
+
+// lcm-logger on a memory hub: every message to a recording, as it comes, except those
+// `lose` picks, if given (a logger whose socket overflowed; it cannot ask for them again).
+class Recorder {
+ public:
+  Recorder(std::shared_ptr<MemoryHub> hub, const std::string& path,
+           std::function<bool(const std::string&, const std::uint8_t*, int)> lose = nullptr)
+      : bus_(std::move(hub)), log_(path, "w"), lose_(std::move(lose)) {
+    bus_.subscribe(
+        ".*",
+        [this](const Message& m) {
+          if (lose_ && lose_(m.channel, m.data, m.size)) {
+            ++lost_;
+            return;
+          }
+          lcm::LogEvent e;
+          e.timestamp = m.recv_utime;
+          e.channel = m.channel;
+          e.datalen = m.size;
+          e.data = const_cast<std::uint8_t*>(m.data);
+          log_.writeEvent(&e);
+          std::fflush(log_.getFilePtr());  // lcm-logger flushes every 100 ms; the reader follows
+        },
+        1 << 20);  // only what `lose` picks is lost
+    thread_ = std::thread([this] {
+      while (!done_) bus_.handle(10);
+    });
+  }
+  ~Recorder() { stop(); }
+  void stop() {
+    done_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  int lost() const { return lost_; }
+  bool good() { return log_.good(); }
+
+ private:
+  MemoryBus bus_;
+  lcm::LogFile log_;
+  std::function<bool(const std::string&, const std::uint8_t*, int)> lose_;
+  std::atomic<bool> done_{false};
+  std::atomic<int> lost_{0};
+  std::thread thread_;
+};
 
 // The whole onion pipeline in one process, each service on its own endpoint and thread:
 // camera frames (PNG) -> perception -> labeller -> optimiser with two sampler workers.
@@ -89,25 +138,8 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
       std::filesystem::temp_directory_path() / ("hbirl_pipeline_" + std::to_string(::getpid()) + ".lcmlog");
   std::optional<OptimiserResult> live;
   {
-    // The recorder: every message, as lcm-logger would write it.
-    MemoryBus recorder_bus(hub);
-    lcm::LogFile log(log_path.string(), "w");
-    ASSERT_TRUE(log.good());
-    recorder_bus.subscribe(
-        ".*",
-        [&log](const Message& m) {
-          lcm::LogEvent e;
-          e.timestamp = m.recv_utime;
-          e.channel = m.channel;
-          e.datalen = m.size;
-          e.data = const_cast<std::uint8_t*>(m.data);
-          log.writeEvent(&e);
-        },
-        1 << 20);
-    std::atomic<bool> stop_recorder{false};
-    std::thread recorder([&] {
-      while (!stop_recorder) recorder_bus.handle(20);
-    });
+    Recorder recorder(hub, log_path.string());  // every message, as lcm-logger would write it
+    ASSERT_TRUE(recorder.good());
     ServiceThread<PerceptionService> perception(hub, "perception");
     ServiceThread<LabellerService> labeller(hub, "labeller", onion_camera());
     WorkerThread w1(hub, "sampler-1"), w2(hub, "sampler-2");
@@ -124,8 +156,7 @@ TEST(Pipeline, OnionFromFramesToRewardAndFromItsLog) {
     options.workers = 2;
     live = run_optimiser(opt_bus, options, opt_counters, nullptr, nullptr, [&] { listening.set_value(); });
     sim.join();
-    stop_recorder = true;
-    recorder.join();
+    recorder.stop();
     ASSERT_TRUE(live.has_value());
     EXPECT_EQ(live->workers, 2);
     EXPECT_EQ(live->missing_frames, 0);
@@ -468,6 +499,67 @@ TEST(Pipeline, LostGroundTruthIsAskedForAgain) {
   ASSERT_EQ(lossy.data.controlled_truth.size(), 5u);
   EXPECT_EQ(lossy.data.controlled_truth, clean.data.controlled_truth);
   for (int k = 0; k < 4; ++k) EXPECT_EQ(lossy.learned.theta[k], clean.learned.theta[k]) << k;
+}
+
+// A recording is complete whenever the run is: observations the logger alone lost (the
+// optimiser had them all) are asked for again until the recording holds them, and the
+// recording then gives the live data set; without --recording it lacks them. A logger
+// that never records them again is given up on after recording_patience_ms, and the run
+// is learned from all the same.
+TEST(Pipeline, WhatTheRecordingLostIsAskedForAgain) {
+  const auto tmp = std::filesystem::temp_directory_path() / ("hbirl_rec_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(tmp);
+  const auto run_with = [&](bool watch, bool lose_for_good, const std::string& name) {
+    auto hub = std::make_shared<MemoryHub>();
+    std::set<std::pair<int, int>> lost_once;
+    std::mutex lost_mutex;
+    const std::string path = (tmp / name).string();
+    Recorder recorder(hub, path, [&](const std::string& channel, const std::uint8_t* data, int size) {
+      if (channel != channels::kObservations.name) return false;
+      hbirl::observations_t o;
+      if (o.decode(data, 0, size) <= 0 || (o.episode * 7 + o.step) % 5 != 0) return false;
+      std::lock_guard<std::mutex> lock(lost_mutex);
+      return lost_once.insert({o.episode, o.step}).second || lose_for_good;
+    });
+    std::int64_t resent = 0;
+    std::string said;
+    auto live = run_serving_requests(
+        hub, *builtin_domain("gridworld"), gridworld_run(13, 6, 5), 100, &resent,
+        [&](OptimiserOptions& options) {
+          options.recording_patience_ms = 500;
+          options.confirm_ms = 100;
+          if (watch) options.recording.path = path;
+        },
+        [&said](const std::string& s) { said += s + "\n"; });
+    recorder.stop();
+    EXPECT_GT(recorder.lost(), 0);
+    EXPECT_EQ(resent > 0, watch);
+    return std::make_tuple(*live, path, said);
+  };
+  const auto [unwatched, unwatched_path, unwatched_said] = run_with(false, false, "unwatched.lcmlog");
+  EXPECT_EQ(unwatched.missing_frames, 0);
+  try {
+    Counters c;
+    collect_from_log({unwatched_path, "", false}, c);
+    ADD_FAILURE() << "a recording that lacks frames was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame(s) missing"), std::string::npos) << e.what();
+  }
+
+  const auto [watched, watched_path, watched_said] = run_with(true, false, "watched.lcmlog");
+  EXPECT_NE(watched_said.find("the recording holds the whole run now"), std::string::npos) << watched_said;
+  Counters counters;
+  const OptimiserResult read = collect_from_log({watched_path, "", false}, counters);
+  EXPECT_EQ(read.incomplete, "");
+  EXPECT_EQ(dataset_digest(read.data.observed), dataset_digest(watched.data.observed));
+  EXPECT_EQ(dataset_digest(read.data.controlled_observed), dataset_digest(watched.data.controlled_observed));
+  EXPECT_EQ(dataset_digest(watched.data.observed), dataset_digest(unwatched.data.observed));  // the same run
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(watched.learned.theta[k], unwatched.learned.theta[k]) << k;
+
+  const auto [given_up, given_up_path, given_up_said] = run_with(true, true, "given_up.lcmlog");
+  EXPECT_NE(given_up_said.find("which did not come again (lcm-logger stopped?)"), std::string::npos) << given_up_said;
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(given_up.learned.theta[k], unwatched.learned.theta[k]) << k;
+  std::filesystem::remove_all(tmp);
 }
 
 // Asked to stop while it learns (SIGTERM in hbirl-optimiser), the optimiser stops at the

@@ -24,6 +24,15 @@
 
 namespace hbirl::services {
 
+// A recorded run to read: the lcm-logger file, the run's key when it was signed (every
+// message is then checked against it, keyed_bus.hpp), and whether a recording that never
+// reached END_RUN (a run cut short) may still be learned from.
+struct RecordedRun {
+  std::string path;
+  std::string key_file;
+  bool allow_incomplete = false;
+};
+
 struct OptimiserOptions {
   // The domain learned on; null: the built-in domain the EPISODE markers name (a domain
   // file must be given: a name off the bus never opens a file).
@@ -43,6 +52,12 @@ struct OptimiserOptions {
   // Once the run is complete, wait up to this long for END_RUN to be heard again (the
   // simulator repeats it each second): what comes meanwhile may contradict the run.
   int confirm_ms = 1500;
+  // The run's lcm-logger recording (its path and the run's key; no path: none): once the
+  // run is complete, followed until it holds the whole run too, what lcm-logger lost asked
+  // for again (RecordingWatch); given up, and said, after recording_patience_ms in which
+  // it gained nothing (lcm-logger stopped?): the run is learned from all the same.
+  RecordedRun recording;
+  int recording_patience_ms = 10000;
   // The most memory the run's observations may take (hbirl-optimiser --max-dataset-mb):
   // frames beyond it are refused, counted, and not kept (DatasetBuilder::limit).
   std::int64_t max_dataset_bytes = std::int64_t{2048} << 20;
@@ -86,15 +101,6 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
                                              const std::function<bool()>& stop,
                                              const std::function<void(const std::string&)>& log = nullptr,
                                              const std::function<void()>& ready = nullptr);
-
-// A recorded run to read: the lcm-logger file, the run's key when it was signed (every
-// message is then checked against it, keyed_bus.hpp), and whether a recording that never
-// reached END_RUN (a run cut short) may still be learned from.
-struct RecordedRun {
-  std::string path;
-  std::string key_file;
-  bool allow_incomplete = false;
-};
 
 // The data set of a recorded log, as the live optimiser collected it (up to the moment
 // the run was complete; the rest of the log is read for contradictions); `learned` is
