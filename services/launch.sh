@@ -60,7 +60,9 @@ Runs a demo as separate processes over LCM and prints the learned reward.
                          waiting for a sensor that publishes EPISODE, OBSERVATIONS (and
                          GROUND_TRUTH for controlled episodes) -- e.g. hbirl publish
   --sensor CMD           with --no-sim: run CMD as the sensor inside the set (its LCM URL is
-                         appended as --url URL), e.g. "build/hbirl publish --problem F"
+                         appended as --url URL), e.g. "build/hbirl publish --problem F" or a
+                         Python sensor, "python3 examples/python/sensor.py" (the build's
+                         hbirl package is on its PYTHONPATH)
   --sensor-key           the sensor signs its messages: append --key FILE to CMD as well (hbirl
                          publish does), so the run is authenticated with a sensor too
   --workers N            sampler workers (default $workers)
@@ -408,6 +410,8 @@ if [ "$no_sim" = 0 ]; then
     --controlled-sorts "$controlled_sorts" --fps "$fps" --confounders "$confounders" --trajectories "$trajectories" \
     --eta "$eta" --seed "$seed" --max-frames-per-second "$max_fps"
 elif [ -n "$sensor" ]; then
+  # A Python sensor finds `import hbirl` in the build (examples/python/sensor.py).
+  [ ! -d "$build/python/hbirl" ] || export PYTHONPATH="$build/python${PYTHONPATH:+:$PYTHONPATH}"
   if [ "${sensor_key:-0}" = 1 ] && [ "$key_mode" != none ]; then
     start sensor bash -c "$sensor --url \"\$0\" --key \"\$1\"" "$url" "$run_key"
   else

@@ -27,10 +27,13 @@ import numpy as np
 
 from . import _hbirl
 from ._hbirl import Mdp, ObservationPrior, Problem, __version__, ile, load_domain, load_problem
+from .sensor import Bus, Sensor
+from . import msg
 
 __all__ = [
     "Mdp", "ObservationPrior", "Observations", "Problem", "MaxCausalEntIRL", "HierarchicalIRL",
     "causal_log_likelihood", "controlled_run_prior", "gridworld", "ile", "load_domain", "load_problem", "onion", "read_log", "__version__",
+    "Bus", "Sensor", "msg",
 ]
 
 

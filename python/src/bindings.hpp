@@ -16,5 +16,6 @@ void bind_example_problems(py::module_& m);   // gridworld, _GridworldOptions, o
 void bind_maxcausalent(py::module_& m);       // causal_log_likelihood, _fit_maxcausalent, _learn_settings
 void bind_hierarchical(py::module_& m);       // _FittedHierarchical, _fit_hierarchical, _posterior, _log_likelihoods
 void bind_recording(py::module_& m);          // _read_log (app/recorded_problem.hpp)
+void bind_bus(py::module_& m);                // _Bus, _Sensor (Python sensors)
 
 }  // namespace hbirl::python

@@ -31,4 +31,5 @@ PYBIND11_MODULE(_hbirl, m) {
   bind_maxcausalent(m);
   bind_hierarchical(m);
   bind_recording(m);
+  bind_bus(m);
 }

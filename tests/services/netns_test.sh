@@ -110,16 +110,21 @@ case "$case" in
     python3 - "$tmp/gw/run.lcmlog" "$tmp/cut.lcmlog" <<'PY'
 import struct, sys
 # lcm-logger's events: sync word, event number, time, channel and data lengths, channel, data.
-# Keep those before the last quarter of EPISODE markers: the run's end (END_RUN) is not among them.
+# Keep those before the last quarter of the EPISODE markers that come before the first END_RUN
+# (the simulator repeats the end markers until the reward: the recording's tail is full of them).
 data, out, pos, events, markers = open(sys.argv[1], "rb").read(), [], 0, [], 0
 while pos + 28 <= len(data):
     sync, num, t, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
     end = pos + 28 + clen + dlen
-    events.append((data[pos + 28:pos + 28 + clen], data[pos:end]))
+    events.append((data[pos + 28:pos + 28 + clen], data[pos + 28 + clen:end], data[pos:end]))
     pos = end
-total = sum(1 for c, _ in events if c == b"EPISODE")
+def kind(m):  # episode_marker_t: fingerprint, utime, seq, domain (length, bytes), episode, controlled, kind
+    (n,) = struct.unpack(">i", m[24:28])
+    return m[28 + n + 5]
+first_end_run = next(i for i, (c, m, _) in enumerate(events) if c == b"EPISODE" and kind(m) == 3)
+total = sum(1 for c, _, _ in events[:first_end_run] if c == b"EPISODE")
 with open(sys.argv[2], "wb") as f:
-    for channel, raw in events:
+    for channel, _, raw in events:
         markers += channel == b"EPISODE"
         if markers > total * 3 // 4:
             break
@@ -353,6 +358,27 @@ PY
     grep -qE '"demonstrations": 30,?$' "$tmp/live.json" || fail "not the sensor's 30 episodes: $(data_summary "$tmp/live.json")"
     awk -v x="$(ile "$tmp/live.json")" 'BEGIN { exit !(x != "" && x + 0 < 1e-9) }' || fail "ILE '$(ile "$tmp/live.json")' is not 0"
     echo "corridor_sensor -> optimiser: theta $(theta "$tmp/live.json"); ILE $(ile "$tmp/live.json")"
+    ;;
+  python_sensor)
+    # examples/python/sensor.py -- a sensor written with nothing but `import hbirl` (no
+    # Python LCM module) -- signs its messages with the run's key and feeds an optimiser
+    # and a worker learning on examples/corridor.json: theta is what hbirl learn gives on
+    # the problem file the sensor saved of what it published, bit for bit; the sensor
+    # hears the reward.
+    "$build/hbirl" keygen "$tmp/run.key" --run >/dev/null
+    "$build/hbirl-sampler" --url "$url" --key "$tmp/run.key" >"$tmp/sampler.log" 2>&1 &
+    "$build/hbirl-optimiser" --url "$url" --workers 1 --key "$tmp/run.key" --domain "$repo/examples/corridor.json" \
+      --out "$tmp/live.json" >/dev/null 2>"$tmp/optimiser.err" &
+    optimiser=$!
+    PYTHONPATH="$build/python" /usr/bin/python3 "$repo/examples/python/sensor.py" --url "$url" --key "$tmp/run.key" \
+      --controlled 3 --save "$tmp/sensed.json" >"$tmp/sensor.log" 2>&1 || { cat "$tmp/sensor.log"; fail "the Python sensor failed"; }
+    wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
+    grep -q '"authenticated": true' "$tmp/live.json" || fail "the optimiser did not check the messages against the key"
+    grep -qE '"demonstrations": 30,?$' "$tmp/live.json" || fail "not the sensor's 30 walks: $(data_summary "$tmp/live.json")"
+    "$build/hbirl" learn --problem "$tmp/sensed.json" --out "$tmp/learned.json" >/dev/null
+    same_theta "$tmp/live.json" "$tmp/learned.json" || fail "the Python sensor's run and hbirl learn on what it published differ"
+    grep -q "the optimiser learned theta" "$tmp/sensor.log" || { cat "$tmp/sensor.log"; fail "the sensor did not hear the reward"; }
+    cat "$tmp/sensor.log"
     ;;
   workers_1_vs_4)
     launch one --workers 1

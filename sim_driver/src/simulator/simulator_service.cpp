@@ -67,6 +67,11 @@ Simulator::Simulator(Bus& bus, std::string domain_name, std::unique_ptr<Simulati
   subs_.add(bus_, subscribe(
                       bus_, channels::kFrameRequest, counters_,
                       [this](const hbirl::frame_request_t& m, const Message&) { on_request(m); }, 100));
+  subs_.add(bus_, subscribe(bus_, channels::kReward, counters_, [this](const hbirl::reward_t& r, const Message&) {
+              // Another run's optimiser (another domain) does not end this one.
+              if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");
+              if (r.final && !reward_) reward_ = Eigen::Map<const Eigen::VectorXd>(r.theta.data(), r.num_features);
+            }));
   subs_.add(bus_, subscribe(bus_, channels::kStop, counters_, [this](const hbirl::stop_t& m, const Message&) {
               // Another run's optimiser does not end this one.
               if (m.domain != domain_) throw InputError("stop.domain", "'" + m.domain + "' is not this run's");
@@ -170,12 +175,9 @@ bool Simulator::publish_run(const std::function<bool()>& stop, const std::functi
       break;
     }
     const Simulation::Episode& e = p.episodes[static_cast<size_t>(id)];
-    publish(bus_, channels::kEpisode, marker(id, hbirl::episode_marker_t::BEGIN_EPISODE, e.start_time), counters_);
+    publish_begin(id);
     for (int t = 0; t < static_cast<int>(e.steps.size()); ++t) {
-      auto m = marker(id, hbirl::episode_marker_t::BEGIN_STEP, e.start_time + t * p.step_seconds);
-      m.step = t;
-      publish(bus_, channels::kEpisode, m, counters_);
-      publish_truth(id, t);
+      publish_step_begin(id, t);
       for (int k = 0; k < p.frames_per_step; ++k) {
         if (stop && stop()) return false;
         publish_frame(id, t, k);
@@ -188,12 +190,29 @@ bool Simulator::publish_run(const std::function<bool()>& stop, const std::functi
         }
       }
     }
-    publish(bus_, channels::kEpisode, end_marker(id), counters_);
+    publish_end(id);
     if (idle) idle();  // a STOP heard now ends the run before the next episode
   }
-  publish(bus_, channels::kEpisode, end_of_run(), counters_);
+  publish_end_of_run();
   return true;
 }
+
+void Simulator::publish_begin(int id) {
+  const Simulation::Episode& e = run_->episodes[static_cast<size_t>(id)];
+  publish(bus_, channels::kEpisode, marker(id, hbirl::episode_marker_t::BEGIN_EPISODE, e.start_time), counters_);
+}
+
+void Simulator::publish_step_begin(int id, int t) {
+  const Simulation::Episode& e = run_->episodes[static_cast<size_t>(id)];
+  auto m = marker(id, hbirl::episode_marker_t::BEGIN_STEP, e.start_time + t * run_->step_seconds);
+  m.step = t;
+  publish(bus_, channels::kEpisode, m, counters_);
+  publish_truth(id, t);
+}
+
+void Simulator::publish_end(int id) { publish(bus_, channels::kEpisode, end_marker(id), counters_); }
+
+void Simulator::publish_end_of_run() { publish(bus_, channels::kEpisode, end_of_run(), counters_); }
 
 hbirl::episode_marker_t Simulator::end_marker(int id) {
   const Simulation::Episode& e = run_->episodes[static_cast<size_t>(id)];
@@ -223,6 +242,36 @@ hbirl::episode_marker_t Simulator::end_of_run() {
   return m;
 }
 
+std::vector<std::string> Simulator::wait_for_listeners(const std::function<bool()>& stop, double seconds,
+                                                       const std::function<void(const std::string&)>& beat) {
+  // The services downstream listen once their first heartbeat is heard.
+  std::set<std::string> waiting;
+  for (const auto& l : listeners()) waiting.insert(l);
+  Subscriptions subs;
+  subs.add(bus_, subscribe(
+                     bus_, channels::kStatus, counters_,
+                     [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); }, 1000));
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  while (!waiting.empty() && Clock::now() < until && !(stop && stop())) {
+    bus_.handle(50);
+    if (beat) beat("starting");
+  }
+  return {waiting.begin(), waiting.end()};
+}
+
+void Simulator::serve_until_learned(const std::function<bool()>& stop,
+                                    const std::function<void(const std::string&)>& beat) {
+  auto next_markers = Clock::now() + std::chrono::seconds(1);
+  while (!reward_ && !(stop && stop())) {
+    bus_.handle(100);
+    if (beat) beat("serving lost frames");
+    if (Clock::now() >= next_markers) {
+      republish_end_markers();
+      next_markers = Clock::now() + std::chrono::seconds(1);
+    }
+  }
+}
+
 bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
                       const std::function<void(const std::string&)>& beat,
                       const std::function<void(const std::string&)>& log) {
@@ -232,29 +281,9 @@ bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
   const auto tick = [&beat](const std::string& state) {
     if (beat) beat(state);
   };
-  // The services downstream listen once their first heartbeat is heard.
-  std::set<std::string> waiting;
-  for (const auto& l : listeners()) waiting.insert(l);
-  bool learned = false;
-  Subscriptions subs;
-  subs.add(bus_, subscribe(
-                     bus_, channels::kStatus, counters_,
-                     [&waiting](const hbirl::service_status_t& m, const Message&) { waiting.erase(m.service); }, 1000));
-  subs.add(bus_,
-           subscribe(bus_, channels::kReward, counters_, [&learned, this](const hbirl::reward_t& r, const Message&) {
-             // Another run's optimiser (another domain) does not end this one.
-             if (r.domain != domain_) throw InputError("reward.domain", "'" + r.domain + "' is not this run's");
-             learned = learned || r.final;
-           }));
-  const auto until =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(start_delay_s));
-  while (!waiting.empty() && Clock::now() < until && !(stop && stop())) {
-    bus_.handle(50);
-    tick("starting");
-  }
-  if (!waiting.empty()) {
+  if (const auto unheard = wait_for_listeners(stop, start_delay_s, beat); !unheard.empty()) {
     std::string names;
-    for (const auto& w : waiting) names += " " + w;
+    for (const auto& w : unheard) names += " " + w;
     say("starting without hearing from:" + names);
   }
   const bool finished = publish_run(stop, [&] {
@@ -266,15 +295,7 @@ bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
       (episodes_in_run_ >= 0 ? "; ended after " + std::to_string(episodes_in_run_) + " episodes, as STOP asked" : ""));
   // Then frames lost on the way are sent again, and the end markers repeated in case they
   // were lost, until the optimiser has published its reward.
-  auto next_markers = Clock::now() + std::chrono::seconds(1);
-  while (finished && !learned && !(stop && stop())) {
-    bus_.handle(100);
-    tick("serving lost frames");
-    if (Clock::now() >= next_markers) {
-      republish_end_markers();
-      next_markers = Clock::now() + std::chrono::seconds(1);
-    }
-  }
+  if (finished) serve_until_learned(stop, beat);
   return finished;
 }
 

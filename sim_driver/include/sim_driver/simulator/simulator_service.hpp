@@ -3,6 +3,7 @@
 // simulated run on the bus of services/, as a camera or a sensor would publish it.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -49,6 +50,27 @@ class Simulator {
   // Which services must listen before the run starts (perception and the labeller only
   // for a camera).
   std::vector<std::string> listeners() const;
+  // Until the listeners' heartbeats are heard, at most `seconds`: those not heard.
+  std::vector<std::string> wait_for_listeners(const std::function<bool()>& stop, double seconds,
+                                              const std::function<void(const std::string&)>& beat = nullptr);
+  // The run piece by piece, as publish_run publishes it (a live sensor's way, live_sensor.hpp):
+  // an episode's BEGIN_EPISODE; a step's BEGIN_STEP and ground truth (its frames:
+  // publish_frame); its END_EPISODE; END_RUN.
+  void publish_begin(int episode);
+  void publish_step_begin(int episode, int step);
+  void publish_frame(int episode, int step, int frame);
+  void publish_end(int episode);
+  void publish_end_of_run();
+  // After the run: answers FRAME_REQUEST and repeats the end markers every second until
+  // the optimiser's final REWARD (reward()) or `stop`.
+  void serve_until_learned(const std::function<bool()>& stop,
+                           const std::function<void(const std::string&)>& beat = nullptr);
+  // Hears what comes (FRAME_REQUEST answered, STOP, REWARD) for up to `timeout_ms`.
+  int handle(int timeout_ms) { return bus_.handle(timeout_ms); }
+  // The final REWARD's theta, once heard.
+  const std::optional<Eigen::VectorXd>& reward() const { return reward_; }
+  // STOP heard for this run: the sensor side should end the run.
+  bool told_to_stop() const { return told_to_stop_; }
 
   // The whole service: waits until the listeners' heartbeats are heard (at most
   // `start_delay_s`), publishes the run, then answers FRAME_REQUEST and repeats the end
@@ -64,7 +86,6 @@ class Simulator {
   hbirl::episode_marker_t end_of_run();
   void on_request(const hbirl::frame_request_t& m);
   void publish_truth(int episode, int step);
-  void publish_frame(int episode, int step, int frame);
   services::Bus& bus_;
   SimulatorOptions options_;
   services::Counters& counters_;
@@ -77,6 +98,7 @@ class Simulator {
   // Told to stop (STOP, for this domain): the run ends before the next episode, END_RUN
   // stating the episodes published.
   bool told_to_stop_ = false;
+  std::optional<Eigen::VectorXd> reward_;
   int episodes_in_run_ = -1;  // once stopped early; -1: all of run_
   int episodes_in_run() const;
   services::Subscriptions subs_;  // last: ends first
