@@ -141,8 +141,11 @@ void add_true_weight_metrics(nlohmann::ordered_json& out, const Problem& problem
 }
 
 // "observation_model": the learned model, how it was learned and, when learned, eta.
+// `context_names`: learned eta's rows by name (the problem file's, when its observations
+// all came with contexts).
 nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app::Learned& learned_all,
-                                                      const RestartResult& best) {
+                                                      const RestartResult& best,
+                                                      const std::vector<std::string>& context_names) {
   nlohmann::ordered_json om = model_json(mdp, learned_all.model);
   const ObservationPrior& used = learned_all.refined;
   om["update"] = used.learn ? alpha_update_name(used.update) : "fixed";
@@ -153,7 +156,7 @@ nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app:
     om["prior_strength_chosen"] = used.automatic_strength;
     if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
   }
-  if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta);
+  if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta, context_names);
   return om;
 }
 
@@ -299,7 +302,16 @@ int run_learn(const LearnArgs& given) {
   if (problem.true_weights) add_true_weight_metrics(out, problem, planned, args);
   out["policy"] = app::policy_json<nlohmann::ordered_json>(app::learned_policy(mdp, planned, policy.policy),
                                                            problem.state_names, problem.action_names);
-  if (observed != nullptr) out["observation_model"] = learned_observation_model_json(mdp, learned_all, best);
+  if (observed != nullptr) {
+    // (the file's contexts: the E-step's trajectories have one for each distinct eta when it gave none)
+    std::vector<ObservedTrajectory> as_given;
+    for (const auto& d : problem.demonstration) {
+      if (d.steps && !d.controlled && !problem.context_names.empty()) as_given.push_back(*d.steps);
+    }
+    const std::vector<std::string> no_names;
+    out["observation_model"] = learned_observation_model_json(
+        mdp, learned_all, best, every_observation_has_context(as_given) ? problem.context_names : no_names);
+  }
   if (learned_all.posterior) {
     out["posterior"] = app::posterior_summary(learned_all);
     warn_if_rough(*learned_all.posterior);

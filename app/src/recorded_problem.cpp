@@ -45,6 +45,7 @@ RecordedProblem read_recorded_problem(const services::RecordedRun& run, std::sha
   problem.state_names = names.states;
   problem.action_names = names.actions;
   problem.feature_names = names.features;
+  problem.context_names = names.contexts;
   problem.observation_model = services::observation_prior(*domain, r.data);
   apply_to_prior(prior, *problem.observation_model);
   problem.demonstration = demonstrations_of(r.data);

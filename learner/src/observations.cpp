@@ -76,6 +76,15 @@ Eigen::VectorXd shifted_exp(const Eigen::VectorXd& v, double* top) {
   return out;
 }
 
+bool every_observation_has_context(std::span<const ObservedTrajectory> trajectories) {
+  bool any = false;
+  for (const ObservedTrajectory& t : trajectories) {
+    if (t.contexts.size() != t.symbols.size()) return false;
+    any = any || !t.symbols.empty();
+  }
+  return any;
+}
+
 std::string normalise_eta(double* eta, int n, double tolerance) {
   if (n < 1) return "is empty";
   double sum = 0.0;

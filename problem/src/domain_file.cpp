@@ -82,6 +82,7 @@ const detail::JsonShape& domain_shape() {
                                                     {"observation_model", &detail::observation_model_shape()},
                                                     {"symbol_names", nullptr},
                                                     {"source_names", nullptr},
+                                                    {"context_names", nullptr},
                                                     {"true_weights", nullptr},
                                                     {"sensor", &sensor_shape()},
                                                     {"demonstration", &unread}});
@@ -187,6 +188,7 @@ DomainSpec parse_domain_document(const nlohmann::json& doc, const std::string& d
     d.source_names =
         detail::read_names(*names_node, d.num_sources(), "source: the subject, then each confounding element");
   }
+  if (auto names_node = root.find("context_names")) d.context_names = detail::read_context_names(*names_node);
   if (auto tw = root.find("true_weights")) d.true_weights = detail::read_true_weights(*tw, d.mdp);
   if (auto sensor = root.find("sensor")) d.sensor = read_sensor(*sensor, d, warnings);
   return d;

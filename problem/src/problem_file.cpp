@@ -140,6 +140,7 @@ const JsonShape& problem_shape() {
                                                     {"mdp", &mdp_shape()},
                                                     {"observation_model", &observation_model_shape()},
                                                     {"demonstration", &demonstration},
+                                                    {"context_names", nullptr},
                                                     {"true_weights", nullptr}});
   return shape;
 }
@@ -147,6 +148,17 @@ const JsonShape& problem_shape() {
 }  // namespace
 
 void expect_tuple(const JsonNode& node, const TupleList& tuple) { node.expect_tuple(tuple.size, tuple.shape); }
+
+std::vector<std::string> read_context_names(const JsonNode& node) {
+  const size_t n = node.size();
+  if (n == 0 || n > 65536) node.fail("has " + std::to_string(n) + " names: give 1 to 65536 (one per context, from 0)");
+  std::vector<std::string> names;
+  for (size_t i = 0; i < n; ++i) {
+    names.push_back(node[i].as_string());
+    if (names.back().empty()) node[i].fail("is empty: name context " + std::to_string(i));
+  }
+  return names;
+}
 
 std::string read_domain_name(const JsonNode& node) {
   const std::string name = node.as_string();
@@ -726,6 +738,7 @@ Problem parse_document(const nlohmann::json& doc, std::vector<std::string>* warn
   if (auto om = root.find("observation_model")) {
     problem.observation_model = read_observation_model(*om, problem.mdp, warnings);
   }
+  if (auto names = root.find("context_names")) problem.context_names = detail::read_context_names(*names);
   const bool has_terminal =
       std::find(problem.mdp.terminal.begin(), problem.mdp.terminal.end(), 1) != problem.mdp.terminal.end();
   const JsonNode demo = root.at("demonstration");
@@ -944,6 +957,7 @@ nlohmann::ordered_json problem_to_json(const Problem& problem) {
   const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
   for (const auto& trajectory : problem.demonstration) demo.push_back(trajectory_to_json(trajectory, has_terminal));
   doc["demonstration"] = demo;
+  if (!problem.context_names.empty()) doc["context_names"] = problem.context_names;
   if (problem.true_weights) {
     doc["true_weights"] =
         std::vector<double>(problem.true_weights->data(), problem.true_weights->data() + problem.true_weights->size());

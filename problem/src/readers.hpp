@@ -13,6 +13,9 @@ namespace hbirl::detail {
 
 // A list of exactly `expected` names, one per `what`.
 std::vector<std::string> read_names(const JsonNode& node, long long expected, const char* what);
+// "context_names": the sensor's contexts (its labeller's rules) by name, context c the
+// c-th: 1 to 65536 non-empty names (observations_t's contexts are 0 .. 65535).
+std::vector<std::string> read_context_names(const JsonNode& node);
 // "name": what EPISODE markers carry (short, printable, no spaces: it names the run on the bus).
 std::string read_domain_name(const JsonNode& node);
 // "mdp": the MDP, and its state, action and feature names into `problem`.

@@ -90,6 +90,8 @@ TEST(DomainFile, BadFilesNameTheField) {
        },
        "symbol_names: has 2 names, expected 3"},
       {[](json& d) { d["source_names"] = {"a"}; }, "source_names: has 1 names, expected 2"},
+      {[](json& d) { d["context_names"] = json::array(); }, "context_names: has 0 names"},
+      {[](json& d) { d["context_names"] = {""}; }, "context_names[0]: is empty"},
       {[](json& d) {
          d["true_weights"] = {1.0, 2.0};
        },

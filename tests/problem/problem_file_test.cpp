@@ -110,6 +110,23 @@ TEST(ProblemFile, TheDomainNameRoundTripsAndIsChecked) {
   expect_error([](json& doc) { doc["name"] = 3; }, "name", "");
 }
 
+// "context_names": the sensor's contexts by name (learned eta is reported by them), read,
+// checked and written back.
+TEST(ProblemFile, ContextNamesRoundTripAndAreChecked) {
+  EXPECT_TRUE(parse_problem(spec_example().dump()).context_names.empty());
+  json d = spec_example();
+  d["context_names"] = {"tracked person", "unknown blob"};
+  std::vector<std::string> warnings;
+  const Problem p = parse_problem(d.dump(), &warnings);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  EXPECT_EQ(p.context_names, (std::vector<std::string>{"tracked person", "unknown blob"}));
+  EXPECT_EQ(parse_problem(problem_to_json(p).dump()).context_names, p.context_names);
+  expect_error([](json& doc) { doc["context_names"] = json::array(); }, "context_names", "give 1 to 65536");
+  expect_error([](json& doc) { doc["context_names"] = {"a", ""}; }, "context_names[1]", "is empty");
+  expect_error([](json& doc) { doc["context_names"] = {"a", 3}; }, "context_names[1]", "");
+  expect_error([](json& doc) { doc["context_names"] = "a"; }, "context_names", "");
+}
+
 // The spec example with a terminal state 3 that (2, 0) enters, an end sensor of two
 // symbols and a trajectory that says what was seen of its end (README "Problem files").
 json with_end_sensor() {

@@ -378,6 +378,10 @@ PY
     "$build/hbirl" learn --problem "$tmp/sensed.json" --out "$tmp/learned.json" >/dev/null
     same_theta "$tmp/live.json" "$tmp/learned.json" || fail "the Python sensor's run and hbirl learn on what it published differ"
     grep -q "the optimiser learned theta" "$tmp/sensor.log" || { cat "$tmp/sensor.log"; fail "the sensor did not hear the reward"; }
+    # Its contexts (the labeller's two rules) named by the domain file's context_names.
+    for f in live learned; do
+      grep -q '"name": "unknown blob"' "$tmp/$f.json" || fail "$f: learned eta not named by context_names"
+    done
     cat "$tmp/sensor.log"
     ;;
   workers_1_vs_4)

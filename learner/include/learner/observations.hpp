@@ -68,6 +68,11 @@ Eigen::VectorXd end_log_evidence(const Mdp& mdp, const ObservedTrajectory& traje
 // when every entry is -inf.
 Eigen::VectorXd shifted_exp(const Eigen::VectorXd& v, double* top = nullptr);
 
+// Whether every observation of `trajectories` (and at least one) came with its context: only
+// then is learned eta one distribution per context of the sensor's -- its rules, which
+// context names name -- rather than per distinct stated eta.
+bool every_observation_has_context(std::span<const ObservedTrajectory> trajectories);
+
 // A 64-bit digest (FNV-1a) of a data set: every length, symbol, eta, weight and end, bit for
 // bit. Two processes with the same digest hold the same data (services/ compares them).
 std::uint64_t dataset_digest(std::span<const ObservedTrajectory> trajectories);

@@ -42,6 +42,7 @@ struct DomainSpec {
   Mdp mdp;
   std::vector<std::string> state_names, action_names, feature_names;  // empty when not given
   std::vector<std::string> symbol_names, source_names;                // empty when not given
+  std::vector<std::string> context_names;  // the sensor's contexts (its labeller's rules); empty when not given
   std::optional<ObservationPrior> observation_model;
   std::optional<Eigen::VectorXd> true_weights;
   std::optional<SensorSpec> sensor;

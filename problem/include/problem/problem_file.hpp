@@ -36,6 +36,9 @@ struct Problem {
   std::vector<std::string> action_names;
   std::vector<std::string> feature_names;
   std::optional<ObservationPrior> observation_model;
+  // "context_names": the sensor's contexts by name (context c the c-th; empty: none given):
+  // learned eta is reported by them.
+  std::vector<std::string> context_names;
   std::vector<DemonstratedTrajectory> demonstration;
   std::optional<Eigen::VectorXd> true_weights;
 

@@ -142,8 +142,7 @@ void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Do
   if (r.learned.eta) {
     // Rows are the labeller's rules only when every observation came with its context
     // (none given, or dropped as contexts_note says: each distinct eta is a row).
-    bool by_rule = r.data.contexts_note.empty() && !r.data.observed.empty();
-    for (const ObservedTrajectory& t : r.data.observed) by_rule = by_rule && (t.contexts.size() == t.symbols.size());
+    const bool by_rule = r.data.contexts_note.empty() && every_observation_has_context(r.data.observed);
     const std::vector<std::string> no_names;
     j["learned_eta"] = learned_eta_json(*r.learned.eta, by_rule ? names.contexts : no_names);
   }

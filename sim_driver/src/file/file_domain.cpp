@@ -111,6 +111,7 @@ class FileDomain final : public Domain {
     for (int e = static_cast<int>(n.sources.size()); e < num_sources; ++e)
       n.sources.push_back("element " + std::to_string(e));
     n.sources.resize(static_cast<size_t>(std::max(num_sources, 1)));
+    n.contexts = spec_.context_names;
     return n;
   }
 
