@@ -346,7 +346,8 @@ nlohmann::json result_json(const OptimiserResult& r, const OptimiserOptions& o, 
     j["estimates"] = {{"demonstrations", r.estimates.size()}, {"confidence", confidence}};
     if (r.stop_sent_after > 0) j["stop_sent_after"] = r.stop_sent_after;
   }
-  j["workers"] = r.workers;
+  j["workers"] = r.workers;                          // ready when learning began
+  j["workers_answered"] = r.estep.blocks_by_worker;  // id -> E-step blocks it computed
   j["estep"] = {{"requests", r.estep.requests},
                 {"remote_blocks", r.estep.remote_blocks},
                 {"local_blocks", r.estep.local_blocks},

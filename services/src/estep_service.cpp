@@ -150,6 +150,7 @@ void BusBlockExecutor::take_answer(const hbirl::estep_result_t& m, EStepStatisti
   w.ever_answered = true;
   ++w.answers;
   ++stats_.remote_blocks;
+  ++stats_.blocks_by_worker[m.worker];
 }
 
 int BusBlockExecutor::wait_for_workers(int count, int timeout_ms) {
@@ -184,6 +185,7 @@ void BusBlockExecutor::forget_answers_of(const std::string& worker) {
     pass_.received[b].reset();
     pass_.answered_by[b].clear();
     --stats_.remote_blocks;
+    if (--stats_.blocks_by_worker[worker] <= 0) stats_.blocks_by_worker.erase(worker);
   }
 }
 

@@ -384,6 +384,49 @@ PY
     done
     cat "$tmp/sensor.log"
     ;;
+  two_hosts)
+    # Several machines: host B is a network namespace of its own, joined to this one (host
+    # A) by a veth pair, multicast routed over it, LCM with ttl=1 (what reaching another
+    # machine takes). The optimiser and the simulator on A, the one sampler worker on B:
+    # it computes the E-step's blocks and theta is the one-host run's (the worker on A) bit
+    # for bit; the result names the worker that answered.
+    unshare -n -- sleep 600 &
+    host_b=$!
+    sleep 0.2
+    ip link add vA type veth peer name vB netns "$host_b"
+    ip addr add 10.77.0.1/24 dev vA
+    ip link set vA up multicast on
+    ip route replace 224.0.0.0/4 dev vA
+    nsenter -t "$host_b" -n -- sh -c 'ip link set lo up && ip addr add 10.77.0.2/24 dev vB &&
+      ip link set vB up multicast on && ip route add 224.0.0.0/4 dev vB'
+    wide="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152"
+    run_on() {  # run_on NAME HOST: a Gridworld run, its worker on HOST (a or b)
+      local name="$1" where=()
+      [ "$2" = a ] || where=(nsenter -t "$host_b" -n --)
+      "$build/hbirl" keygen "$tmp/$name.key" --run >/dev/null
+      "${where[@]}" "$build/hbirl-sampler" --url "$wide" --key "$tmp/$name.key" --id "worker-on-$2" >"$tmp/$name.sampler.log" 2>&1 &
+      local sampler=$!
+      "$build/hbirl-optimiser" --url "$wide" --key "$tmp/$name.key" --workers 1 --out "$tmp/$name.json" >/dev/null \
+        2>"$tmp/$name.optimiser.err" &
+      local optimiser=$!
+      "$build/hbirl-sim-driver" --url "$wide" --key "$tmp/$name.key" --domain gridworld --trajectories 20 \
+        >"$tmp/$name.sim.log" 2>&1 || { cat "$tmp/$name.sim.log"; fail "$name: the simulator failed"; }
+      wait "$optimiser" || { cat "$tmp/$name.optimiser.err"; fail "$name: the optimiser failed"; }
+      kill "$sampler" 2>/dev/null || true
+      wait "$sampler" 2>/dev/null || true
+    }
+    run_on one_host a
+    run_on two_hosts b
+    same_theta "$tmp/two_hosts.json" "$tmp/one_host.json" || fail "a worker on another host changed theta"
+    python3 - "$tmp/two_hosts.json" <<'PY' || { cat "$tmp/two_hosts.optimiser.err"; fail "the worker on host B did not compute the E-step"; }
+import json, sys
+r = json.load(open(sys.argv[1]))
+answered, estep = r["workers_answered"], r["estep"]
+print("  workers answered:", answered, "remote blocks", estep["remote_blocks"], "local", estep["local_blocks"])
+assert list(answered) == ["worker-on-b"] and answered["worker-on-b"] == estep["remote_blocks"] > 0, answered
+PY
+    kill "$host_b" 2>/dev/null || true
+    ;;
   workers_1_vs_4)
     launch one --workers 1
     launch four --workers 4

@@ -327,6 +327,12 @@ TEST(Pipeline, GridworldFromSimulatorToReward) {
   EXPECT_EQ(live->missing_frames, 0);
   EXPECT_EQ(opt_counters.bad_messages, 0);
   EXPECT_GT(live->estep.remote_blocks, 0);
+  std::int64_t answered = 0;  // the result's workers_answered: by worker, all of the remote blocks
+  for (const auto& [worker, blocks] : live->estep.blocks_by_worker) {
+    EXPECT_TRUE(worker == "sampler-1" || worker == "sampler-2") << worker;
+    answered += blocks;
+  }
+  EXPECT_EQ(answered, live->estep.remote_blocks);
   ASSERT_EQ(live->data.observed.size(), 20u);
   ASSERT_EQ(live->data.controlled_observed.size(), 10u);
   ASSERT_EQ(live->data.truth.size(), 20u);

@@ -128,6 +128,9 @@ class BusBlockExecutor final : public BlockExecutor {
     // Passes that waited on a worker that had never answered (its one trial block left
     // unanswered): at most kMaxTrialPasses, whatever the number and rate of fake workers.
     std::int64_t trial_passes = 0;
+    // Blocks each worker answered (and kept: answers later distrusted are taken back), by
+    // its id: which workers did the E-step, whatever --workers asked for.
+    std::map<std::string, std::int64_t> blocks_by_worker;
   };
   // What workers that never answer (a crashed build, a forger's heartbeats) may cost a run:
   // this many passes, each at most one timeout longer (docs/RELIABILITY.md).
