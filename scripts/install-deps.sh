@@ -9,6 +9,7 @@ packages=(
   libboost-dev gnuplot-nox
   libopencv-core-dev libopencv-imgproc-dev libspng-dev libturbojpeg0-dev
   liblcm-dev liblcm-bin iproute2 util-linux
+  default-jdk-headless liblcm-java libjchart2d-java
   libcpp-httplib-dev libjs-chart.js ca-certificates libsodium-dev
   chromium chromium-driver fonts-dejavu-core python3
   libgtest-dev libgmock-dev libbenchmark-dev

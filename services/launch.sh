@@ -287,11 +287,14 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
       'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' \
       "${BASH_SOURCE[0]}" "${inner_args[@]}" &
     set_pid=$!
+    # The process that holds the namespace: scripts/lcm-spy.sh --run OUT enters it.
+    mkdir -p "$out/logs" && echo "$set_pid" >"$out/logs/netns.pid"
     trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; stop_dashboard; exit 130' INT TERM
     set +e
     wait "$set_pid"
     status=$?
     set -e
+    rm -f "$out/logs/netns.pid"
     trap - INT TERM
     finish "$status"
   else

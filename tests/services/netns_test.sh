@@ -105,6 +105,31 @@ case "$case" in
     "$build/hbirl" learn --log "$tmp/gw/run.lcmlog" --key "$tmp/gw/run.key" --out "$tmp/gw_offline.json"
     [ "$(theta "$tmp/gw_offline.json")" = "$(theta "$tmp/gw/result.json")" ] ||
       fail "hbirl learn --log: theta $(theta "$tmp/gw_offline.json") != live $(theta "$tmp/gw/result.json"); offline: $(data_summary "$tmp/gw_offline.json"); live: $(data_summary "$tmp/gw/result.json")"
+    # LCM's own tools read it: every event of a known type decodes with the build's
+    # lcmtypes_hbirl.jar through LCM's Java library, found by fingerprint as lcm-spy finds it,
+    # as many of each as the recording holds on its channel.
+    jar="$build/lcmtypes/lcmtypes_hbirl.jar"
+    if [ -f "$jar" ]; then
+      mkdir -p "$tmp/java"
+      javac -nowarn -cp /usr/share/java/lcm.jar -d "$tmp/java" "$repo/tests/lcmtypes/DecodeRecording.java"
+      java -cp "/usr/share/java/lcm.jar:$jar:$tmp/java" DecodeRecording "$tmp/gw/run.lcmlog" >"$tmp/decoded.txt" 2>&1 ||
+        { cat "$tmp/decoded.txt"; fail "the recording does not decode with lcmtypes_hbirl.jar"; }
+      python3 - "$tmp/gw/run.lcmlog" "$tmp/decoded.txt" <<'PY' || { cat "$tmp/decoded.txt"; fail "the jar decoded another count"; }
+import collections, struct, sys
+data, pos, channels = open(sys.argv[1], "rb").read(), 0, collections.Counter()
+while pos + 28 <= len(data):
+    _, _, _, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
+    channels[data[pos + 28:pos + 28 + clen].decode()] += 1
+    pos += 28 + clen + dlen
+decoded = dict(line.split() for line in open(sys.argv[2]) if line.startswith("hbirl."))
+for channel, kind in [("EPISODE", "episode_marker_t"), ("OBSERVATIONS", "observations_t"),
+                      ("GROUND_TRUTH", "ground_truth_t"), ("REWARD", "reward_t"), ("STATUS", "service_status_t")]:
+    assert channels[channel] > 0 and int(decoded["hbirl." + kind]) == channels[channel], (channel, channels[channel], decoded)
+print("  lcmtypes_hbirl.jar decoded", ", ".join(f"{k} {v}" for k, v in decoded.items()))
+PY
+    else
+      echo "note: no lcmtypes_hbirl.jar (no JDK or liblcm-java): LCM's Java tools not checked"
+    fi
     # The recording cut short (as when the run is killed): refused in one line, or learned
     # from its finished episodes with --allow-incomplete, which says what is missing.
     python3 - "$tmp/gw/run.lcmlog" "$tmp/cut.lcmlog" <<'PY'
