@@ -41,14 +41,19 @@ if [ -n "$log" ]; then
   # A namespace of its own: the replay reaches lcm-spy and nothing else.
   # shellcheck disable=SC2016  # the inner shell's $0 and $@
   exec unshare -rn -- bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo || exit 1
-    java -Djava.net.preferIPv4Stack=true -cp "$0" lcm.logging.LogPlayer "$1" & shift; exec "$@"' \
+    java -Djava.net.preferIPv4Stack=true -cp "$0" lcm.logging.LogPlayer "$1" & player=$!; shift
+    "$@"; status=$?; kill "$player" 2>/dev/null; exit "$status"' \
     "$classpath" "$log" "${spy[@]}"
 fi
 if [ -n "$run" ]; then
   # launch.sh in a private network namespace says which process holds it (logs/netns.pid).
   if [ -f "$run/logs/netns.pid" ]; then
     pid="$(cat "$run/logs/netns.pid")"
-    kill -0 "$pid" 2>/dev/null || { echo "lcm-spy.sh: the run in $run has ended (its namespace is gone): spy on its recording with --log" >&2; exit 1; }
+    # (still the run's launch.sh, not a process that took its number since)
+    if ! kill -0 "$pid" 2>/dev/null || ! tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -q "launch.sh"; then
+      echo "lcm-spy.sh: the run in $run has ended (its namespace is gone): spy on its recording with --log" >&2
+      exit 1
+    fi
     if [ "$(id -u)" = 0 ]; then
       exec nsenter -t "$pid" -n -- "${spy[@]}"
     fi

@@ -289,7 +289,7 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     set_pid=$!
     # The process that holds the namespace: scripts/lcm-spy.sh --run OUT enters it.
     mkdir -p "$out/logs" && echo "$set_pid" >"$out/logs/netns.pid"
-    trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; stop_dashboard; exit 130' INT TERM
+    trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; rm -f "$out/logs/netns.pid"; stop_dashboard; exit 130' INT TERM
     set +e
     wait "$set_pid"
     status=$?

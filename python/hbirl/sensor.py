@@ -14,9 +14,28 @@ until its reward, STOP heard.
     sensor.end_run()
     theta = sensor.wait_for_reward()
 """
+import math
+
 import numpy as np
 
 from . import _hbirl
+
+
+def _checked():
+    """The package's checks of whole numbers (hbirl/__init__.py: 0.7 is refused, not truncated)."""
+    from . import _int, _int_array
+    return _int, _int_array
+
+
+def _seconds(value, name="timeout"):
+    """A wait in seconds: a finite number >= 0 (at most a million seconds, ~11 days)."""
+    try:
+        s = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a number of seconds, got {value!r}") from None
+    if not math.isfinite(s) or s < 0:
+        raise ValueError(f"{name}: must be a finite number of seconds >= 0, got {value!r}")
+    return min(s, 1e6)
 
 __all__ = ["Bus", "Sensor"]
 
@@ -50,7 +69,7 @@ class Bus:
     def handle(self, timeout=0.1):
         """Delivers waiting messages to their handlers, waiting up to `timeout` seconds for
         the first; returns how many were delivered. A handler's exception is raised here."""
-        return self._bus.handle(float(timeout))
+        return self._bus.handle(_seconds(timeout))
 
     @property
     def authenticated(self):
@@ -79,7 +98,7 @@ class Sensor:
     def wait_for_optimiser(self, timeout=10.0):
         """Waits until the optimiser's heartbeat is heard (it then hears the run from its
         first message), at most `timeout` seconds; returns whether it was."""
-        return self._sensor.wait_for_optimiser(float(timeout))
+        return self._sensor.wait_for_optimiser(_seconds(timeout))
 
     def begin_episode(self, controlled=False):
         """Begins an episode; returns its number. A controlled one (the subject alone, as
@@ -92,19 +111,21 @@ class Sensor:
         rule of yours gave each eta (0..65535; learned eta is one distribution per
         context). A step may see nothing. `state` and `action`: the true step, in a
         controlled episode only."""
-        symbols = np.asarray(symbols, dtype=np.int64).reshape(-1)
+        as_int, as_ints = _checked()
+        symbols = as_ints(symbols, "symbols").reshape(-1)
         eta = np.zeros((0, self.num_sources)) if eta is None else np.asarray(eta, dtype=float)
         if eta.ndim == 1 and symbols.size == 1:
             eta = eta.reshape(1, -1)
-        ctx = None if contexts is None else np.asarray(contexts, dtype=np.int64).reshape(-1)
-        self._sensor.step(symbols, eta, ctx, None if state is None else int(state),
-                          None if action is None else int(action))
+        ctx = None if contexts is None else as_ints(contexts, "contexts").reshape(-1)
+        self._sensor.step(symbols, eta, ctx, None if state is None else as_int(state, "state"),
+                          None if action is None else as_int(action, "action"))
 
     def end_episode(self, ends_in_terminal=False, end_state=-1, end_symbols=None):
         """Ends the episode: whether its last action entered a terminal state and, of that
         end, the state entered when known (-1: not) and an end sensor's reports."""
-        reports = None if end_symbols is None else np.asarray(end_symbols, dtype=np.int64).reshape(-1)
-        self._sensor.end_episode(bool(ends_in_terminal), int(end_state), reports)
+        as_int, as_ints = _checked()
+        reports = None if end_symbols is None else as_ints(end_symbols, "end_symbols").reshape(-1)
+        self._sensor.end_episode(bool(ends_in_terminal), as_int(end_state, "end_state"), reports)
 
     def end_run(self):
         """Ends the run (END_RUN, stating its episodes): the optimiser learns once it has them all."""
@@ -113,7 +134,7 @@ class Sensor:
     def handle(self, timeout=0.0):
         """Hears what comes for up to `timeout` seconds: the optimiser's requests for lost
         steps are answered, STOP is noted (stop_requested)."""
-        return self._sensor.handle(float(timeout))
+        return self._sensor.handle(_seconds(timeout))
 
     @property
     def stop_requested(self):
@@ -135,5 +156,5 @@ class Sensor:
         """After end_run: answers the optimiser's requests and repeats the end markers until
         it publishes its reward; returns the learned theta (K,), or None after `timeout`
         seconds."""
-        theta = self._sensor.wait_for_reward(float(timeout))
+        theta = self._sensor.wait_for_reward(_seconds(timeout))
         return None if theta is None else np.asarray(theta)

@@ -71,14 +71,21 @@ class PyBus {
         1000);
   }
 
-  void unsubscribe(services::SubscriptionId id) { bus_->unsubscribe(id); }
+  void unsubscribe(services::SubscriptionId id) {
+    // (the bus may not drop a handler while it runs it: services/bus.hpp)
+    if (handling_) throw InputError("unsubscribe", "not from inside a handler: after handle() returns");
+    bus_->unsubscribe(id);
+  }
 
+  // `timeout_s`: checked by the package (finite, >= 0, at most 10^6 s).
   int handle(double timeout_s) {
     int handled = 0;
+    handling_ = true;
     {
       py::gil_scoped_release released;
       handled = bus_->handle(static_cast<int>(timeout_s * 1000.0));
     }
+    handling_ = false;
     if (raised_) {
       const std::unique_ptr<py::error_already_set> e = std::move(raised_);
       throw *e;
@@ -90,6 +97,7 @@ class PyBus {
   services::Counters counters_;
   std::unique_ptr<services::Bus> bus_;
   std::unique_ptr<py::error_already_set> raised_;
+  bool handling_ = false;
 };
 
 // A sensor on a PyBus: LiveSensor, with the service set's heartbeat (STATUS as "sensor").
@@ -161,8 +169,13 @@ void bind_bus(py::module_& m) {
       .def(
           "wait_for_optimiser",
           [](PySensor& s, double seconds) {
-            py::gil_scoped_release released;
-            return s.sensor().wait_for_optimiser(seconds, interrupted);
+            bool heard = false;
+            {
+              py::gil_scoped_release released;
+              heard = s.sensor().wait_for_optimiser(seconds, interrupted);
+            }
+            if (PyErr_Occurred()) throw py::error_already_set();  // Ctrl-C while it waited
+            return heard;
           },
           py::arg("seconds"))
       .def(
@@ -196,7 +209,7 @@ void bind_bus(py::module_& m) {
       .def("end_run", [](PySensor& s) { s.sensor().end_run(); })
       .def(
           "handle",
-          [](PySensor& s, double timeout_s) {
+          [](PySensor& s, double timeout_s) {  // (seconds checked by the package)
             s.beat();
             py::gil_scoped_release released;
             return s.sensor().handle(static_cast<int>(timeout_s * 1000.0));

@@ -340,6 +340,7 @@ nlohmann::json result_json(const OptimiserResult& r, const OptimiserOptions& o, 
   add_learned_run(j, r, o.domain);
   if (!r.incomplete.empty()) j["incomplete"] = r.incomplete;
   j["frame_requests"] = r.frame_requests;
+  if (!r.recording.empty()) j["recording"] = r.recording;  // --recording: complete, or what it lacks
   if (o.anytime) {
     nlohmann::json confidence = nlohmann::json::array();
     for (const auto& e : r.estimates) confidence.push_back(e.confidence);

@@ -126,8 +126,11 @@ class RunCollector {
 
   // What a run learned from as allowed lacks ("" when complete).
   const std::string& incomplete() const { return incomplete_; }
-  // FRAME_REQUEST messages sent.
+  // FRAME_REQUEST messages sent (for the optimiser's losses and the recording's).
   int frame_requests() const { return frame_requests_; }
+  // What became of the run's recording: "complete", "lacks ...", "cannot be followed: ..."
+  // ("": none followed, OptimiserOptions::recording).
+  const std::string& recording() const { return recording_; }
 
  private:
   bool stopped() const { return stop_ && stop_(); }
@@ -202,39 +205,42 @@ class RunCollector {
   // The run is complete here: until its recording is too (OptimiserOptions::recording),
   // what lcm-logger lost is asked for again once a second -- the sensor side sends it to
   // every listener, the logger among them. Given up, and said, once the recording has
-  // gained nothing for recording_patience_ms: the run is learned from all the same.
+  // gained nothing for recording_patience_ms (at least three requests' time): the run is
+  // learned from all the same. The watch (a second copy of the data) ends here.
   void complete_the_recording() {
     if (options_.recording.path.empty()) return;
-    if (!recording_) {
-      recording_.emplace(options_.recording.path, options_.recording.key_file, options_.max_dataset_bytes);
-    }
-    RecordingWatch& recording = *recording_;
-    std::int64_t had = -1;
+    RecordingWatch recording(options_.recording.path, options_.recording.key_file, options_.max_dataset_bytes);
+    const auto patience =
+        std::chrono::milliseconds(std::max(options_.recording_patience_ms, 3 * options_.resend_after_ms));
+    std::int64_t had = -2;
     int asked = 0;
     auto last_gain = Clock::now(), last_request = Clock::now();
     while (!stopped() && !ended_ && builder_.complete()) {
       try {
-        recording.read();
+        recording.read(std::chrono::milliseconds(200));
       } catch (const InputError& e) {  // not a recording: nothing to complete, the run is
-        say(std::string("the recording cannot be followed: ") + e.what() + "; learning from the complete run");
-        return;
+        recording_ = std::string("cannot be followed: ") + e.what();
+        say("the recording " + recording_ + "; learning from the complete run");
+        break;
       }
       if (recording.complete()) {
+        recording_ = "complete";
         if (asked > 0) say("the recording holds the whole run now: what lcm-logger lost came again");
-        return;
+        break;
       }
       const auto now = Clock::now();
-      if (recording.frames() != had) {
-        had = recording.frames();
+      if (recording.progress() != had || !recording.caught_up()) {
+        had = recording.progress();
         last_gain = now;
       }
-      if (now - last_gain > std::chrono::milliseconds(options_.recording_patience_ms)) {
-        say("the recording " + recording.path() + " lacks " + recording.lacks() +
+      if (now - last_gain > patience) {
+        recording_ = "lacks " + recording.lacks();
+        say("the recording " + recording.path() + " " + recording_ +
             ", which did not come again (lcm-logger stopped?): hbirl learn --log will refuse it; learning from "
             "the complete run");
-        return;
+        break;
       }
-      if (now - last_request > std::chrono::milliseconds(options_.resend_after_ms)) {
+      if (recording.caught_up() && now - last_request > std::chrono::milliseconds(options_.resend_after_ms)) {
         ask_again(recording.missing_frame_keys(kFramesPerRequest), "frame(s) the recording lacks");
         ++asked;
         last_request = now;
@@ -243,6 +249,9 @@ class RunCollector {
       ended_ = bus_.handle(50) < 0;
       check_contradiction();
     }
+    // The wait is no silence of the run's (quiet_too_long counts from the last frame).
+    last_frame_ = Clock::now();
+    frames_ = builder_.frames();
   }
 
   // Nothing for too long after the end of the run: the run fails (RunFailed) or, with
@@ -278,6 +287,8 @@ class RunCollector {
       ended_ = bus_.handle(50) < 0;
       check_contradiction();
     }
+    last_frame_ = Clock::now();  // (the confirmation's wait is no silence of the run's either)
+    frames_ = builder_.frames();
     return builder_.complete() || ended_;
   }
 
@@ -292,7 +303,7 @@ class RunCollector {
   Clock::time_point last_frame_ = Clock::now();
   Clock::time_point last_request_ = Clock::now();
   int frame_requests_ = 0;
-  std::optional<RecordingWatch> recording_;
+  std::string recording_;  // what became of the recording ("": none followed)
   bool announced_end_ = false;
   Clock::time_point last_progress_ = Clock::now();
   std::string incomplete_;
@@ -502,6 +513,7 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   // From here the builder keeps nothing: it watches what still comes for a contradiction
   // (checked before the reward is published); frames are not read while learning.
   result.frame_requests = collector.frame_requests();
+  result.recording = collector.recording();
   result.estimates = estimator.take();
   result.stop_sent_after = estimator.stop_sent_after();
   const std::shared_ptr<const Domain> domain = domain_of(result.data, options.domain);

@@ -82,7 +82,18 @@ def test_a_sensor_publishes_the_protocol():
     (lambda s: (s.begin_episode(), s.step([0], [[1.0, 0.0]], contexts=[0, 1])), "contexts: must give one per symbol"),
     (lambda s: (s.begin_episode(), s.step([0], [[1.0, 0.0]], contexts=[70000])), "contexts[0]: is not in"),
     (lambda s: (s.begin_episode(), s.step([0], [[1.0, 0.0]], contexts=[0]), s.step([0], [[1.0, 0.0]])),
-     "contexts: given in some steps"),
+     "contexts: missing, where the demonstrations' observations before had them"),
+    (lambda s: (s.begin_episode(), s.step([0], [[1.0, 0.0]]), s.step(), s.end_episode(), s.begin_episode(),
+                s.step([0], [[1.0, 0.0]], contexts=[1])),
+     "contexts: given, where the demonstrations' observations before had none"),
+    (lambda s: (s.begin_episode(), s.step([0.7], [[1.0, 0.0]])), "symbols: must be whole numbers"),
+    (lambda s: (s.begin_episode(controlled=True), s.step([0], [[1.0, 0.0]], state=1.5, action=0)),
+     "state: must be a whole number"),
+    (lambda s: (s.begin_episode(), s.step(), s.end_episode(True, end_state=0.5)), "end_state: must be a whole"),
+    (lambda s: s.handle(-1), "timeout: must be a finite number of seconds >= 0"),
+    (lambda s: s.wait_for_optimiser(float("nan")), "timeout: must be a finite"),
+    (lambda s: (s.begin_episode(), s.step(), s.end_episode(), s.end_run(), s.wait_for_reward(float("inf"))),
+     "timeout: must be a finite"),
     (lambda s: (s.begin_episode(controlled=True), s.step([0], [[1.0, 0.0]])), "state: a controlled episode"),
     (lambda s: (s.begin_episode(), s.step([0], [[1.0, 0.0]], state=1, action=1)), "state: a demonstration"),
     (lambda s: (s.begin_episode(controlled=True), s.step([0], [[1.0, 0.0]], state=1)), "action: give the true"),
@@ -132,6 +143,22 @@ def test_a_handler_that_raises_is_raised_from_handle():
     with pytest.raises(RuntimeError, match="the handler's own error"):
         bus.handle(0.1)
     assert bus.handle(0.0) == 0  # and the bus goes on
+
+
+def test_a_handler_may_not_unsubscribe_while_handled():
+    bus = hbirl.Bus("memq://")
+    ids = []
+
+    def handler(channel, data):
+        bus.unsubscribe(ids[0])
+
+    ids.append(bus.subscribe("X", handler))
+    bus.publish("X", b"anything")
+    with pytest.raises(ValueError, match="^unsubscribe: not from inside a handler"):
+        bus.handle(0.1)
+    bus.unsubscribe(ids[0])  # afterwards, fine
+    bus.publish("X", b"anything")
+    assert bus.handle(0.05) == 0
 
 
 def test_a_signed_bus(tmp_path):

@@ -80,7 +80,7 @@ case "$case" in
     "$repo/services/launch.sh" --build "$build" --out "$tmp/stalled" "${small[@]}" --workers 1 --record \
       --url "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=65536" >"$tmp/stalled.out" 2>&1 &
     set_pid=$!
-    for _ in $(seq 1 100); do [ -n "$(pid_in stalled lcm-logger)" ] && break; sleep 0.05; done
+    for _ in $(seq 1 200); do [ -n "$(pid_in stalled lcm-logger)" ] && break; sleep 0.05; done
     logger_pid="$(pid_in stalled lcm-logger)"
     [ -n "$logger_pid" ] || fail "lcm-logger did not start"
     kill -STOP "$logger_pid"
@@ -91,6 +91,7 @@ case "$case" in
       { cat "$tmp/stalled/logs/optimiser.err"; fail "the logger lost nothing: the test tested nothing"; }
     grep -q "the recording holds the whole run now" "$tmp/stalled/logs/optimiser.err" ||
       { cat "$tmp/stalled/logs/optimiser.err"; fail "the recording was not completed"; }
+    grep -q '"recording": "complete"' "$tmp/stalled/result.json" || fail "the result does not say the recording is complete"
     "$build/hbirl" learn --log "$tmp/stalled/run.lcmlog" --key "$tmp/stalled/run.key" --out "$tmp/stalled_offline.json"
     same_theta "$tmp/stalled_offline.json" "$tmp/stalled/result.json" || fail "the completed recording gives another theta"
     ;;
@@ -119,9 +120,12 @@ import collections, struct, sys
 data, pos, channels = open(sys.argv[1], "rb").read(), 0, collections.Counter()
 while pos + 28 <= len(data):
     _, _, _, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
+    if pos + 28 + clen + dlen > len(data):
+        break  # an event the file ends inside (the logger stopped while writing it)
     channels[data[pos + 28:pos + 28 + clen].decode()] += 1
     pos += 28 + clen + dlen
-decoded = dict(line.split() for line in open(sys.argv[2]) if line.startswith("hbirl."))
+decoded = dict(line.split() for line in open(sys.argv[2]) if line.startswith(("hbirl.", "unknown ")))
+assert int(decoded.pop("unknown")) == channels["LCM_SELF_TEST"], ("types the jar lacks", decoded, channels)
 for channel, kind in [("EPISODE", "episode_marker_t"), ("OBSERVATIONS", "observations_t"),
                       ("GROUND_TRUTH", "ground_truth_t"), ("REWARD", "reward_t"), ("STATUS", "service_status_t")]:
     assert channels[channel] > 0 and int(decoded["hbirl." + kind]) == channels[channel], (channel, channels[channel], decoded)
@@ -395,7 +399,7 @@ PY
     "$build/hbirl-optimiser" --url "$url" --workers 1 --key "$tmp/run.key" --domain "$repo/examples/corridor.json" \
       --out "$tmp/live.json" >/dev/null 2>"$tmp/optimiser.err" &
     optimiser=$!
-    PYTHONPATH="$build/python" /usr/bin/python3 "$repo/examples/python/sensor.py" --url "$url" --key "$tmp/run.key" \
+    PYTHONPATH="$build/python" "${HBIRL_PYTHON:-/usr/bin/python3}" "$repo/examples/python/sensor.py" --url "$url" --key "$tmp/run.key" \
       --controlled 3 --save "$tmp/sensed.json" >"$tmp/sensor.log" 2>&1 || { cat "$tmp/sensor.log"; fail "the Python sensor failed"; }
     wait "$optimiser" || { cat "$tmp/optimiser.err"; fail "the optimiser failed"; }
     grep -q '"authenticated": true' "$tmp/live.json" || fail "the optimiser did not check the messages against the key"
@@ -417,7 +421,10 @@ PY
     # for bit; the result names the worker that answered.
     unshare -n -- sleep 600 &
     host_b=$!
-    sleep 0.2
+    for _ in $(seq 1 100); do  # until it is in a namespace of its own
+      [ "$(readlink "/proc/$host_b/ns/net")" != "$(readlink /proc/self/ns/net)" ] && break
+      sleep 0.05
+    done
     ip link add vA type veth peer name vB netns "$host_b"
     ip addr add 10.77.0.1/24 dev vA
     ip link set vA up multicast on

@@ -554,6 +554,8 @@ TEST(Pipeline, WhatTheRecordingLostIsAskedForAgain) {
 
   const auto [watched, watched_path, watched_said] = run_with(true, false, "watched.lcmlog");
   EXPECT_NE(watched_said.find("the recording holds the whole run now"), std::string::npos) << watched_said;
+  EXPECT_EQ(watched.recording, "complete");
+  EXPECT_EQ(unwatched.recording, "");
   Counters counters;
   const OptimiserResult read = collect_from_log({watched_path, "", false}, counters);
   EXPECT_EQ(read.incomplete, "");
@@ -564,6 +566,7 @@ TEST(Pipeline, WhatTheRecordingLostIsAskedForAgain) {
 
   const auto [given_up, given_up_path, given_up_said] = run_with(true, true, "given_up.lcmlog");
   EXPECT_NE(given_up_said.find("which did not come again (lcm-logger stopped?)"), std::string::npos) << given_up_said;
+  EXPECT_EQ(given_up.recording.rfind("lacks 0 episode end(s), ", 0), 0u) << given_up.recording;
   for (int k = 0; k < 4; ++k) EXPECT_EQ(given_up.learned.theta[k], unwatched.learned.theta[k]) << k;
   std::filesystem::remove_all(tmp);
 }

@@ -86,7 +86,8 @@ struct OptimiserResult {
   Learned learned;
   Dataset data;
   std::int64_t missing_frames = 0;  // never came, even when asked for again
-  int frame_requests = 0;           // FRAME_REQUEST messages sent
+  int frame_requests = 0;           // FRAME_REQUEST messages sent (the run's losses and the recording's)
+  std::string recording;            // what became of the recording followed: "complete", "lacks ..." ("": none)
   int workers = 0;
   BusBlockExecutor::Stats estep;
   std::string incomplete;  // learned with allow_incomplete from a run that lacks this ("" when complete)

@@ -4,6 +4,7 @@
 // lcm-logger lost -- a UDP receiver that cannot ask for a message again -- is asked for
 // again as the optimiser's own losses are, and the recording is complete whenever the run
 // is (docs/RELIABILITY.md "A recording holds the whole run").
+#include <chrono>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -14,31 +15,43 @@
 
 namespace hbirl::services {
 
+class LogBus;
+
 class RecordingWatch {
  public:
   // `key_file`: the run's key when its messages are signed ("" when not), so that the
   // recording is read as its readers read it. Nothing is opened until read().
   RecordingWatch(std::string path, std::string key_file, std::int64_t max_dataset_bytes);
-  // Reads what lcm-logger has written since the last call (nothing while the file does
-  // not exist yet). Throws InputError when the file is not a recording.
-  void read();
-  // Whether the recording holds the whole run, as collect_from_log asks it.
-  bool complete() const { return builder_.complete(); }
-  std::int64_t frames() const { return builder_.frames(); }
+  // Reads what lcm-logger has written since the last call, for at most `budget` (a long
+  // recording is read over several calls, the caller beating its heartbeat between them);
+  // nothing while the file does not exist yet. A file rewritten from its start is read
+  // again from scratch. Throws InputError when the file is not a recording.
+  void read(std::chrono::milliseconds budget);
+  // Whether its readers will take the recording as the whole run: everything read so far,
+  // complete as collect_from_log asks it, no damaged event skipped, no contradiction.
+  bool complete() const;
+  // What it holds, a number that changes with every frame, ground-truth step and episode
+  // end it gains, not with repeats (the optimiser gives up on a recording that stops gaining).
+  std::int64_t progress() const;
+  // The last read() reached the end of what is written.
+  bool caught_up() const { return caught_up_; }
   // The frames (and ground-truth steps) of ended episodes it lacks, at most `limit`.
-  std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const {
-    return builder_.missing_frame_keys(limit);
-  }
+  std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
   // What it lacks, in words.
   std::string lacks() const;
   const std::string& path() const { return path_; }
 
  private:
+  void open();
   std::string path_;
   std::string key_file_;
-  Counters counters_;  // its own: a recording's bad messages are not the bus's
+  std::int64_t max_dataset_bytes_;
+  std::int64_t size_ = 0;               // the file's size when last read
+  bool caught_up_ = false;              // the last read() reached the end of what was written
+  std::unique_ptr<Counters> counters_;  // its own: a recording's bad messages are not the bus's
   std::unique_ptr<Bus> log_;
-  DatasetBuilder builder_;  // (after log_: its subscriptions end before the log)
+  std::unique_ptr<DatasetBuilder> builder_;  // (after log_: its subscriptions end before the log)
+  const LogBus* file_ = nullptr;             // log_'s file, for its damage count
 };
 
 }  // namespace hbirl::services

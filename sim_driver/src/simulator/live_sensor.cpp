@@ -103,11 +103,15 @@ void LiveSensor::step(const std::vector<int>& symbols, const RowMatrix& eta, con
     if (contexts[i] < 0 || contexts[i] > kMaxContext)
       throw InputError("contexts[" + std::to_string(i) + "]", "is not in [0, " + std::to_string(kMaxContext) + "]");
   }
-  // Contexts are all or none within an episode (the optimiser's rule is per run: a problem file's).
-  const bool had_contexts = !seen.contexts.empty(), had_observations = seen.num_observations() > 0;
-  if (n > 0 && had_observations && had_contexts != !contexts.empty())
-    throw InputError("contexts",
-                     "given in some steps of an episode and not in others: give them in every step or none");
+  // Contexts are all or none, in the demonstrations and in the controlled run (the
+  // optimiser keeps none of a set that gives them for some observations only).
+  int& given = contexts_given_[e.controlled ? 1 : 0];
+  if (n > 0 && given >= 0 && (given == 1) != !contexts.empty()) {
+    throw InputError("contexts", std::string(given == 1 ? "missing" : "given") + ", where the " +
+                                     (e.controlled ? "controlled run's" : "demonstrations'") + " observations before " +
+                                     (given == 1 ? "had them" : "had none") +
+                                     ": give them for every observation or none");
+  }
   if (e.controlled && !truth)
     throw InputError("state", "a controlled episode's steps need their true state and action");
   if (!e.controlled && truth) throw InputError("state", "a demonstration's true steps are what is learned: give none");
@@ -117,6 +121,7 @@ void LiveSensor::step(const std::vector<int>& symbols, const RowMatrix& eta, con
   seen.eta.conservativeResize(rows + n, shape_.num_sources);
   if (n > 0) seen.eta.bottomRows(n) = checked;
   seen.contexts.insert(seen.contexts.end(), contexts.begin(), contexts.end());
+  if (n > 0) given = contexts.empty() ? 0 : 1;
   seen.step_begin.push_back(seen.num_observations());
   e.steps.push_back(truth.value_or(StateAction{0, 0}));  // a demonstration's: a placeholder, never published
   const int t = static_cast<int>(e.steps.size()) - 1;
@@ -167,6 +172,9 @@ bool LiveSensor::stop_requested() const { return simulator_->told_to_stop(); }
 
 std::optional<Eigen::VectorXd> LiveSensor::wait_for_reward(double seconds, const std::function<bool()>& stop) {
   if (!run_ended_) throw InputError("wait_for_reward", "the run has not ended: end_run first");
+  if (!(seconds >= 0.0) || !std::isfinite(seconds))
+    throw InputError("timeout", "must be a finite number of seconds >= 0");
+  seconds = std::min(seconds, 1e6);
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                             std::chrono::duration<double>(seconds));
   simulator_->serve_until_learned([&] { return (stop && stop()) || std::chrono::steady_clock::now() >= until; });

@@ -66,6 +66,7 @@ class LiveSensor {
   LiveSensorShape shape_;
   bool in_episode_ = false;
   bool run_ended_ = false;
+  int contexts_given_[2] = {-1, -1};  // demonstrations, controlled run: -1 not yet known, 0 none, 1 given
 };
 
 }  // namespace hbirl
