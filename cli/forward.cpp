@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "full_commands.hpp"
+#include "generate_args.hpp"
 #include "learn_args.hpp"
 
 namespace hbirl::cli {
@@ -48,5 +49,7 @@ Command add_forwarded(CLI::App& app, const FullCommand& command) {
 }
 
 int run_learn_from_log(const LearnArgs&) { return run_in_full(); }
+
+int run_generate_from_domain(const GenerateDomainArgs&) { return run_in_full(); }
 
 }  // namespace hbirl::cli

@@ -2,6 +2,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "generate_args.hpp"
 #include "learner/input_error.hpp"
 #include "problem/json_format.hpp"
 #include "sim_driver/gridworld/problem_file.hpp"
@@ -175,16 +176,32 @@ CLI::App* add_random_task_generator(CLI::App* cmd, RandomTaskArgs& args) {
 
 Command add_generate(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
-      "generate", "Write a problem file for a built-in domain (a starting point for your own files).");
-  cmd->require_subcommand(1);
+      "generate",
+      "Write a problem file: a built-in domain's (gridworld, random-task), or with --domain F the run a\n"
+      "domain file's \"sensor\" section simulates (a starting point for your own files).");
+  cmd->require_subcommand(0, 1);
+  auto d = std::make_shared<GenerateDomainArgs>();
+  cmd->add_option(
+      "--domain", d->domain,
+      "A domain file (README.md \"Your own task\"): the run its \"sensor\" section simulates -- what\n"
+      "hbirl-sim-driver publishes for it, the controlled run and the demonstrations with their true steps --\n"
+      "as a problem file (hbirl learn --problem, hbirl publish --problem)");
+  cmd->add_option("--seed", d->seed, "With --domain: the simulation's seed (the same seed, the same file)")
+      ->capture_default_str();
+  cmd->add_option("--out,-o", d->out, "With --domain: write the problem file here instead of stdout");
   auto g = std::make_shared<GridworldArgs>();
   CLI::App* grid = add_gridworld_generator(cmd, *g);
   auto t = std::make_shared<RandomTaskArgs>();
   CLI::App* task = add_random_task_generator(cmd, *t);
-  return [g, grid, t, task] {
+  return [d, g, grid, t, task] {
+    if (!d->domain.empty() && (grid->parsed() || task->parsed()))
+      throw InputError("--domain", "generates from a domain file: not with gridworld or random-task");
     if (grid->parsed()) return run_gridworld(*g);
     if (task->parsed()) return run_random_task(*t);
-    return 2;
+    if (d->domain.empty()) {
+      throw InputError("generate", "give a domain file (--domain F) or what to generate: gridworld or random-task");
+    }
+    return run_generate_from_domain(*d);
   };
 }
 

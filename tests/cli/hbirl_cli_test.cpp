@@ -271,6 +271,41 @@ TEST_F(Cli, GenerateThenLearn) {
   EXPECT_EQ(std::max_element(w.begin(), w.end()) - w.begin(), 2);
 }
 
+// generate --domain F: the run the domain file's sensor section simulates, as a problem
+// file -- the controlled run and the demonstrations it states, each with its true steps;
+// the same seed, the same bytes -- that learns the expert's policy (examples/warehouse.json).
+TEST_F(Cli, GenerateFromADomainFile) {
+  const std::string domain = std::string(HBIRL_SOURCE_DIR) + "/examples/warehouse.json";
+  const auto generate = [&](int seed, const std::string& name) {
+    const fs::path p = dir_ / name;
+    const Outcome g =
+        run("generate --domain '" + domain + "' --seed " + std::to_string(seed) + " --out '" + p.string() + "'");
+    EXPECT_EQ(g.status, 0) << g.err;
+    return p;
+  };
+  const fs::path a = generate(3, "a.json"), again = generate(3, "again.json"), other = generate(4, "other.json");
+  EXPECT_EQ(hbirl::testing::slurp(a), hbirl::testing::slurp(again));
+  EXPECT_NE(hbirl::testing::slurp(a), hbirl::testing::slurp(other));
+  const json doc = json::parse(hbirl::testing::slurp(a)), spec = json::parse(hbirl::testing::slurp(domain));
+  EXPECT_EQ(doc["name"], "warehouse");
+  int controlled = 0, demonstrations = 0;
+  for (const auto& t : doc["demonstration"]) {
+    EXPECT_TRUE(t.contains("steps") && t.contains("truth"));
+    (t.value("controlled", false) ? controlled : demonstrations) += 1;
+  }
+  EXPECT_EQ(controlled, spec["sensor"]["controlled_trajectories"].get<int>());
+  EXPECT_EQ(demonstrations, spec["sensor"]["trajectories"].get<int>());
+  const Outcome r = run("learn --problem '" + a.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_LT(json::parse(r.out)["ile_relative"].get<double>(), 0.05) << r.out;
+  const Outcome none = run("generate --domain '" + std::string(HBIRL_SOURCE_DIR) + "/examples/corridor.json'");
+  EXPECT_EQ(none.status, 2);
+  EXPECT_NE(none.err.find("has no \"sensor\" section"), std::string::npos) << none.err;
+  const Outcome both = run("generate --domain '" + domain + "' gridworld");
+  EXPECT_EQ(both.status, 2);
+  EXPECT_NE(both.err.find("--domain: generates from a domain file"), std::string::npos) << both.err;
+}
+
 // --anytime prints an estimate per demonstration, and each is reproduced alone by
 // --demonstrations n --warm-start <estimate n-1> (the weights as printed: JSON's numbers
 // round-trip).
