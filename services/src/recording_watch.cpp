@@ -30,7 +30,10 @@ void RecordingWatch::open() {
 void RecordingWatch::read(std::chrono::milliseconds budget) {
   std::error_code error;
   const auto size = std::filesystem::file_size(path_, error);
-  if (error) return;                                             // lcm-logger has not begun it yet
+  if (error) {  // lcm-logger has not begun it yet (or never will): nothing more to read now
+    caught_up_ = true;
+    return;
+  }
   if (!log_ || static_cast<std::int64_t>(size) < size_) open();  // rewritten from its start: read anew
   size_ = static_cast<std::int64_t>(size);
   const auto until = std::chrono::steady_clock::now() + budget;

@@ -564,6 +564,16 @@ TEST(Pipeline, WhatTheRecordingLostIsAskedForAgain) {
   EXPECT_EQ(dataset_digest(watched.data.observed), dataset_digest(unwatched.data.observed));  // the same run
   for (int k = 0; k < 4; ++k) EXPECT_EQ(watched.learned.theta[k], unwatched.learned.theta[k]) << k;
 
+  // A recording that never appears (lcm-logger died at once) is given up on too.
+  const auto never = run_serving_requests(std::make_shared<MemoryHub>(), *builtin_domain("gridworld"),
+                                          gridworld_run(13, 6, 5), 100, nullptr, [&](OptimiserOptions& options) {
+                                            options.recording_patience_ms = 300;
+                                            options.confirm_ms = 100;
+                                            options.recording.path = (tmp / "never_written.lcmlog").string();
+                                          });
+  ASSERT_TRUE(never.has_value());
+  EXPECT_EQ(never->recording, "lacks everything: the file is not there");
+
   const auto [given_up, given_up_path, given_up_said] = run_with(true, true, "given_up.lcmlog");
   EXPECT_NE(given_up_said.find("which did not come again (lcm-logger stopped?)"), std::string::npos) << given_up_said;
   EXPECT_EQ(given_up.recording.rfind("lacks 0 episode end(s), ", 0), 0u) << given_up.recording;
