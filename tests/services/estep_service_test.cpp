@@ -25,8 +25,8 @@ namespace {
 using testing::quiet;
 
 // Workers on the task's MDP.
-struct WorkerThread : testing::WorkerThread {
-  WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1, bool lying = false);
+struct TaskWorker : testing::WorkerThread {
+  TaskWorker(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after = -1, bool lying = false);
 };
 
 // 40 trajectories (3 blocks of the E-step's sum) of the paper's Gridworld with three
@@ -98,7 +98,7 @@ void expect_identical(const LearnResult& a, const LearnResult& b) {
   EXPECT_EQ(a.log_likelihood, b.log_likelihood);
 }
 
-WorkerThread::WorkerThread(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after, bool lying)
+TaskWorker::TaskWorker(std::shared_ptr<MemoryHub> hub, const std::string& id, std::int64_t die_after, bool lying)
     : testing::WorkerThread(std::move(hub), id, die_after, lying) {}
 
 struct Optimiser {
@@ -248,7 +248,7 @@ TEST(EStepService, MdpRoundTripsInChunksAndBadOnesAreRefused) {
 // from the worker whose block holds it, bit for bit what the E-step computes in one process.
 TEST(EStepService, WatchedPosteriorComesBackFromTheWorkers) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread a(hub, "sampler-a"), b(hub, "sampler-b");
+  TaskWorker a(hub, "sampler-a"), b(hub, "sampler-b");
   Optimiser opt(hub);
   ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
   const Task& t = task();
@@ -270,8 +270,8 @@ TEST(EStepService, WatchedPosteriorComesBackFromTheWorkers) {
 TEST(EStepService, SameThetaWithOneTwoOrFourWorkers) {
   for (int n : {1, 2, 4}) {
     auto hub = std::make_shared<MemoryHub>();
-    std::vector<std::unique_ptr<WorkerThread>> workers;
-    for (int w = 0; w < n; ++w) workers.push_back(std::make_unique<WorkerThread>(hub, "sampler-" + std::to_string(w)));
+    std::vector<std::unique_ptr<TaskWorker>> workers;
+    for (int w = 0; w < n; ++w) workers.push_back(std::make_unique<TaskWorker>(hub, "sampler-" + std::to_string(w)));
     Optimiser opt(hub);
     ASSERT_EQ(opt.executor->wait_for_workers(n, 10000), n);
     expect_identical(learn(opt.executor), local());
@@ -296,7 +296,7 @@ TEST(EStepService, LearnedEtaOverTheBusIsBitIdentical) {
     const Task t = with_learned_eta(given);
     const LearnResult here = learn(t, nullptr);
     auto hub = std::make_shared<MemoryHub>();
-    WorkerThread a(hub, "sampler-a"), b(hub, "sampler-b");
+    TaskWorker a(hub, "sampler-a"), b(hub, "sampler-b");
     Optimiser opt(hub, {}, t);
     ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
     const LearnResult there = learn(t, opt.executor);
@@ -322,7 +322,7 @@ TEST(EStepService, LearnedEtaOverTheBusIsBitIdentical) {
 TEST(EStepService, TooManyContextsForTheBusAreComputedHere) {
   const Task t = with_learned_eta(true);  // five contexts
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread worker(hub, "sampler-a");
+  TaskWorker worker(hub, "sampler-a");
   BusExecutorOptions options;
   options.max_contexts = 4;
   Optimiser opt(hub, options, t);
@@ -342,7 +342,7 @@ TEST(EStepService, TooManyContextsForTheBusAreComputedHere) {
 TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
   auto hub = std::make_shared<MemoryHub>();     // the optimiser's side
   auto behind = std::make_shared<MemoryHub>();  // the worker's side of the relay
-  WorkerThread worker(behind, "sampler-a");
+  TaskWorker worker(behind, "sampler-a");
   MemoryBus front(hub), back(behind);
   std::atomic<int> forged{0};
   const auto forward_to = [](MemoryBus& to) {
@@ -390,8 +390,8 @@ TEST(EStepService, TwoDifferentAnswersUnderOneNameAreNotUsed) {
 // result is still bit-identical.
 TEST(EStepService, WorkerKilledMidRunSameTheta) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread steady(hub, "sampler-a");
-  WorkerThread doomed(hub, "sampler-b", 5);
+  TaskWorker steady(hub, "sampler-a");
+  TaskWorker doomed(hub, "sampler-b", 5);
   BusExecutorOptions options;
   options.timeout_ms = 300;
   options.worker_silence_s = 2.5;  // > the 1 s heartbeat, with room for a loaded machine
@@ -435,8 +435,8 @@ struct RemoteAndLocal {
 TEST(EStepService, AWorkerThatMissedARequestGetsWorkAgain) {
   auto hub = std::make_shared<MemoryHub>();
   auto behind = std::make_shared<MemoryHub>();
-  WorkerThread steady(hub, "sampler-a");
-  WorkerThread missing(behind, "sampler-b");
+  TaskWorker steady(hub, "sampler-a");
+  TaskWorker missing(behind, "sampler-b");
   MemoryBus front(hub), back(behind);
   std::atomic<int> dropped{0};
   const auto forward_to = [](MemoryBus& to) {
@@ -491,7 +491,7 @@ TEST(EStepService, NoWorkersComputesLocally) {
 // protocol: counted, ignored, and theta is still bit-identical.
 TEST(EStepService, DuplicatesStaleAnswersAndGarbageAreIgnored) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread worker(hub, "sampler-a");
+  TaskWorker worker(hub, "sampler-a");
   // A meddler: repeats every answer twice (once as stale) and sprays garbage.
   MemoryBus meddler(hub);
   Counters meddler_counters = quiet("meddler");
@@ -651,8 +651,8 @@ TEST(SamplerWorker, AnotherAttemptWithOtherBlocksIsRefused) {
 // and theta is the one-process run's, bit for bit.
 TEST(EStepService, LyingWorkerIsCaughtBySpotCheck) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread honest(hub, "sampler-a");
-  WorkerThread liar(hub, "sampler-b", -1, true);
+  TaskWorker honest(hub, "sampler-a");
+  TaskWorker liar(hub, "sampler-b", -1, true);
   Optimiser opt(hub);
   ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
   expect_identical(learn(opt.executor), local());
@@ -677,8 +677,8 @@ TEST(EStepService, AWorkerThatAlwaysLiesIsCaughtInItsFirstPass) {
   const std::vector<EStepStatistics> truth = here.block_statistics(policy, model, 7, all, 1);
   for (int run = 0; run < 5; ++run) {
     auto hub = std::make_shared<MemoryHub>();
-    WorkerThread honest(hub, "sampler-a");
-    WorkerThread liar(hub, "sampler-b", -1, true);
+    TaskWorker honest(hub, "sampler-a");
+    TaskWorker liar(hub, "sampler-b", -1, true);
     Optimiser opt(hub);
     ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
     ObservationEStepOptions options;
@@ -700,7 +700,7 @@ TEST(EStepService, AWorkerThatAlwaysLiesIsCaughtInItsFirstPass) {
 TEST(EStepService, ForgedAnswersDoNotChangeTheta) {
   for (const bool name_the_assigned_worker : {false, true}) {
     auto hub = std::make_shared<MemoryHub>();
-    WorkerThread worker(hub, "sampler-a");
+    TaskWorker worker(hub, "sampler-a");
     MemoryBus forger(hub);
     Counters forger_counters = quiet("forger");
     std::atomic<bool> stop{false};
@@ -804,7 +804,7 @@ TEST(EStepService, FakeWorkerHeartbeatsCostNothingWithAKey) {
 // got another block: every pass waited a timeout, for as long as the forger kept at it.)
 TEST(EStepService, FakeWorkersWithoutAKeyCostABoundedNumberOfPasses) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread worker(hub, "sampler-a");
+  TaskWorker worker(hub, "sampler-a");
   BusExecutorOptions options;
   options.timeout_ms = 200;
   Optimiser opt(hub, options);
@@ -853,7 +853,7 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
   EXPECT_EQ(numerics_fingerprint(), numerics_fingerprint());
   EXPECT_NE(numerics_fingerprint(), 0u);
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread worker(hub, "sampler-a");
+  TaskWorker worker(hub, "sampler-a");
   BusExecutorOptions options;
   options.same_numerics_only = true;
   Optimiser opt(hub, options);
@@ -900,7 +900,7 @@ TEST(EStepService, WorkersWithOtherNumericsCanBeLeftOut) {
 // had them drops: together they hold the data set once, and theta is the one-process run's.
 TEST(EStepService, LateWorkerGetsItsShare) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread early(hub, "sampler-a");
+  TaskWorker early(hub, "sampler-a");
   Optimiser opt(hub);
   ASSERT_EQ(opt.executor->wait_for_workers(1, 10000), 1);
   const Task& t = task();
@@ -912,7 +912,7 @@ TEST(EStepService, LateWorkerGetsItsShare) {
   const EStepStatistics here = ObservationEStep(t.task.mdp, t.observed, t.prior).statistics(policy, model, 5);
   EXPECT_EQ(there.statistics(policy, model, 5).counts, here.counts);
   EXPECT_EQ(early.worker().trajectories_held(), 40);
-  WorkerThread late(hub, "sampler-b");
+  TaskWorker late(hub, "sampler-b");
   EXPECT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
   for (int pass = 0; pass < 3; ++pass) {
     const EStepStatistics s = there.statistics(policy, model, 5);
@@ -932,7 +932,7 @@ TEST(EStepService, LateWorkerGetsItsShare) {
 // re-asked.
 TEST(EStepService, BlocksAWorkerCannotHoldGoToAnother) {
   auto hub = std::make_shared<MemoryHub>();
-  WorkerThread able(hub, "sampler-a");
+  TaskWorker able(hub, "sampler-a");
   testing::WorkerThread small(hub, "sampler-b", -1, false, 1);
   Optimiser opt(hub, short_timeout());
   ASSERT_EQ(opt.executor->wait_for_workers(2, 10000), 2);
@@ -965,8 +965,8 @@ void each_worker_is_sent_only_its_share(std::int64_t window) {
                                  random_confounder_observation_model(3, rng), options, rng)
                    .trajectories;
   auto hub = std::make_shared<MemoryHub>();
-  std::vector<std::unique_ptr<WorkerThread>> workers;
-  for (int w = 0; w < 4; ++w) workers.push_back(std::make_unique<WorkerThread>(hub, "sampler-" + std::to_string(w)));
+  std::vector<std::unique_ptr<TaskWorker>> workers;
+  for (int w = 0; w < 4; ++w) workers.push_back(std::make_unique<TaskWorker>(hub, "sampler-" + std::to_string(w)));
   BusExecutorOptions executor_options;
   executor_options.send_window_bytes = window;
   Optimiser opt(hub, executor_options, t);
