@@ -7,10 +7,14 @@
 # dashboard stays up after the run until Ctrl-C.
 set -euo pipefail
 cd "$(dirname "$0")"
-scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+scripts/install-deps.sh  # only what the demo needs; ./test.sh installs the rest
+# The tests' configuration (scripts/configure.sh), without the tests on a first build: their
+# libraries are ./test.sh's to install, and it builds on this folder without recompiling it.
+tests=()
+[ -f build/CMakeCache.txt ] || tests=(-DHBIRL_BUILD_TESTS=OFF -DHBIRL_BUILD_BENCH=OFF)
+scripts/configure.sh build "${tests[@]}"
 targets=(hbirl hbirl-services hbirl-dashboard)
-# The Python package too, when it is configured (pybind11 and numpy there): README.md "Python".
+# The Python package too, when it is configured (pybind11 and numpy there): docs/python.md "Python".
 [ -d build/python/hbirl ] && targets+=(hbirl_python)
 cmake --build build --target "${targets[@]}" -j"$(nproc)" >/dev/null
 keep=()

@@ -1,6 +1,6 @@
 """`pip install .`: the package hbirl (python/hbirl) with its extension module built by
 the project's own CMake (only the libraries it links: -DHBIRL_PYTHON_ONLY=ON) for the
-Python that runs pip. README.md "Python" says how to run it offline."""
+Python that runs pip. docs/python.md "Python" says how to run it offline."""
 import os
 import re
 import shutil

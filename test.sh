@@ -12,7 +12,7 @@ start=$(date +%s)
 # One line per stage with the time so far: a run that is slow says where.
 stage() { echo "== test.sh: $1 ($(($(date +%s) - start)) s so far)"; }
 stage "installing what is missing"
-scripts/install-deps.sh
+scripts/install-deps.sh --for-tests
 jobs="$(nproc)"
 
 # The scripts a user runs and the tests' own: quoting (a path with a space once broke
@@ -26,41 +26,68 @@ scripts/format.sh --check
 
 # Ninja when there is one: it compiles a library's sources while the libraries it links
 # are still being built, and so keeps both cores busy (the Makefiles wait per target).
-# A build folder made before keeps the generator it was made with.
 generator=()
 if command -v ninja >/dev/null 2>&1; then generator=(-G Ninja); fi
-release_generator=("${generator[@]}")
-if [ -f build/CMakeCache.txt ]; then release_generator=(); fi
 
 stage "Release build"
-cmake -S . -B build "${release_generator[@]}" -DCMAKE_BUILD_TYPE=Release -DHBIRL_WERROR=ON >/dev/null
+# The demo's configuration (scripts/configure.sh), with the tests and benchmarks: what
+# ./demo.sh built is not compiled again.
+scripts/configure.sh build -DHBIRL_BUILD_TESTS=ON -DHBIRL_BUILD_BENCH=ON
 cmake --build build -j"$jobs"
-stage "Release tests"
-ctest --test-dir build --output-on-failure -j"$jobs"
+# Background builds take only what the tests leave idle (nice 19: the Release tests wait on
+# timers and the network about a third of their time); a background job still running when
+# this script exits, failing or interrupted, is stopped with it.
+background() {  # background LOG COMMAND...: COMMAND at the lowest priority, output to LOG
+  local log="$1"
+  shift
+  setsid nice -n 19 "$@" >"$log" 2>&1 &  # a process group of its own: stopped whole
+}
+stop_background() {
+  local job
+  for job in $(jobs -p); do kill -- -"$job" 2>/dev/null || true; done
+}
+trap stop_background EXIT
+finish_background() {  # finish_background WHAT LOG: wait for the one background job
+  local what="$1" log="$2" status=0
+  wait -n || status=$?
+  if [ "$status" -ne 0 ]; then
+    tail -n 60 "$log" >&2
+    echo "test.sh: $what failed (exit $status; the whole output: $log)" >&2
+    exit 1
+  fi
+}
 
-stage "sanitizer and fuzz build (clang)"
 # -O1 with line tables only: half the compile time of -O2 -g, and still file:line in
 # the sanitizers' reports. clang: the libraries also carry libFuzzer's coverage, so this
 # one build serves the sanitizer tests and the fuzz targets (CMakeLists.txt says what it
 # leaves out); it took 432 s where gcc's sanitizer build and a separate fuzz build took
-# 835 s. Ninja when there is one (above).
+# 835 s. Ninja when there is one (above). Compiled while the Release tests run.
 CC=clang CXX=clang++ cmake -S . -B build-sanitize-fuzz "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DHBIRL_WERROR=ON -DHBIRL_SANITIZE=ON -DHBIRL_BUILD_BENCH=OFF >/dev/null
 # What the sanitizer run needs: the test executable, the hbirl command it runs, the
 # bindings it compiles; and the fuzz targets.
-cmake --build build-sanitize-fuzz -j"$jobs" --target hbirl_tests hbirl hbirl_lcmtypes_bindings hbirl_fuzz
+background build-sanitize-fuzz/build.log \
+  cmake --build build-sanitize-fuzz -j"$jobs" --target hbirl_tests hbirl hbirl_lcmtypes_bindings hbirl_fuzz
+stage "Release tests (the sanitizer and fuzz build (clang) in the background)"
+ctest --test-dir build --output-on-failure -j"$jobs"
+stage "sanitizer and fuzz build: what is left of it"
+finish_background "the sanitizer and fuzz build" build-sanitize-fuzz/build.log
+
 # Run in the Release build only: the multi-process tests (label multiprocess: whole
 # service sets over LCM in network namespaces; the same service code runs under the
 # sanitizers in the in-process tests), and seventeen statistics-heavy tests that take
 # seconds in Release and up to two minutes each under the sanitizers (the E-step, EM and the
 # experiment runners they drive run under the sanitizers in the other tests).
 heavy='^(EtaSensitivity\.LearnedEtaFindsTheCalibrationAndSameBitsForAnyThreads|LearnReward\.RecordedObjectiveNeverDecreasesOnRandomTasks|Cli\.EtaExperimentsAtSmallScale|Unlisted\.MethodsRunAndTheOracleIsToldEverything|HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal|ObservationEStep\.LearnedEtaRecoversTheLabellersCalibration|Cli\.EveryGeneratedRandomTaskValidates|Cli\.OnionExperimentAtSmallScale|LearnAnytime\.EachEstimateIsLearnOnThePrefixFromThePreviousAndNoWorseThanFresh|StoppingExperiment\.AnEstimatePerDemonstration|CalibrationExperiment\.RunsAndReadsBack|RewardPosterior\.OneFeatureFromObservationsAgreesWithEnumerationOnAGrid)$'
-stage "sanitizer tests"
+# The learner-only check builds in the background meanwhile.
+mkdir -p build-learner-only
+background build-learner-only/check.log scripts/learner-only-check.sh build-learner-only "$jobs"
+stage "sanitizer tests (the learner-only build and tests in the background)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize-fuzz --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"
-
-stage "learner-only build and tests"
-scripts/learner-only-check.sh build-learner-only "$jobs"
+stage "learner-only build and tests: what is left of them"
+finish_background "the learner-only check" build-learner-only/check.log
+grep -E "^learner-only:|tests passed" build-learner-only/check.log
 
 # libFuzzer (clang, ASan + UBSan): every reader of files and of the bus, and the
 # dashboard's HTTP handling, 10 s each on its seed corpus (tests/fuzz; the long runs are

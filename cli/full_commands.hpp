@@ -31,7 +31,7 @@ inline constexpr FullCommand kReport{
     "camera frame with its detections coloured by their most likely source, and OUT/state.json."};
 inline constexpr FullCommand kPublish{
     "publish",
-    "Stream a problem file's demonstration onto the bus exactly as a sensor would (README.md \"Your own task\"):\n"
+    "Stream a problem file's demonstration onto the bus exactly as a sensor would (docs/your-task.md):\n"
     "EPISODE markers, one OBSERVATIONS message per step, and GROUND_TRUTH for the trajectories marked\n"
     "\"controlled\". A live optimiser started with --domain on the same file learns what `hbirl learn\n"
     "--problem FILE` learns (with the same --eta), bit for bit. Waits for the optimiser's heartbeat first, and\n"

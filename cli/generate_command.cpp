@@ -183,7 +183,7 @@ Command add_generate(CLI::App& app) {
   auto d = std::make_shared<GenerateDomainArgs>();
   cmd->add_option(
       "--domain", d->domain,
-      "A domain file (README.md \"Your own task\"): the run its \"sensor\" section simulates -- what\n"
+      "A domain file (docs/your-task.md \"Your own task\"): the run its \"sensor\" section simulates -- what\n"
       "hbirl-sim-driver publishes for it, the controlled run and the demonstrations with their true steps --\n"
       "as a problem file (hbirl learn --problem, hbirl publish --problem)");
   cmd->add_option("--seed", d->seed, "With --domain: the simulation's seed (the same seed, the same file)")

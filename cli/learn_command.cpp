@@ -337,7 +337,7 @@ Command add_learn(CLI::App& app) {
                          "weights, log_likelihood, feature_count_error, and with true_weights in the file also\n"
                          "ile (||V^piE - V^piL||_1 under the true reward), ile_relative (ile / ||V^piE||_1) and\n"
                          "policy_agreement; then one entry per restart.");
-  CLI::Option* problem = cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)");
+  CLI::Option* problem = cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see docs/files.md)");
   CLI::Option* log =
       cmd->add_option("--log", args->log,
                       "Learn from a run of the service set recorded with lcm-logger (services/launch.sh --record): "

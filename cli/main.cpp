@@ -15,7 +15,7 @@ constexpr const char* kDescription =
     "environments (Bogert & Doshi, IROS 2021). It learns the reward weights of an expert\n"
     "from a problem file: an MDP, a demonstration (observations with source distributions\n"
     "eta, and/or the true state-action trajectories) and optional true weights for metrics.\n"
-    "The problem-file format is documented in README.md (\"Problem files\").\n";
+    "The problem-file format is documented in docs/files.md (\"Problem files\").\n";
 }
 
 int main(int argc, char** argv) {

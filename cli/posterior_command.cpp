@@ -164,7 +164,7 @@ Command add_posterior(CLI::App& app) {
                          "(default all zero); O is the Dirichlet mean of the file's alpha (not refined). With\n"
                          "truth in the file, each step also gets truth_probability and the output map_accuracy\n"
                          "(share of steps whose most probable pair is the true one).");
-  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see README.md)")->required();
+  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, see docs/files.md)")->required();
   app::add_learn_settings(cmd, args->engine, app::Front::kEngine);
   cmd->add_option("--weights,-w", args->weights, "Reward weights theta as w1,w2,... (default: all zero)");
   cmd->add_option("--seed", args->seed, "Seed of the MCMC engine")->capture_default_str();

@@ -79,7 +79,7 @@ int run_publish(const PublishArgs& args) {
 Command add_publish(CLI::App& app) {
   auto args = std::make_shared<PublishArgs>();
   CLI::App* cmd = app.add_subcommand(kPublish.name, kPublish.description);
-  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, README.md \"Problem files\")")->required();
+  cmd->add_option("--problem,-p", args->problem, "Problem file (JSON, docs/files.md \"Problem files\")")->required();
   cmd->add_option(
       "--name", args->name,
       "The domain's name the episodes carry: the optimiser's (launch.sh --domain F: F's \"name\", else its\n"

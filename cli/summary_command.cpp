@@ -1,4 +1,4 @@
-// hbirl summary: what a learned result says, for a person (README "Commands"):
+// hbirl summary: what a learned result says, for a person (docs/commands.md "Commands"):
 // the weights by feature name, how right they are when the truth is known, the policy by
 // state and action names, learned eta by the labeller's rule. Reads hbirl-optimiser's
 // result.json (services/launch.sh prints this at the end of a run), hbirl learn's output

@@ -78,7 +78,7 @@ void warn_if_the_expert_rarely_ends(const std::string& path, const DomainSpec& d
                "a start nearer the goal)\n";
 }
 
-// A domain file (README.md "Your own task"): its sizes, names and sensor.
+// A domain file (docs/your-task.md "Your own task"): its sizes, names and sensor.
 int run_validate_domain(const std::string& path) {
   std::vector<std::string> warnings;
   DomainSpec d;
@@ -128,8 +128,8 @@ Command add_validate(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto domain = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(kValidate.name, kValidate.description);
-  CLI::Option* problem = cmd->add_option("--problem,-p", *path, "Problem file (JSON, see README.md)");
-  CLI::Option* domain_file = cmd->add_option("--domain", *domain, "Domain file (JSON, README.md \"Your own task\")");
+  CLI::Option* problem = cmd->add_option("--problem,-p", *path, "Problem file (JSON, see docs/files.md)");
+  CLI::Option* domain_file = cmd->add_option("--domain", *domain, "Domain file (JSON, docs/your-task.md)");
   problem->excludes(domain_file);
   cmd->require_option(1);
   return [path, domain] { return domain->empty() ? run_validate(*path) : run_validate_domain(*domain); };

@@ -6,7 +6,7 @@
 # on any crash, sanitizer report, leak, timeout (-timeout=10) or over-limit allocation,
 # printing the reproducer's path and the first lines of the report. Prints each target's
 # executions and coverage. Without TARGET arguments: every target.
-# Environment: FUZZ_JOBS (parallel builds, default nproc), FUZZ_KEEP=DIR (keep the grown
+# Environment: FUZZ_JOBS (parallel builds and targets run at once, default nproc), FUZZ_KEEP=DIR (keep the grown
 # corpora and logs in DIR instead of deleting them), FUZZ_ARGS (more libFuzzer flags).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -44,16 +44,15 @@ if [ -z "$work" ]; then
 fi
 mkdir -p "$work"
 
-failed=0
-for t in "${targets[@]}"; do
-  corpus="$work/corpus/$t"
+# One target: its run, then its summary line (and, if it failed, its reproducers and report)
+# into $work/$t.out, printed in the targets' order once all have run.
+fuzz_one() {
+  local t="$1" corpus="$work/corpus/$1" log="$work/$1.log" status=0 runs speed cov units first
   mkdir -p "$corpus" "$work/artifacts/$t"
   cp -r tests/fuzz/corpus/"$t"/. "$corpus"/ 2>/dev/null || true
-  log="$work/$t.log"
   # -rss_limit_mb above -malloc_limit_mb: one allocation past 1 GB is reported as such
   # (with its stack) before the whole process would be. Leaks are checked (-detect_leaks
   # is libFuzzer's default with ASan).
-  status=0
   # shellcheck disable=SC2086  # FUZZ_ARGS: words on purpose
   ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=1:allocator_may_return_null=0" \
   UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
@@ -66,23 +65,41 @@ for t in "${targets[@]}"; do
   units=$(find "$corpus" -type f | wc -l)
   echo "fuzz: $t: $runs executions ($speed/s), ${cov:-cov: ?}, corpus $units"
   if [ "$status" -ne 0 ]; then
-    failed=1
-    echo "fuzz: $t FAILED (exit $status); reproducer(s):" >&2
+    echo "fuzz: $t FAILED (exit $status); reproducer(s):"
     for a in "$work/artifacts/$t"/*; do
       [ -e "$a" ] || continue
       # Outside the temporary directory, which is deleted on exit.
       mkdir -p "$build/fuzz-findings"
       cp "$a" "$build/fuzz-findings/"
-      echo "  $build/fuzz-findings/$(basename "$a")  (replay: $build/tests/fuzz/$t $build/fuzz-findings/$(basename "$a"))" >&2
+      echo "  $build/fuzz-findings/$(basename "$a")  (replay: $build/tests/fuzz/$t $build/fuzz-findings/$(basename "$a"))"
     done
     # The report: from its first line (sanitizer, libFuzzer's deadly signal, timeout or
     # out-of-memory), else the log's end.
     first=$(grep -a -m1 -n -E '==[0-9]+==ERROR|ERROR: libFuzzer|runtime error:|ALARM: working' "$log" | cut -d: -f1 || true)
     if [ -n "$first" ]; then
-      sed -n "${first},$((first + 30))p" "$log" >&2
+      sed -n "${first},$((first + 30))p" "$log"
     else
-      tail -n 30 "$log" >&2
+      tail -n 30 "$log"
     fi
+    return 1
+  fi
+}
+
+# The targets $jobs at a time (each is one process on one core): the same seconds each,
+# in a fraction of the time.
+# (Each writes its exit status to a file: a status reaped by `wait -n` is not asked again.)
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+  { status=0; fuzz_one "$t" >"$work/$t.out" 2>&1 || status=$?; echo "$status" >"$work/$t.status"; } &
+done
+wait
+failed=0
+for t in "${targets[@]}"; do
+  if [ "$(cat "$work/$t.status" 2>/dev/null)" = 0 ]; then
+    cat "$work/$t.out"
+  else
+    failed=1
+    cat "$work/$t.out" >&2
   fi
 done
 echo "fuzz: ${#targets[@]} targets in $(($(date +%s) - start)) s (build $((built - start)) s)"

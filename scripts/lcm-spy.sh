@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # lcm-spy -- LCM's live message browser -- with hbirl's message types
-# (build/lcmtypes/lcmtypes_hbirl.jar, README.md "LCM's own tools"), on:
+# (build/lcmtypes/lcmtypes_hbirl.jar, docs/services.md "LCM's own tools"), on:
 #   scripts/lcm-spy.sh [--build DIR] [--url URL]       the bus of this network namespace
 #   scripts/lcm-spy.sh [--build DIR] --run OUT         a run of services/launch.sh, also one it
 #                                                      ran in a private network namespace

@@ -53,7 +53,7 @@ usage: services/launch.sh [options]
 Runs a demo as separate processes over LCM and prints the learned reward.
   --domain D             onion (camera frames -> perception -> labeller -> learner),
                          gridworld (the paper's Gridworld; its simulator publishes the
-                         observations itself), or a domain file (README.md "Your own task":
+                         observations itself), or a domain file (docs/your-task.md "Your own task":
                          its simulated sensor publishes the observations) (default $domain)
   --size N               gridworld: cells a side (default $size)
   --no-sim               no simulator: the learning side only (optimiser, workers, dashboard),
@@ -84,11 +84,13 @@ Runs a demo as separate processes over LCM and prints the learned reward.
   --eta K                plausible, uniform or true (default $eta)
  all:
   --record               record every message with lcm-logger to OUT/run.lcmlog
-                         (replay: build/hbirl learn --log OUT/run.lcmlog); on with the dashboard
+                         (replay: build/hbirl learn --log OUT/run.lcmlog); on with the
+                         dashboard or the report, which are made from the recording
   --dashboard-port P     serve the live dashboard on http://127.0.0.1:P/ (default $dashboard_port)
   --no-dashboard         no dashboard
   --keep-dashboard       after the run, keep the dashboard up until Ctrl-C
-  --no-report            do not write the static report (OUT/report/index.html)
+  --no-report            do not write the static report (OUT/report/index.html; written
+                         for every run by default, even one that did not finish)
   --out DIR              where logs and results go (default runs/<date-time>)
   --build DIR            the build folder with hbirl-services (default build/)
   --url URL              an LCM URL to use instead of a private network namespace, e.g.
@@ -213,7 +215,8 @@ if [ "$key_mode" != none ]; then
 fi
 
 # The outer launch.sh (not the copy run inside a namespace) owns the dashboard and the report.
-[ -z "$dashboard_port" ] || record=1  # the dashboard follows the recording
+# The dashboard follows the recording and the report is made from it: either records the run.
+if [ -n "$dashboard_port" ] || [ "$report" = 1 ]; then record=1; fi
 dashboard_pid=""
 if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
   rm -f "$out/run.lcmlog"  # an earlier run's recording is not this one's

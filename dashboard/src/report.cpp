@@ -69,16 +69,24 @@ std::string heat_map(const std::string& name, size_t rows, size_t cols) {
          " matrix using 1:2:(0.5):(0.5):3 with boxxy fc palette notitle\n";
 }
 
-// Tics for a heat map's axis: every `every`-th label, at its row or column.
-std::string tics(const std::string& axis, const std::vector<std::string>& labels, size_t every = 1, size_t offset = 0) {
+// Tics for a heat map's axis: label i at row or column i, or, with `block` > 1, at the
+// middle of rows i * block .. (i + 1) * block - 1 (a state's rows, one per action).
+std::string tics(const std::string& axis, const std::vector<std::string>& labels, size_t block = 1) {
   std::ostringstream s;
   s << "set " << axis << " (";
-  bool first = true;
-  for (size_t i = offset; i < labels.size(); i += every) {
-    s << (first ? "" : ", ") << gnuplot_quoted(labels[i]) << " " << i;
-    first = false;
-  }
+  for (size_t i = 0; i < labels.size(); ++i)
+    s << (i ? ", " : "") << gnuplot_quoted(labels[i]) << " "
+      << static_cast<double>(i * block) + 0.5 * static_cast<double>(block - 1);
   s << ")\n";
+  return s.str();
+}
+
+// Lines between the blocks of `block` rows of a heat map `width` cells wide.
+std::string block_separators(size_t rows, size_t block, size_t width) {
+  std::ostringstream s;
+  for (size_t r = block; r < rows; r += block)
+    s << "set arrow from -0.5," << edge(r) << " to " << edge(width) << "," << edge(r)
+      << " nohead front lc rgb '#9e9e9e' lw 0.5\n";
   return s.str();
 }
 
@@ -236,10 +244,13 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
   const size_t pairs = subject.size(), symbols = subject[0].size();
   const int actions = m["num_actions"];
   const std::vector<std::string> symbol_names = names_or_numbers(s["names"]["symbols"], symbols, "symbol ");
-  const std::vector<std::string> state_names =
-      names_or_numbers(s["names"]["states"], pairs / static_cast<size_t>(actions), "state ");
-  std::vector<std::string> pair_rows;  // a state's name on its first action's row
-  for (size_t p = 0; p < pairs; ++p) pair_rows.push_back(state_names[p / static_cast<size_t>(actions)]);
+  const size_t per_state = static_cast<size_t>(actions);
+  const std::vector<std::string> state_names = names_or_numbers(s["names"]["states"], pairs / per_state, "state ");
+  const std::vector<std::string> action_names = names_or_numbers(s["names"]["actions"], per_state, "action ");
+  // A state's rows are its actions in order: the state named at their middle, the actions
+  // in the axis label (one name per row would not fit beside a hundred rows).
+  std::string action_order;
+  for (size_t a = 0; a < per_state; ++a) action_order += (a ? ", " : "") + action_names[a];
   std::ostringstream data;
   data << "$subject << EOD\n";
   for (const auto& row : subject) {
@@ -262,10 +273,11 @@ void model_figure(const json& s, const std::string& stem, Report& r) {
        << gnuplot_quoted("Subject: O(symbol | state, action), EM iteration " +
                          std::to_string(m["iteration"].get<int>()))
        << "\n"
-       << tics("xtics rotate by -60 font ',7'", symbol_names)
-       << tics("ytics font ',7'", pair_rows, static_cast<size_t>(actions)) << "set xrange [-0.5:" << edge(symbols)
+       << tics("xtics rotate by -60 font ',7'", symbol_names) << tics("ytics font ',7'", state_names, per_state)
+       << "set ylabel " << gnuplot_quoted("state (rows: its actions " + action_order + ")") << " font ',8'\n"
+       << block_separators(pairs, per_state, symbols) << "set xrange [-0.5:" << edge(symbols)
        << "]\nset yrange [-0.5:" << edge(pairs) << "]\n"
-       << heat_map("subject", pairs, symbols);
+       << heat_map("subject", pairs, symbols) << "unset arrow\nunset ylabel\n";
   if (!confounders.empty()) {
     const std::vector<std::string> sources =
         names_or_numbers(s["names"]["sources"], confounders.size() + 1, "element ");

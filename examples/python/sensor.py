@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A complete sensor for examples/corridor.json, written with nothing but `import hbirl`
-(README.md "Python sensors"). A camera at the end of a 4-cell corridor watches a person
+(docs/python.md "Python sensors"). A camera at the end of a 4-cell corridor watches a person
 walk to the exit (cell 3); now and then a passer-by is in view too. Each step it reports
 what its detector saw -- symbol 0 "a blob far left", 1 "a blob near the exit" -- with eta,
 how likely each blob is the person or the passer-by, and which of its two rules gave that
@@ -101,7 +101,7 @@ def main():
 
 
 def save(domain_file, published, path):
-    """What was published as a problem file (README.md "Problem files"): the domain's MDP
+    """What was published as a problem file (docs/files.md "Problem files"): the domain's MDP
     and observation model, the walks' observations as [symbol, eta, context]."""
     with open(domain_file, encoding="utf-8") as f:
         problem = json.load(f)

@@ -15,7 +15,7 @@
 # 5. compare with MaxCausalEnt IRL on the true paths (what a perfect tracker would give)
 #    and with a learner that believes every observation is the expert's.
 #
-# Run it as `python3 examples/python/tutorial.py` (README.md "Python" says how to make
+# Run it as `python3 examples/python/tutorial.py` (docs/python.md "Python" says how to make
 # `import hbirl` work); it writes the figure to `tutorial.png` (or `--out PATH`).
 
 # %%

@@ -1,4 +1,4 @@
-// A minimal sensor for hbirl's service set (README.md "Your own task"): a camera at the end
+// A minimal sensor for hbirl's service set (docs/your-task.md "Your own task"): a camera at the end
 // of examples/corridor.json's corridor sees a person walk to the exit, and a passer-by now
 // and then. It publishes what any sensor must -- EPISODE markers and one OBSERVATIONS
 // message per step -- and nothing of hbirl but its message types.

@@ -16,7 +16,7 @@ sources, the subject first):
        eta (n, J)) or a triple with contexts (n,); or the flat form Observations(symbols
        (N,), eta (N, J), step_index (N,), lengths (trajectories,)) -- hmmlearn's `lengths`.
 Bad input raises ValueError with the command line's one-line message, naming the
-argument (README.md "Python"). Every long call releases the GIL.
+argument (docs/python.md "Python"). Every long call releases the GIL.
 """
 import inspect
 import json

@@ -1,4 +1,4 @@
-"""Python sensors for hbirl's service set (README.md "Python sensors"), with nothing but
+"""Python sensors for hbirl's service set (docs/python.md "Python sensors"), with nothing but
 `import hbirl`: the message types (hbirl.msg, lcm-gen's Python), the bus the services use
 (LCM, each message signed with the run's key as theirs are), and a Sensor that keeps the
 protocol -- episode markers, one OBSERVATIONS message per step, the controlled run's

@@ -1,5 +1,5 @@
 #pragma once
-// numpy <-> hbirl conversions of the Python package (README.md "Python"): shapes are checked
+// numpy <-> hbirl conversions of the Python package (docs/python.md "Python"): shapes are checked
 // before anything is allocated, and bad input is an InputError (a ValueError in Python)
 // naming the argument as the Python caller wrote it.
 #include <pybind11/numpy.h>

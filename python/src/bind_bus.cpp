@@ -1,4 +1,4 @@
-// Python sensors (bindings.hpp; README.md "Python sensors"): the service set's bus --
+// Python sensors (bindings.hpp; docs/python.md "Python sensors"): the service set's bus --
 // LCM, every message signed with the run's key as the services sign theirs
 // (services/keyed_bus.hpp) -- and a sensor that keeps the protocol
 // (sim_driver/simulator/live_sensor.hpp). No Python LCM module is needed: the message

@@ -252,7 +252,7 @@ Eigen::VectorXd start_distribution(const std::optional<Eigen::VectorXd>& start, 
   return d;
 }
 
-// An MDP from dense arrays or rows (README.md "Python"). Sizes come from the dense arrays,
+// An MDP from dense arrays or rows (docs/python.md "Python"). Sizes come from the dense arrays,
 // else from num_states / num_actions / num_features, else from the largest index in the
 // rows; they are bounded by what the rows can describe before anything is allocated
 // (every state terminal or with transitions, as in a problem file). Checked as a problem

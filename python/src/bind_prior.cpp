@@ -182,7 +182,7 @@ void set_prior_strength(ObservationPrior& prior, const py::object& prior_strengt
   }
 }
 
-// An observation prior from arrays (README.md "Python"): the subject's alpha as a number
+// An observation prior from arrays (docs/python.md "Python"): the subject's alpha as a number
 // (every (s, a) and symbol) or an (S, A, W) array, the confounders' as a number or an
 // (E, W) array; checked as a problem file's observation_model is.
 ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders, const py::object& subject_alpha,

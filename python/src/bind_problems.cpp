@@ -41,7 +41,7 @@ void warn_each(const std::string& path, const std::vector<std::string>& warnings
 
 void bind_problem(py::module_& m) {
   py::class_<Problem>(m, "Problem",
-                      "A problem file (README.md \"Problem files\"): an MDP, names, demonstrations, true weights.")
+                      "A problem file (docs/files.md \"Problem files\"): an MDP, names, demonstrations, true weights.")
       .def_property_readonly("mdp", [](const Problem& p) { return p.mdp; })
       .def_property_readonly("feature_names", [](const Problem& p) { return p.feature_names; })
       .def_property_readonly("state_names", [](const Problem& p) { return p.state_names; })
@@ -76,7 +76,7 @@ void bind_problem(py::module_& m) {
             if (!out.flush()) throw InputError(path, "could not be written");
           },
           py::arg("path"),
-          "Write the problem file (README.md \"Problem files\"); hbirl load_problem and the CLI read it back.");
+          "Write the problem file (docs/files.md \"Problem files\"); hbirl load_problem and the CLI read it back.");
 }
 
 void bind_problem_files(py::module_& m) {
@@ -113,7 +113,7 @@ void bind_problem_files(py::module_& m) {
         return p;
       },
       py::arg("path"),
-      "Read and check a domain file of the service set (README.md \"Your own task\") as a Problem without\n"
+      "Read and check a domain file of the service set (docs/your-task.md \"Your own task\") as a Problem without\n"
       "demonstrations: its MDP, names, stated observation prior and true weights.");
 }
 

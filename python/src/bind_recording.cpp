@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "app/recorded_problem.hpp"
@@ -15,6 +16,21 @@
 namespace hbirl::python {
 
 namespace {
+
+// The readers of recordings are shared with `hbirl learn --log`, and name its flags; here
+// an error names read_log's arguments instead, as the caller wrote them.
+std::string with_argument_names(std::string text) {
+  static const std::pair<std::string, std::string> kNames[] = {{"--allow-incomplete", "allow_incomplete=True"},
+                                                               {"--log", "path"},
+                                                               {"--key", "key"},
+                                                               {"--domain", "domain"},
+                                                               {"--eta", "eta"}};
+  for (const auto& [flag, argument] : kNames) {
+    for (size_t at = text.find(flag); at != std::string::npos; at = text.find(flag, at + argument.size()))
+      text.replace(at, flag.size(), argument);
+  }
+  return text;
+}
 
 Problem read_log(const std::string& path, const std::optional<std::string>& key_file,
                  const std::optional<std::string>& domain_file, bool allow_incomplete,
@@ -30,7 +46,9 @@ Problem read_log(const std::string& path, const std::optional<std::string>& key_
     try {
       r = app::read_recorded_problem({path, key_file.value_or(""), allow_incomplete}, domain, prior, "hbirl.read_log");
     } catch (const InputError& e) {  // named by the recording first, as load_problem names its file
-      throw InputError(path + (e.field().empty() ? "" : ": " + e.field()), e.message());
+      const bool the_recording = e.field().empty() || e.field() == "--log";  // the path says it already
+      throw InputError(path + (the_recording ? "" : ": " + with_argument_names(e.field())),
+                       with_argument_names(e.message()));
     }
   }
   if (!warnings.empty()) {

@@ -1,7 +1,7 @@
 // hbirl._hbirl: the C++ core for Python (pybind11), numpy arrays in and out. The package
 // around it (python/hbirl/__init__.py) adds the scikit-learn-style estimators and the
 // input forms numpy cannot check alone; shapes and conventions are documented there and
-// in README.md "Python". Every long call releases the GIL. The definitions are in the
+// in docs/python.md "Python". Every long call releases the GIL. The definitions are in the
 // bind_*.cpp files, by topic (bindings.hpp).
 #include <pybind11/pybind11.h>
 

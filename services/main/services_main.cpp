@@ -1,4 +1,4 @@
-// The service processes of the set (README.md "Services and channels"), one executable: it runs as the service it is
+// The service processes of the set (docs/services.md), one executable: it runs as the service it is
 // called by -- hbirl-sim-driver, hbirl-perception, hbirl-labeller, hbirl-sampler,
 // hbirl-optimiser are links to it -- or as `hbirl-services SERVICE ...`. Each process only
 // wires a library service (services/*_service.hpp, sim_driver/simulator/simulator_service.hpp,
@@ -130,7 +130,7 @@ int sim_driver(int argc, char** argv) {
       "  gridworld:   the paper's Gridworld (--size, default 5x5), whose simulated sensor publishes\n"
       "               OBSERVATIONS with their eta itself (no perception or labeller needed);\n"
       "  FILE.json:   a domain file's task, watched by the sensor its \"sensor\" section describes\n"
-      "               (README.md \"Your own task\"), publishing OBSERVATIONS the same way.\n"
+      "               (docs/your-task.md \"Your own task\"), publishing OBSERVATIONS the same way.\n"
       "Stays to publish lost frames again (FRAME_REQUEST) until the optimiser's REWARD.");
   Common c;
   add_common(app, c);
@@ -334,7 +334,7 @@ void check_stop_rule(const CLI::App& app, OptimiserOptions& o) {
   o.anytime = true;
 }
 
-// What hbirl-optimiser prints (README.md "Services and channels": the result JSON).
+// What hbirl-optimiser prints (docs/services.md "Services and channels": the result JSON).
 nlohmann::json result_json(const OptimiserResult& r, const OptimiserOptions& o, const Counters& counters) {
   nlohmann::json j;
   add_learned_run(j, r, o.domain);

@@ -460,6 +460,11 @@ void DatasetBuilder::finish_dataset(Dataset& d) {
   if (d.truth.size() != d.observed.size()) d.truth.clear();  // ground truth only when complete
 }
 
+int DatasetBuilder::controlled_episodes() const {
+  return static_cast<int>(std::count_if(episodes_.begin(), episodes_.end(),
+                                        [](const auto& e) { return e.second.marked && e.second.controlled; }));
+}
+
 int DatasetBuilder::complete_demonstration_prefix() const {
   int n = 0;
   for (const auto& [id, e] : episodes_) {

@@ -171,8 +171,12 @@ class RunCollector {
     const auto now = Clock::now();
     if (builder_.frames() == 0 || now - last_progress_ < kProgressEvery) return;
     last_progress_ = now;
-    say(std::string(kProgress) + "collecting: " + std::to_string(builder_.episodes()) + " episodes begun, " +
-        std::to_string(builder_.complete_demonstrations()) + " demonstrations complete, " +
+    // The controlled run comes first and has no demonstrations: said apart, so that its
+    // minutes do not read as "0 demonstrations" of a stuck run.
+    const int controlled = builder_.controlled_episodes();
+    say(std::string(kProgress) + "collecting: " + std::to_string(builder_.episodes()) + " episodes begun (" +
+        std::to_string(controlled) + " controlled, " + std::to_string(builder_.episodes() - controlled) +
+        " demonstrations), " + std::to_string(builder_.complete_demonstrations()) + " demonstrations complete, " +
         std::to_string(builder_.frames()) + " frames");
   }
 

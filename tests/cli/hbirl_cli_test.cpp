@@ -219,7 +219,7 @@ TEST_F(Cli, ValidateSummarises) {
   EXPECT_EQ(out["occluded_steps"], 4);
 }
 
-// Domain files (README.md "Your own task"): the example validates with its sensor; a bad
+// Domain files (docs/your-task.md "Your own task"): the example validates with its sensor; a bad
 // one is one stderr line naming the file and the field, exit 2, for each of the
 // services' and commands' ways in.
 TEST_F(Cli, ValidatesDomainFiles) {

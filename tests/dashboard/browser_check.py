@@ -3,7 +3,11 @@
 HTTP, Python's standard library only), waits until every panel shows data, fails on any
 console error, and saves a screenshot.
 
-    browser_check.py URL SCREENSHOT.png [TIMEOUT_SECONDS]
+    browser_check.py URL SCREENSHOT.png [TIMEOUT_SECONDS] [FINISHED_FILE]
+
+With FINISHED_FILE (e.g. a run's result.json), the screenshot waits until that file
+exists and the page has polled once more: the run's final state, not its first panels
+(scripts/dashboard-screenshot.sh).
 """
 import base64
 import json
@@ -63,6 +67,7 @@ FRAME = "const i = document.getElementById('frame'); return i.hidden || (i.compl
 def main():
     url, screenshot = sys.argv[1], sys.argv[2]
     timeout = float(sys.argv[3]) if len(sys.argv) > 3 else 120.0
+    finished_file = sys.argv[4] if len(sys.argv) > 4 else None
     port = free_port()
     driver_log = open(screenshot + ".chromedriver.log", "w")
     chromedriver = subprocess.Popen([os.environ.get("HBIRL_CHROMEDRIVER", "/usr/bin/chromedriver"), f"--port={port}"],
@@ -87,7 +92,12 @@ def main():
         else:
             print(f"FAIL: not every panel shows data after {timeout:.0f} s: {panels}", file=sys.stderr)
             return 1
-        time.sleep(1.5)  # a few more polls: errors in updates would show too
+        while finished_file and not os.path.exists(finished_file):
+            if time.time() > deadline:
+                print(f"FAIL: {finished_file} did not appear within {timeout:.0f} s", file=sys.stderr)
+                return 1
+            time.sleep(0.5)
+        time.sleep(3 if finished_file else 1.5)  # a few more polls: errors in updates would show too
         png = base64.b64decode(wd.call("GET", wd.s("/screenshot")))
         with open(screenshot, "wb") as f:
             f.write(png)

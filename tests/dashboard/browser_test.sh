@@ -40,3 +40,17 @@ for f in index.html state.json camera.png em.svg em.png estimates.svg theta.svg 
   [ -s "$tmp/run/report/$f" ] || fail "the report has no $f"
 done
 echo "report: $(find "$tmp/run/report" -mindepth 1 -maxdepth 1 -printf '%f ')"
+# The subject's map: each state named at the middle of its rows (one per action), the
+# actions named in order (they used to be unnamed, each state on its first action's row).
+python3 - "$tmp/run/report" <<'PY' || fail "the subject map's states or actions are not labelled as they should be"
+import json, sys
+report = sys.argv[1]
+names = json.load(open(report + "/state.json"))["names"]
+script = open(report + "/observation_model.gp").read()
+actions = len(names["actions"])
+for s in (0, len(names["states"]) - 1):
+    tic = "'%s' %g" % (names["states"][s].replace("'", "''"), s * actions + (actions - 1) / 2)
+    assert tic in script, tic
+assert "its actions " + ", ".join(names["actions"]) in script
+print("subject map: %d states centred on their %d action rows" % (len(names["states"]), actions))
+PY

@@ -186,7 +186,7 @@ Detection blob(BlobClass cls, double x, double y, int area, double dark = 0.0) {
   return d;
 }
 
-// The labeller's rules (paper §Experiments B and appendix; README.md "The onion camera"), case by case.
+// The labeller's rules (paper §Experiments B and appendix; docs/onion-camera.md "The onion camera"), case by case.
 TEST(Labeller, EtaRules) {
   LabellerOptions o;
   o.gripper_area = 400.0;

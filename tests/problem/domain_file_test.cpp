@@ -12,7 +12,7 @@ namespace {
 
 using nlohmann::json;
 
-// A two-state domain with one confounding element and a sensor (README.md "Your own task").
+// A two-state domain with one confounding element and a sensor (docs/your-task.md "Your own task").
 json tiny_domain() {
   return json::parse(R"({
     "name": "tiny",

@@ -14,7 +14,7 @@ namespace {
 
 using nlohmann::json;
 
-// A minimal problem file (format: README.md "Problem files"), extended with names and a terminal-free 3-state MDP.
+// A minimal problem file (format: docs/files.md "Problem files"), extended with names and a terminal-free 3-state MDP.
 json spec_example() {
   return json::parse(R"({
     "mdp": {
@@ -128,7 +128,7 @@ TEST(ProblemFile, ContextNamesRoundTripAndAreChecked) {
 }
 
 // The spec example with a terminal state 3 that (2, 0) enters, an end sensor of two
-// symbols and a trajectory that says what was seen of its end (README "Problem files").
+// symbols and a trajectory that says what was seen of its end (docs/files.md "Problem files").
 json with_end_sensor() {
   json d = spec_example();
   d["mdp"]["num_states"] = 4;

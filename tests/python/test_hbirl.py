@@ -152,6 +152,20 @@ def test_a_bad_problem_file_names_the_file_and_the_field(tmp_path):
         hbirl.load_problem(str(path))
 
 
+def test_a_bad_recording_is_named_by_read_logs_arguments(tmp_path):
+    # The readers are hbirl learn --log's: their errors name read_log's arguments, not its flags.
+    damaged = tmp_path / "run.lcmlog"
+    damaged.write_bytes(bytes(range(54)))  # 54 bytes of no recording
+    with pytest.raises(ValueError) as e:
+        hbirl.read_log(damaged)
+    assert str(e.value).startswith(str(damaged) + ": "), str(e.value)
+    assert "--" not in str(e.value) and "\n" not in str(e.value), str(e.value)
+    with pytest.raises(ValueError) as e:
+        hbirl.read_log(damaged, key=tmp_path / "absent.key")
+    assert str(e.value).startswith(str(damaged) + ": key: "), str(e.value)
+    assert "--" not in str(e.value), str(e.value)
+
+
 def test_fit_releases_the_gil():
     # A thread that counts while a fit runs keeps counting: the GIL is free meanwhile.
     # (A dense random MDP of 300 states: a fit of a tenth of a second or more.)

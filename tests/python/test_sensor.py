@@ -1,4 +1,4 @@
-"""Python sensors (README.md "Python sensors"): hbirl.msg, hbirl.Bus and hbirl.Sensor.
+"""Python sensors (docs/python.md "Python sensors"): hbirl.msg, hbirl.Bus and hbirl.Sensor.
 Over LCM's in-process provider (memq://) here, so no packet leaves the process; over real
 LCM against the optimiser, signed: the multi-process test services.python_sensor."""
 import os

@@ -169,7 +169,7 @@ PY
     # In a notebook: hbirl.read_log (in process: no hbirl command needed) and HierarchicalIRL give the live
     # theta (when the Python package is built).
     if [ -d "$build/python/hbirl" ]; then
-      PYTHONPATH="$build/python" /usr/bin/python3 - "$tmp/gw/run.lcmlog" "$tmp/gw/run.key" "$tmp/gw/result.json" <<'PY' ||
+      PYTHONPATH="$build/python" /usr/bin/python3 - "$tmp/gw/run.lcmlog" "$tmp/gw/run.key" "$tmp/gw/result.json" "$tmp/cut.lcmlog" <<'PY' ||
 import json, sys, hbirl
 run = hbirl.read_log(sys.argv[1], key=sys.argv[2])
 model = hbirl.HierarchicalIRL().fit(run.mdp, run.observations(), run.observation_prior)
@@ -180,6 +180,11 @@ try:
     sys.exit("read_log accepted a signed run without its key")
 except ValueError as e:
     assert str(e).startswith(sys.argv[1] + ": ") and "\n" not in str(e), e
+try:
+    hbirl.read_log(sys.argv[4], key=sys.argv[2])  # the run cut short: named by read_log's argument
+    sys.exit("read_log accepted a run cut short")
+except ValueError as e:
+    assert "allow_incomplete=True" in str(e) and "--" not in str(e), e
 PY
         fail "hbirl.read_log + HierarchicalIRL did not give the live theta"
     fi

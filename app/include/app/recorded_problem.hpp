@@ -1,5 +1,5 @@
 #pragma once
-// A recorded run of the service set as a problem (README.md "Services and channels"): what
+// A recorded run of the service set as a problem (docs/services.md "Services and channels"): what
 // `hbirl export` writes and Python's read_log returns -- the domain's MDP and names, the
 // demonstrations as the live optimiser received them and the observation prior it learned
 // from (the controlled run's counts included), so that learning the problem again starts

@@ -1,5 +1,5 @@
 #pragma once
-// Beyond the paper (its "future work"; README.md "Beyond the paper"): how learning fares
+// Beyond the paper (its "future work"; docs/results.md "Beyond the paper"): how learning fares
 // when the labeller's eta is miscalibrated, and when the environment was not fully listed.
 //
 // eta sensitivity (docs/results/eta_sensitivity): the Gridworld (gridworld_scenario.hpp)

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's Gridworld experiment (paper §Experiments A, Fig. 3; README.md "Results"): ILE of five
+// The paper's Gridworld experiment (paper §Experiments A, Fig. 3; docs/results.md "Results"): ILE of five
 // methods as the number of confounding elements |E| grows.
 //
 // A run r at |E| = E: the task (goal corner, 20 soft-expert trajectories of 10 steps,

@@ -1,5 +1,5 @@
 #pragma once
-// The onion-sorting demonstration from pixels (paper §Experiments B; README.md "The onion camera"): the expert
+// The onion-sorting demonstration from pixels (paper §Experiments B; docs/onion-camera.md): the expert
 // sorts onions, the simulated camera renders every frame, perception finds the blobs and
 // the labeller turns them into observations with eta. The learner gets the observations
 // (and, for the True Trajectories baseline and for evaluation, the true steps).

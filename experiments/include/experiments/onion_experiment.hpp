@@ -1,5 +1,5 @@
 #pragma once
-// The paper's onion-sorting experiment (paper §Experiments B, Fig. 4; README.md "Results"): ILE of
+// The paper's onion-sorting experiment (paper §Experiments B, Fig. 4; docs/results.md "Results"): ILE of
 // five methods as the number of demonstrated sorts grows, all from rendered frames.
 //
 // One controlled run (no confounding elements, no mirror, true states known) gives the

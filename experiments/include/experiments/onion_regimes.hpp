@@ -1,5 +1,5 @@
 #pragma once
-// Where each onion baseline breaks (README.md "Beyond the paper"): the onion experiment
+// Where each onion baseline breaks (docs/results.md "Beyond the paper"): the onion experiment
 // (onion_experiment.hpp) at one number of sorts, across scenes -- the foreground person's
 // share of the time in front of the expert (0: absent), with and without the mirror, and
 // with the labeller's eta as stated or overconfident (raised to a power and renormalised).

@@ -1,5 +1,5 @@
 #pragma once
-// Colour-blob perception (paper §Experiments B; README.md "The onion camera"): HSV thresholds
+// Colour-blob perception (paper §Experiments B; docs/onion-camera.md "The onion camera"): HSV thresholds
 // and connected components (OpenCV's own functions, the thresholds through a colour
 // table built with them) find the blue blobs (the gripper, or
 // anything of its colour) and the onion-coloured blobs in a BGR frame, with each blob's

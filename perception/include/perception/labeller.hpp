@@ -1,6 +1,6 @@
 #pragma once
 // From detections to the paper's observations and their source distributions eta
-// (paper §Experiments B and appendix; README.md "The onion camera").
+// (paper §Experiments B and appendix; docs/onion-camera.md "The onion camera").
 //
 // Alphabet Omega (22 symbols): a gripper-coloured blob is one of 20 equal regions of the
 // field of view (5 columns x 4 rows, row-major from the top left), by its centroid; an

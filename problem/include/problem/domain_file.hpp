@@ -1,5 +1,5 @@
 #pragma once
-// The domain file (README.md "Your own task"): a task as the service set runs it -- a
+// The domain file (docs/your-task.md "Your own task"): a task as the service set runs it -- a
 // problem file without a demonstration (the same "mdp" and "observation_model" keys),
 // plus names for its symbols and sources, the expert's true weights and a "sensor"
 // section that says how to simulate watching the expert. A problem file is also a

@@ -1,8 +1,8 @@
 #pragma once
-// The problem file (README.md "Problem files"): the user's MDP and demonstration as one JSON document.
+// The problem file (docs/files.md "Problem files"): the user's MDP and demonstration as one JSON document.
 // Everything is validated here, at the edge; a bad file raises InputError naming the
 // field and position, e.g. "demonstration[3].steps[2].observations[0]: eta has 2
-// entries, expected 3". The full format is documented in README.md ("Problem files").
+// entries, expected 3". The full format is documented in docs/files.md ("Problem files").
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>

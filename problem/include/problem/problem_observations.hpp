@@ -1,6 +1,6 @@
 #pragma once
 // What `hbirl learn` (and Python's Problem.observations / observation_prior) learns from in
-// a problem file (README.md "Problem files"): the demonstrations' observations, the
+// a problem file (docs/files.md "Problem files"): the demonstrations' observations, the
 // controlled run's left out, and the stated observation model with the controlled run's
 // symbol counts as the subject prior when the file has one (paper §Experiments: the
 // prior comes from watching the subject alone).

@@ -1,5 +1,5 @@
 #pragma once
-// The bus every hbirl service talks through (README.md "Services and channels"), one abstract bus
+// The bus every hbirl service talks through (docs/services.md "Services and channels"), one abstract bus
 // interface: raw messages on named channels, with three implementations behind one
 // interface so that a service's code is the same live, in a replay and in a unit test:
 //   LcmBus     LCM itself: udpm:// (live, several machines), memq:// (in-process), and

@@ -1,6 +1,6 @@
 #pragma once
 // Every channel of the service set, in one place, each with its message type (lcmtypes/);
-// who publishes it and who listens are in README.md "Services and channels".
+// who publishes it and who listens are in docs/services.md "Services and channels".
 #include <cstdint>
 #include <cstdio>
 #include <string>

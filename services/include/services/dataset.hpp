@@ -1,5 +1,5 @@
 #pragma once
-// The learner's data, assembled from the stream (README.md "Services and channels"): episodes and their steps
+// The learner's data, assembled from the stream (docs/services.md "Services and channels"): episodes and their steps
 // (EPISODE), the observations of every frame (OBSERVATIONS) and, for controlled-run
 // episodes, the expert's true (s, a) at every step (GROUND_TRUTH). Channels arrive out
 // of step with each other (observations come two services later than the markers), so
@@ -85,6 +85,8 @@ class DatasetBuilder {
   std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }
   int episodes() const { return static_cast<int>(episodes_.size()); }
+  // Of them, those a marker said are controlled (the controlled run's, paper §III-B).
+  int controlled_episodes() const;
   // Demonstrations of the run that ended with every frame's observations.
   int complete_demonstrations() const { return complete_demonstrations_; }
   // How many of the run's first demonstrations, in episode order, ended with every frame's

@@ -1,10 +1,10 @@
 #pragma once
-// The E-step over the bus (README.md "Services and channels"): the optimiser's HiddenDataEM asks
+// The E-step over the bus (docs/services.md "Services and channels"): the optimiser's HiddenDataEM asks
 // sampler workers, over the bus, for the statistics of the blocks of trajectories each
 // is assigned, and sums them in block order -- so the learned theta is bit-identical to
 // a run without workers, with 1, 2 or 4 of them, and when one dies mid-run.
 //
-// Protocol (channels in the README's table):
+// Protocol (channels in docs/services.md's table):
 //   MDP            optimiser -> workers: the MDP's dynamics (mdp_message.hpp), with its
 //                  digest. Re-sent when a worker reports another digest: workers need
 //                  no domain of their own.

@@ -1,5 +1,5 @@
 #pragma once
-// The labeller service (README.md "Services and channels"): the onion camera's detections as the paper's
+// The labeller service (docs/services.md "Services and channels"): the onion camera's detections as the paper's
 // observations with their source distributions eta.
 #include "hbirl/detections_t.hpp"
 #include "hbirl/observations_t.hpp"

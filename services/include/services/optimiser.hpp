@@ -1,5 +1,5 @@
 #pragma once
-// The optimiser service (README.md "Services and channels"): the data set off the bus (dataset.hpp),
+// The optimiser service (docs/services.md "Services and channels"): the data set off the bus (dataset.hpp),
 // HiddenDataEM with the E-step on the sampler workers (estep_service.hpp), EM_PROGRESS,
 // OBSERVATION_MODEL and POSTERIOR while it learns, and the final REWARD.
 #include <functional>
@@ -118,7 +118,7 @@ OptimiserResult learn_from_log(const RecordedRun& run, const app::LearnSettings&
                                std::shared_ptr<const Domain> domain = nullptr);
 
 // What a learned run reports, in hbirl-optimiser's result and hbirl learn --log's alike
-// (README.md "Services and channels"): the domain, theta and how it was learned, and the
+// (docs/services.md "Services and channels"): the domain, theta and how it was learned, and the
 // data it came from. `domain` as domain_of's `given`. Json: nlohmann::json or ordered_json.
 template <class Json>
 void add_learned_run(Json& j, const OptimiserResult& r, std::shared_ptr<const Domain> domain);

@@ -1,5 +1,5 @@
 #pragma once
-// The perception service (README.md "Services and channels"): colour blobs in the onion camera's frames.
+// The perception service (docs/services.md "Services and channels"): colour blobs in the onion camera's frames.
 #include "hbirl/camera_frame_t.hpp"
 #include "hbirl/detections_t.hpp"
 #include "perception/blobs.hpp"

@@ -54,7 +54,7 @@ inline constexpr const char* kAllRefusedMarker = "refused every message on ";
 // beats a silent wait for --timeout. Channels where a refusal is part of the protocol
 // (a block another worker holds, a request before its data) or where a run may accept
 // nothing (GROUND_TRUTH) are only counted. On an unauthenticated bus another run's
-// unsigned messages count too (README "Data you already have"; a run key prevents it).
+// unsigned messages count too (docs/your-task.md "Data you already have"; a run key prevents it).
 enum class Refusals { kCounted, kWatched };
 inline constexpr std::int64_t kAllRefusedAfter = 10;
 

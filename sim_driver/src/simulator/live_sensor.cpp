@@ -11,7 +11,7 @@
 namespace hbirl {
 
 namespace {
-constexpr int kMaxContext = 65535;  // observations_t's contexts (README.md "Services and channels")
+constexpr int kMaxContext = 65535;  // observations_t's contexts (docs/services.md "Services and channels")
 constexpr int kMaxSymbols = 32767;  // observations_t's symbols are int16
 }  // namespace
 

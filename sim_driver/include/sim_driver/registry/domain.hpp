@@ -1,5 +1,5 @@
 #pragma once
-// A domain: everything hbirl knows about one task, in one place (README.md "Your own
+// A domain: everything hbirl knows about one task, in one place (docs/your-task.md "Your own
 // task"). The services, the dashboard, the CLI and the experiments look a domain up in
 // the registry below and never test its name.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// A sensor that publishes as it sees (the Python package's hbirl.Sensor, README.md
+// A sensor that publishes as it sees (the Python package's hbirl.Sensor, docs/python.md
 // "Python sensors"): episodes and steps come one at a time and go onto the bus at once, as
 // the simulator's own messages (simulator_service.hpp), and are kept: a frame lost on the
 // way is sent again on FRAME_REQUEST, the end markers are repeated until the optimiser's

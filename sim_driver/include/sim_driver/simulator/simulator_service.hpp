@@ -1,5 +1,5 @@
 #pragma once
-// The simulator service, hbirl-sim-driver (README.md "Services and channels"): a domain's
+// The simulator service, hbirl-sim-driver (docs/services.md "Services and channels"): a domain's
 // simulated run on the bus of services/, as a camera or a sensor would publish it.
 #include <functional>
 #include <memory>
