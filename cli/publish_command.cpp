@@ -55,8 +55,8 @@ int run_publish(const PublishArgs& args) {
   std::cerr << "hbirl publish: " << name << ": " << problem.demonstration.size() << " trajectories (" << controlled
             << " controlled), " << steps << " steps, to " << (args.url.empty() ? "LCM's default URL" : args.url)
             << "\n";
-  // After the run: frames asked for again and the end markers repeated, until the
-  // optimiser's reward or --linger seconds.
+  // After the run: frames and end markers asked for again and END_RUN repeated, until
+  // the optimiser's reward or --linger seconds.
   std::optional<std::chrono::steady_clock::time_point> published;
   const auto stop = [&] {
     return services::stop_requested() ||

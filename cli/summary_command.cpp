@@ -12,6 +12,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "commands.hpp"
 #include "learner/input_error.hpp"
@@ -83,17 +84,34 @@ void print_policy(std::ostream& out, const json& policy, size_t shown, const std
     out << "    ... " << policy.size() - shown << " more states: all in " << path << " \"policy\"\n";
 }
 
-void print_eta(std::ostream& out, const json& eta) {
+// The `shown` contexts that cover the most observations (a labeller may have dozens of
+// rules), in the result's order.
+void print_eta(std::ostream& out, const json& eta, size_t shown, const std::string& path) {
   if (!eta.is_array() || eta.empty()) return;
+  std::vector<size_t> order(eta.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&eta](size_t a, size_t b) {
+    return eta.at(a).at("observations").get<double>() > eta.at(b).at("observations").get<double>();
+  });
+  order.resize(std::min(shown, order.size()));
+  std::sort(order.begin(), order.end());
   out << "  learned eta (per labeller rule, the subject first): stated -> learned (observations)\n";
-  for (const json& c : eta) {
+  for (size_t i : order) {
+    const json& c = eta.at(i);
     const std::string name = c.contains("name") ? text(c.at("name")) : "context " + text(c.at("context"));
     out << "    " << name << ": " << vector_text(c.at("stated")) << " -> " << vector_text(c.at("learned")) << " ("
         << count(c.at("observations")) << ")\n";
   }
+  if (eta.size() > shown)
+    out << "    ... " << eta.size() - shown << " more contexts, with fewer observations: all in " << path
+        << " \"learned_eta\"\n";
 }
 
-void print_summary(std::ostream& out, const json& r, const std::string& path, size_t states) {
+struct Shown {
+  size_t states = 20, contexts = 8;
+};
+
+void print_summary(std::ostream& out, const json& r, const std::string& path, const Shown& shown) {
   out << "Learned";
   if (r.contains("domain")) out << " on " << text(r.at("domain"));
   if (r.contains("demonstrations")) out << " from " << text(r.at("demonstrations")) << " demonstrations";
@@ -112,19 +130,21 @@ void print_summary(std::ostream& out, const json& r, const std::string& path, si
   const json confidence = r.contains("posterior") ? r.at("posterior").value("confidence", json()) : json();
   if (confidence.is_number())
     out << "  confidence " << number(confidence) << " that the learned policy is within 5% of optimal\n";
-  print_policy(out, r.value("policy", json()), states, path);
-  print_eta(out, r.contains("learned_eta") ? r.at("learned_eta")
-                                           : r.value("observation_model", json::object()).value("learned_eta", json()));
+  print_policy(out, r.value("policy", json()), shown.states, path);
+  print_eta(out,
+            r.contains("learned_eta") ? r.at("learned_eta")
+                                      : r.value("observation_model", json::object()).value("learned_eta", json()),
+            shown.contexts, path);
   if (r.contains("incomplete")) out << "  INCOMPLETE: " << text(r.at("incomplete")) << "\n";
 }
 
 // The summary, or one line naming the file when a field is missing or of another type
 // (a hand-edited or foreign file): printed whole or not at all.
-int run_summary(const std::string& path, size_t states) {
+int run_summary(const std::string& path, const Shown& shown) {
   const json r = read_result(path);
   std::ostringstream text;
   try {
-    print_summary(text, r, path, states);
+    print_summary(text, r, path, shown);
   } catch (const json::exception& e) {
     throw InputError("FILE", "'" + path + "' is not a result hbirl wrote (" + e.what() + ")");
   }
@@ -137,7 +157,7 @@ int run_summary(const std::string& path, size_t states) {
 Command add_summary(CLI::App& app) {
   struct Args {
     std::string path;
-    size_t states = 20;
+    Shown shown;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(
@@ -147,10 +167,14 @@ Command add_summary(CLI::App& app) {
       "by the labeller's rule. FILE: hbirl-optimiser's result.json (services/launch.sh prints this at the\n"
       "end of a run) or what hbirl learn wrote.");
   cmd->add_option("FILE", args->path, "The result (JSON)")->required();
-  cmd->add_option("--states", args->states, "Show the policy in this many states at most")
+  cmd->add_option("--states", args->shown.states, "Show the policy in this many states at most")
       ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
-  return [args] { return run_summary(args->path, args->states); };
+  cmd->add_option("--contexts", args->shown.contexts,
+                  "Show learned eta in this many contexts at most: those with the most observations")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  return [args] { return run_summary(args->path, args->shown); };
 }
 
 }  // namespace hbirl::cli

@@ -45,6 +45,7 @@ stall=20
 allow_incomplete=0
 incomplete_after=60
 orig_args=("$@")
+progress_open=0  # a progress line is being rewritten in the terminal (show_progress)
 
 usage() {
   cat <<USAGE
@@ -463,6 +464,7 @@ check_services() {
     if supervised "$name" && [ "$s" != 2 ] && [ "$s" != 3 ] && [ "${restarts[$i]}" -lt "$max_restarts" ]; then
       restarts[i]=$((restarts[i] + 1))
       delay="$(awk -v k="${restarts[$i]}" 'BEGIN { print 0.5 * 2 ^ (k - 1) }')"
+      end_progress
       echo "launch.sh: $name died ($why); restarting it in $delay s (restart ${restarts[$i]} of $max_restarts)" >&2
       sleep "$delay"
       run_service "$i"
@@ -470,14 +472,18 @@ check_services() {
     fi
     finished[i]=1
     if [ "$name" = lcm-logger ]; then
+      end_progress
       echo "launch.sh: lcm-logger died ($why): the recording $out/run.lcmlog is incomplete" >&2
       continue
     fi
     if [ "$name" = optimiser ] && [ "$s" = 3 ]; then
+      end_progress
       echo "launch.sh: $(tail -n 1 "$out/logs/optimiser.err")" >&2
     elif supervised "$name" && [ "$s" != 2 ] && [ "$s" != 3 ]; then
+      end_progress
       echo "launch.sh: $name died $((max_restarts + 1)) times (last: $why); giving up: see $out/logs/$name.log" >&2
     else
+      end_progress
       echo "launch.sh: $name failed ($why); see $out/logs/$name.log" >&2
     fi
     failed=1
@@ -492,13 +498,23 @@ refused_all() {  # only the watching services' own lines (a message's text canno
 }
 # The optimiser's progress (its "progress:" lines on stderr: collecting, then each EM
 # iteration's log-likelihood), the newest shown every few seconds while the run lasts.
+# In a terminal the line is rewritten in place (the demo's output then fits a screen); in
+# a log, each is a line of its own.
 shown_progress=""
 show_progress() {
   local line
   line="$(tail -n 40 "$out/logs/optimiser.err" 2>/dev/null | grep -F "hbirl-optimiser: progress: " | tail -n 1 || true)"
   [ -n "$line" ] && [ "$line" != "$shown_progress" ] || return 0
   shown_progress="$line"
-  echo "launch.sh: ${line#hbirl-optimiser: progress: }"
+  if [ -t 1 ]; then
+    printf '\r\033[Klaunch.sh: %s' "${line#hbirl-optimiser: progress: }"
+    progress_open=1
+  else
+    echo "launch.sh: ${line#hbirl-optimiser: progress: }"
+  fi
+}
+end_progress() {  # the rewritten line ends before anything else is said
+  if [ "$progress_open" = 1 ]; then echo; progress_open=0; fi
 }
 deadline=$((SECONDS + timeout))
 next_refusal_check=0
@@ -510,18 +526,21 @@ while [ "$optimiser_done" = 0 ]; do
     show_progress
     refusal="$(refused_all)"
     if [ -n "$refusal" ]; then
+      end_progress
       echo "launch.sh: $refusal; stopping (logs: $out/logs)" >&2
       failed=1
       break
     fi
   fi
   if [ "$SECONDS" -ge "$deadline" ]; then
+    end_progress
     echo "launch.sh: no result after $timeout s (--timeout); stopping" >&2
     failed=1
     break
   fi
   sleep 0.2
 done
+end_progress
 [ "$failed" = 1 ] || check_services
 restarted=""
 for i in "${!names[@]}"; do [ "${restarts[$i]}" = 0 ] || restarted+=" ${names[$i]} (${restarts[$i]})"; done

@@ -350,6 +350,26 @@ void page_summary(std::ostream& page, const json& s, const Report& report, const
   page << "</table>\n";
 }
 
+// The learned reward's policy by state and action names: what a robot would do.
+void page_policy(std::ostream& page, const json& s) {
+  if (s["reward"].is_null() || !s["reward"].contains("policy")) return;
+  const json& policy = s["reward"]["policy"];
+  page << "<h2>Learned policy</h2>\n<p>In each state that is not terminal, the action the learned reward's optimal "
+          "policy takes (what a robot would do) and the probability that the expert takes it by the learned soft "
+          "policy (MaxCausalEnt's model of the expert).</p>\n<table><tr><th>state</th><th>action</th>"
+          "<th>probability</th></tr>\n";
+  for (const auto& step : policy["shown"]) {
+    const auto name = [](const json& x) { return x.is_string() ? x.get<std::string>() : x.dump(); };
+    page << "<tr><td>" << html(name(step["state"])) << "</td><td>" << html(name(step["action"])) << "</td><td>"
+         << number(step["probability"]) << "</td></tr>\n";
+  }
+  page << "</table>\n";
+  const size_t shown = policy["shown"].size(), states = policy["states"].get<size_t>();
+  if (states > shown)
+    page << "<p>... and " << states - shown << " more states: the whole policy is in the run's result.json "
+         << "(\"policy\").</p>\n";
+}
+
 // The last camera frame, with the legend of the sources' colours.
 void page_camera(std::ostream& page, const json& s) {
   const json& c = s["camera"];
@@ -448,6 +468,7 @@ Report write_report(const std::string& log_path, const std::string& out_dir, std
   page_summary(page, s, report, log_path);
   if (!frame.empty()) page_camera(page, s);
   page_figures(page, report, dir);
+  page_policy(page, s);
   page_services(page, s, report);
   page << "</body></html>\n";
   report.page = (dir / "index.html").string();

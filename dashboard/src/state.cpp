@@ -4,6 +4,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "app/output.hpp"
 #include "learner/input_error.hpp"
 #include "learner/observations.hpp"
 #include "perception/image_codec.hpp"
@@ -150,6 +151,23 @@ nlohmann::json estimates_json(const std::vector<hbirl::estimate_t>& estimates) {
                    {"seconds", e.seconds}});
   }
   return out;
+}
+
+// The learned reward's policy as every result shows it (app/output.hpp): in each state that
+// is not terminal, the action a robot would take and the soft policy's probability of it --
+// in the first kPolicyShown such states (the page is polled twice a second; a 200 x 200
+// Gridworld's whole policy is in the run's result.json).
+constexpr size_t kPolicyShown = 100;
+nlohmann::json policy_json(const hbirl::reward_t& reward, const DomainNames& names) {
+  std::vector<app::PolicyStep> policy;
+  size_t states = 0;
+  for (int s = 0; s < reward.num_states && s < static_cast<int>(reward.action.size()); ++s) {
+    const int a = reward.action[static_cast<size_t>(s)];
+    if (a < 0) continue;
+    if (++states <= kPolicyShown)
+      policy.push_back({s, a, reward.policy[static_cast<size_t>(s)][static_cast<size_t>(a)]});
+  }
+  return {{"states", states}, {"shown", app::policy_json<nlohmann::json>(policy, names.states, names.actions)}};
 }
 
 // The learned theta (the final reward's, else the newest iteration's) and the true one, or null.
@@ -384,7 +402,6 @@ void DashboardState::on_reward(const hbirl::reward_t& m) {
   const std::lock_guard<std::mutex> lock(mutex_);
   set_domain(m.domain);
   reward_ = m;
-  reward_->policy.clear();  // not shown
   changed();
 }
 
@@ -529,7 +546,8 @@ nlohmann::json DashboardState::json(std::int64_t now_utime) const {
   j["reward"] =
       reward_ ? nlohmann::json{{"final", reward_->final != 0},
                                {"ile", reward_->ile >= 0.0 ? finite_or_null(reward_->ile) : nlohmann::json(nullptr)},
-                               {"log_likelihood", finite_or_null(reward_->log_likelihood)}}
+                               {"log_likelihood", finite_or_null(reward_->log_likelihood)},
+                               {"policy", policy_json(*reward_, names)}}
               : nlohmann::json(nullptr);
 
   if (posterior_) {

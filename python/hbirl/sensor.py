@@ -2,8 +2,8 @@
 `import hbirl`: the message types (hbirl.msg, lcm-gen's Python), the bus the services use
 (LCM, each message signed with the run's key as theirs are), and a Sensor that keeps the
 protocol -- episode markers, one OBSERVATIONS message per step, the controlled run's
-ground truth, lost steps sent again when the optimiser asks, the end markers repeated
-until its reward, STOP heard.
+ground truth, lost steps and end markers sent again when the optimiser asks, the end of
+the run repeated until its reward, STOP heard.
 
     import hbirl
     sensor = hbirl.Sensor("corridor", num_symbols=2, num_sources=2, key="runs/x/run.key")
@@ -153,8 +153,8 @@ class Sensor:
         return self._sensor.frames_resent
 
     def wait_for_reward(self, timeout=600.0):
-        """After end_run: answers the optimiser's requests and repeats the end markers until
-        it publishes its reward; returns the learned theta (K,), or None after `timeout`
+        """After end_run: answers the optimiser's requests and repeats the end of the run
+        until it publishes its reward; returns the learned theta (K,), or None after `timeout`
         seconds."""
         theta = self._sensor.wait_for_reward(_seconds(timeout))
         return None if theta is None else np.asarray(theta)

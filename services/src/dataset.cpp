@@ -218,6 +218,7 @@ void DatasetBuilder::on_end_run(const hbirl::episode_marker_t& m) {
   // one states the run's number of episodes (num_steps; 0: not stated), episodes 0 .. n-1
   // are the run; a second END_RUN stating another number, or an episode at or past n
   // (begun before or after), contradicts it (docs/RELIABILITY.md).
+  end_run_stated_ = std::max(end_run_stated_, m.num_steps);
   const bool any_ended =
       watching_ || std::any_of(episodes_.begin(), episodes_.end(), [](const auto& e) { return e.second.ended; });
   if (!any_ended) throw InputError("episode_marker.kind", "END_RUN before any episode ended: not believed");
@@ -364,6 +365,24 @@ std::int64_t DatasetBuilder::missing_truth() const { return missing_truth_; }
 
 std::vector<std::tuple<int, int, int>> DatasetBuilder::missing_frame_keys(size_t limit) const {
   std::vector<std::tuple<int, int, int>> out;
+  // First the end markers the run lacks (the sensor sends each once; END_RUN says how many
+  // episodes there are -- also one not believed yet, end_run_heard() -- else every episode
+  // begun is one): nothing of an episode is known complete before its end.
+  const auto lacks_end = [this](int id) {
+    const auto it = episodes_.find(id);
+    return it == episodes_.end() || !it->second.ended;
+  };
+  const int stated = run_ended_ ? run_episodes_ : end_run_stated_;
+  if (stated > 0) {
+    for (int id = 0; id < stated && out.size() < limit; ++id) {
+      if (lacks_end(id)) out.emplace_back(id, -1, -1);
+    }
+  } else if (run_ended_) {
+    for (const auto& [id, e] : episodes_) {
+      if (out.size() >= limit) return out;
+      if (!e.ended) out.emplace_back(id, -1, -1);
+    }
+  }
   for (const auto& [id, e] : episodes_) {
     if (!e.ended || !in_run(id)) continue;
     for (int t = 0; t < e.num_steps; ++t) {

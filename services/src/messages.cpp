@@ -156,6 +156,33 @@ void validate(const hbirl::estimate_t& m) {
   }
 }
 
+void validate(const hbirl::reward_t& m) {
+  if (m.num_features < 1 || m.num_features > kMaxFeatures) {
+    throw InputError("reward.num_features", "must be in [1, " + std::to_string(kMaxFeatures) + "]");
+  }
+  for (double w : m.theta) {
+    if (!std::isfinite(w)) throw InputError("reward.theta", "must be finite");
+  }
+  if (m.num_true != 0 && m.num_true != m.num_features) {
+    throw InputError("reward.num_true", "must be 0 or num_features (" + std::to_string(m.num_features) + ")");
+  }
+  for (double w : m.true_theta) {
+    if (!std::isfinite(w)) throw InputError("reward.true_theta", "must be finite");
+  }
+  for (const std::vector<double>& row : m.policy) {
+    for (double p : row) {
+      if (!(p >= 0.0 && p <= 1.0)) throw InputError("reward.policy", "every entry must be in [0, 1]");
+    }
+  }
+  for (std::int32_t a : m.action) {
+    if (a < -1 || a >= m.num_actions) {
+      throw InputError("reward.action",
+                       "must be -1 (a terminal state) or in [0, " + std::to_string(m.num_actions) + ")");
+    }
+  }
+  if (!unknown_or_not_negative(m.ile)) throw InputError("reward.ile", "must be -1 or a number >= 0");
+}
+
 void validate(const hbirl::stop_t& m) {
   if (m.demonstrations < 0 || m.demonstrations > kMaxEpisodes) {
     throw InputError("stop.demonstrations", "must be in [0, " + std::to_string(kMaxEpisodes) + "]");

@@ -182,7 +182,7 @@ class RunCollector {
 
   // Frames lost on the way: ask for them again (a few hundred per request), once a second.
   void ask_for_lost_frames() {
-    if (builder_.run_ended() && Clock::now() - last_frame_ > std::chrono::milliseconds(options_.resend_after_ms) &&
+    if (builder_.end_run_heard() && Clock::now() - last_frame_ > std::chrono::milliseconds(options_.resend_after_ms) &&
         Clock::now() - last_request_ > std::chrono::milliseconds(options_.resend_after_ms)) {
       ask_again(builder_.missing_frame_keys(kFramesPerRequest), "lost frame(s)");
       last_request_ = Clock::now();
@@ -473,7 +473,8 @@ void publish_progress(Bus& bus, Counters& counters, const Mdp& mdp, std::int64_t
   publish(bus, channels::kEmProgress, p, counters);
 }
 
-// REWARD: the learned theta, its soft policy and, when known, the true weights and the ILE.
+// REWARD: the learned theta, its soft policy and optimal actions and, when known, the true
+// weights and the ILE.
 void publish_reward(Bus& bus, Counters& counters, const Mdp& mdp, const OptimiserResult& result, std::int64_t utime,
                     const std::optional<Eigen::VectorXd>& truth) {
   hbirl::reward_t r{};
@@ -488,6 +489,8 @@ void publish_reward(Bus& bus, Counters& counters, const Mdp& mdp, const Optimise
   r.num_states = mdp.num_states;
   r.num_actions = mdp.num_actions;
   r.policy = lcm_rows(RowMatrix::Map(policy.policy.data(), mdp.num_states, mdp.num_actions));  // pairs are s * A + a
+  r.action.assign(static_cast<size_t>(mdp.num_states), -1);
+  for (const app::PolicyStep& step : result.learned.policy) r.action[static_cast<size_t>(step.state)] = step.action;
   r.log_likelihood = result.learned.log_likelihood;
   r.ile = result.learned.ile.value_or(-1.0);
   publish(bus, channels::kReward, r, counters);

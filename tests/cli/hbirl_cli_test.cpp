@@ -197,6 +197,17 @@ TEST_F(Cli, ThePolicyAndASummaryAPersonReads) {
   for (size_t at = r.out.find("-> right"); at != std::string::npos; at = r.out.find("-> right", at + 1)) ++rights;
   EXPECT_EQ(rights, 2u) << r.out;
   EXPECT_LT(std::count(r.out.begin(), r.out.end(), '\n'), 20);  // fits a screen
+  // Learned eta in the contexts with the most observations (--contexts), in the result's order.
+  const fs::path many = write("many.json", R"({"weights": [1], "learned_eta": [
+      {"context": 0, "stated": [0.5, 0.5], "learned": [0.4, 0.6], "observations": 5},
+      {"context": 1, "stated": [0.5, 0.5], "learned": [0.3, 0.7], "observations": 50},
+      {"context": 2, "stated": [0.5, 0.5], "learned": [0.2, 0.8], "observations": 20}]})");
+  const Outcome few = run("summary '" + many.string() + "' --contexts 2");
+  ASSERT_EQ(few.status, 0) << few.err;
+  EXPECT_EQ(few.out.find("context 0:"), std::string::npos) << few.out;
+  EXPECT_LT(few.out.find("context 1: 0.5 0.5 -> 0.3 0.7 (50)"), few.out.find("context 2: 0.5 0.5 -> 0.2 0.8 (20)"))
+      << few.out;
+  EXPECT_NE(few.out.find("... 1 more contexts, with fewer observations: all in"), std::string::npos) << few.out;
   // Anything else is refused in one line naming it.
   for (const std::string& bad :
        {write("other.json", "{\"mdp\": 1}").string(), write("x.txt", "[1, 2").string(), std::string("/dev/zero"),

@@ -54,3 +54,14 @@ for s in (0, len(names["states"]) - 1):
 assert "its actions " + ", ".join(names["actions"]) in script
 print("subject map: %d states centred on their %d action rows" % (len(names["states"]), actions))
 PY
+# The learned policy, by state and action names, as result.json has it.
+python3 - "$tmp/run/report/index.html" "$tmp/run/result.json" <<'PY' || fail "the report does not show the learned policy as result.json has it"
+import html, json, sys
+page = open(sys.argv[1]).read()
+policy = json.load(open(sys.argv[2]))["policy"]
+assert "<h2>Learned policy</h2>" in page
+for step in policy[:5]:
+    row = "<tr><td>%s</td><td>%s</td>" % (html.escape(str(step["state"]), quote=False), html.escape(str(step["action"]), quote=False))
+    assert row in page, row
+print("report: the learned policy in %d states, as result.json has it" % len(policy))
+PY

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
+#include <utility>
+
 #include "perception/image_codec.hpp"
 #include <opencv2/imgproc.hpp>
 
@@ -9,6 +13,7 @@
 #include "learner/input_error.hpp"
 #include "services/channels.hpp"
 #include "services/memory_bus.hpp"
+#include "services/messages.hpp"
 
 namespace hbirl::dashboard {
 namespace {
@@ -182,8 +187,40 @@ TEST(DashboardState, LearningProgressThetaAndServices) {
   r.num_true = 2;
   r.true_theta = {2.0, -2.0};
   r.ile = 0.0;
+  // Three states, the last terminal: the policy as results show it, by the domain's names.
+  r.num_states = 3;
+  r.num_actions = 2;
+  r.policy = {{0.25, 0.75}, {0.9, 0.1}, {0.5, 0.5}};
+  r.action = {1, 0, -1};
   state.on_reward(r);
   j = state.json(0);
+  const nlohmann::json& policy = j["reward"]["policy"];
+  EXPECT_EQ(policy["states"], 2);
+  ASSERT_EQ(policy["shown"].size(), 2u);
+  EXPECT_EQ(policy["shown"][0]["state"], j["names"]["states"].at(0));
+  EXPECT_EQ(policy["shown"][0]["action"], j["names"]["actions"].at(1));
+  EXPECT_EQ(policy["shown"][0]["probability"], 0.75);
+  EXPECT_EQ(policy["shown"][1]["action"], j["names"]["actions"].at(0));
+  EXPECT_EQ(policy["shown"][1]["probability"], 0.9);
+  services::validate(r);
+  // A reward no optimiser sends is refused by its type's validate(), naming the field.
+  for (const auto& [field, change] : std::vector<std::pair<std::string, std::function<void(hbirl::reward_t&)>>>{
+           {"reward.action", [](hbirl::reward_t& x) { x.action[0] = 2; }},
+           {"reward.action", [](hbirl::reward_t& x) { x.action[2] = -2; }},
+           {"reward.policy", [](hbirl::reward_t& x) { x.policy[1][0] = 1.5; }},
+           {"reward.theta", [](hbirl::reward_t& x) { x.theta[0] = std::nan(""); }},
+           {"reward.num_true", [](hbirl::reward_t& x) { x.num_true = 1, x.true_theta = {1.0}; }},
+           {"reward.num_features", [](hbirl::reward_t& x) { x.num_features = 0, x.theta.clear(); }},
+           {"reward.ile", [](hbirl::reward_t& x) { x.ile = -0.5; }}}) {
+    hbirl::reward_t refused = r;
+    change(refused);
+    try {
+      services::validate(refused);
+      ADD_FAILURE() << field << ": taken";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), field);
+    }
+  }
   EXPECT_TRUE(j["theta"]["final"]);
   EXPECT_EQ(j["theta"]["true"][1], -2.0);
   EXPECT_EQ(j["reward"]["ile"], 0.0);

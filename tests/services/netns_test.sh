@@ -140,7 +140,7 @@ PY
 import struct, sys
 # lcm-logger's events: sync word, event number, time, channel and data lengths, channel, data.
 # Keep those before the last quarter of the EPISODE markers that come before the first END_RUN
-# (the simulator repeats the end markers until the reward: the recording's tail is full of them).
+# (the simulator repeats END_RUN until the reward: the recording's tail holds several).
 data, out, pos, events, markers = open(sys.argv[1], "rb").read(), [], 0, [], 0
 while pos + 28 <= len(data):
     sync, num, t, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])

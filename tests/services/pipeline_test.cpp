@@ -69,7 +69,7 @@ std::optional<OptimiserResult> run_serving_requests(std::shared_ptr<MemoryHub> h
   std::thread sim([&] {
     listening.get_future().wait();
     driver.publish_run(nullptr);
-    while (!done) sim_bus.handle(20);  // serving FRAME_REQUEST
+    driver.serve_until_learned([&done] { return done.load(); });  // FRAME_REQUEST served, END_RUN repeated
   });
   MemoryBus opt_bus(hub);
   Counters opt_counters = quiet("optimiser");
@@ -1510,9 +1510,11 @@ TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
         publish(bus, channels::kObservations, ahead, c);
         ++forged;
       }
-      hbirl::reward_t reward{};
+      hbirl::reward_t reward{};  // a well-formed one: only the key can tell
       reward.domain = "corridor";
       reward.final = true;
+      reward.num_features = 1;
+      reward.theta = {0.0};
       publish(bus, channels::kReward, reward, c);
       for (int k = 0; k < 300; ++k) {
         hbirl::service_status_t beat{};
@@ -1546,6 +1548,16 @@ TEST(Pipeline, ForgeriesChangeNothingWithAKey) {
 TEST(Pipeline, SimulatorWaitsForTheOptimiserAndStopsAtItsReward) {
   const std::shared_ptr<const Domain> domain = builtin_domain("gridworld");
   auto hub = std::make_shared<MemoryHub>();
+  // Each episode's end is sent once (none was lost, none asked for); END_RUN until the reward.
+  std::atomic<int> episode_ends{0}, run_ends{0};
+  hub->set_loss([&](const std::string& channel, const std::uint8_t* data, int size) {
+    hbirl::episode_marker_t m;
+    if (channel == channels::kEpisode.name && m.decode(data, 0, size) > 0) {
+      episode_ends += m.kind == hbirl::episode_marker_t::END_EPISODE;
+      run_ends += m.kind == hbirl::episode_marker_t::END_RUN;
+    }
+    return false;
+  });
   MemoryBus sim_bus(hub), opt_bus(hub);
   Counters sim_counters = quiet("sim_driver"), opt_counters = quiet("optimiser");
   Simulator driver(sim_bus, *domain, gridworld_run(4, 6, 4), sim_counters);
@@ -1568,6 +1580,34 @@ TEST(Pipeline, SimulatorWaitsForTheOptimiserAndStopsAtItsReward) {
   ASSERT_FALSE(said.empty());
   EXPECT_EQ(said.front().rfind("run published", 0), 0u) << said.front();  // no "starting without hearing from"
   EXPECT_EQ(result->data.observed.size(), 6u);
+  EXPECT_EQ(episode_ends, 6 + 4);  // demonstrations and the controlled run's episodes
+  EXPECT_GE(run_ends, 1);
+}
+
+// An episode's end marker lost on the way is asked for (FRAME_REQUEST, step and frame -1)
+// and sent again: the run completes with the data set of a run that lost nothing -- even
+// when every one was lost, so that END_RUN is not believed at first (an optimiser that
+// missed the whole run, restarted, is in the same place).
+TEST(Pipeline, LostEndMarkersAreAskedFor) {
+  const SimulatorOptions run = gridworld_run(7, 8, 4);
+  const auto clean = run_serving_requests(std::make_shared<MemoryHub>(), *builtin_domain("gridworld"), run, 200);
+  ASSERT_TRUE(clean.has_value());
+  auto hub = std::make_shared<MemoryHub>();
+  std::set<int> lost;  // the first END_EPISODE of every episode
+  hub->set_loss([&lost](const std::string& channel, const std::uint8_t* data, int size) {
+    hbirl::episode_marker_t m;
+    return channel == channels::kEpisode.name && m.decode(data, 0, size) > 0 &&
+           m.kind == hbirl::episode_marker_t::END_EPISODE && lost.insert(m.episode).second;
+  });
+  std::int64_t resent = 0;
+  const auto live = run_serving_requests(hub, *builtin_domain("gridworld"), run, 200, &resent);
+  ASSERT_TRUE(live.has_value());
+  EXPECT_EQ(lost.size(), 12u);
+  EXPECT_GE(resent, 12);
+  EXPECT_GT(live->frame_requests, 0);
+  EXPECT_TRUE(live->incomplete.empty()) << live->incomplete;
+  EXPECT_EQ(dataset_digest(live->data.observed), dataset_digest(clean->data.observed));
+  EXPECT_EQ(dataset_digest(live->data.controlled_observed), dataset_digest(clean->data.controlled_observed));
 }
 
 }  // namespace

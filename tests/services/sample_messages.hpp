@@ -137,7 +137,7 @@ inline std::vector<SampleMessage> sample_messages() {
   {
     hbirl::reward_t m{};
     m.domain = "onion", m.num_features = 2, m.theta = {1, 2}, m.num_true = 2, m.true_theta = {1, 1}, m.num_states = 1,
-    m.num_actions = 2, m.policy = {{0.5, 0.5}};
+    m.num_actions = 2, m.policy = {{0.5, 0.5}}, m.action = {1};
     all.push_back(sample_of("REWARD", m));
   }
   {

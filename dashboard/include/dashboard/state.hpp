@@ -65,7 +65,8 @@ class DashboardState {
   //     symbol, symbol_name, eta, source}]} | null,
   //   observations {episode, step, frame, n, by_source_symbol [source][symbol]} | null,
   //   em [{iteration, log_likelihood, ile, seconds, retries, local_blocks}],
-  //   theta {learned, true, final} | null, reward {final, ile, log_likelihood} | null,
+  //   theta {learned, true, final} | null, reward {final, ile, log_likelihood, policy {states, shown:
+  //   [{state, action, probability}] in at most 100 states, by name}} | null,
   //   estimates [{demonstrations, confidence, ile_relative, seconds}] (the optimiser's
   //     estimate after each demonstration, --anytime; confidence and ILE null when unknown),
   //   posterior {episode, iteration, steps, state_marginals [t][state], action_marginals

@@ -65,6 +65,10 @@ class DatasetBuilder {
   void on_truth(const hbirl::ground_truth_t& m);
 
   bool run_ended() const { return run_ended_; }
+  // An END_RUN stating a number of episodes was heard, believed or not (one before any
+  // episode ended is not, docs/RELIABILITY.md): their end markers may be asked for, so that
+  // an optimiser that missed them all -- restarted, or every one lost -- still gets the run.
+  bool end_run_heard() const { return run_ended_ || end_run_stated_ > 0; }
   // Non-empty when the run's own messages contradict each other: two END_RUNs stating
   // different numbers of episodes, or an episode at or past the number END_RUN states
   // (begun before it, or after). Nothing says which message was forged: a run that says
@@ -78,9 +82,11 @@ class DatasetBuilder {
   std::int64_t missing_frames() const;  // of episodes that ended
   int unfinished_episodes() const;      // begun, never ended
   std::int64_t missing_truth() const;   // steps of controlled episodes that ended
-  // Up to `limit` missing (episode, step, frame), in order; a controlled step without its
-  // ground truth is asked for as its frame 0 (the simulator sends the truth of every step
-  // it sends frames of).
+  // Up to `limit` missing (episode, step, frame), in order: once the run has ended, first
+  // (episode, -1, -1) for each of its episodes whose end marker has not come (FRAME_REQUEST
+  // asks for the marker so), then the frames of episodes that ended; a controlled step
+  // without its ground truth is asked for as its frame 0 (the simulator sends the truth of
+  // every step it sends frames of).
   std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
   std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }
@@ -165,7 +171,8 @@ class DatasetBuilder {
   std::map<int, Episode> episodes_;
   int num_symbols_ = 0, num_sources_ = 0;
   bool run_ended_ = false;
-  int run_episodes_ = 0;                                           // as END_RUN states it (0: not stated)
+  int run_episodes_ = 0;    // as END_RUN states it (0: not stated)
+  int end_run_stated_ = 0;  // the most episodes any END_RUN stated, believed or not
   std::int64_t bytes_ = 0, max_bytes_ = std::int64_t{2048} << 20;  // of the frames kept
   std::int64_t frames_ = 0;
   // Kept as messages come (count): of the ended episodes of the run, the frames and the

@@ -12,6 +12,7 @@
 #include "hbirl/estimate_t.hpp"
 #include "hbirl/ground_truth_t.hpp"
 #include "hbirl/observations_t.hpp"
+#include "hbirl/reward_t.hpp"
 #include "hbirl/stop_t.hpp"
 
 namespace hbirl::services {
@@ -49,5 +50,9 @@ void validate(const hbirl::estimate_t& m);
 // Demonstrations in [0, kMaxEpisodes]; the confidence in [0, 1]; a reason of at most 1000
 // bytes.
 void validate(const hbirl::stop_t& m);
+// 1 to kMaxFeatures weights, all finite; the true weights none or as many, all finite;
+// every policy entry in [0, 1]; each state's action -1 (terminal) or one of the actions;
+// the ILE -1 or a number >= 0.
+void validate(const hbirl::reward_t& m);
 
 }  // namespace hbirl::services

@@ -134,6 +134,11 @@ void Simulator::on_request(const hbirl::frame_request_t& m) {
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
     const int id = m.episode[k], t = m.step[k], f = m.frame[k];
+    if (t == -1 && f == -1) {  // the episode's end marker
+      if (id < 0 || id >= episodes_in_run())
+        throw InputError("frame_request[" + std::to_string(i) + "]", "is not an episode of this run");
+      continue;
+    }
     if (id < 0 || id >= static_cast<int>(p.episodes.size()) || t < 0 ||
         t >= static_cast<int>(p.episodes[static_cast<size_t>(id)].steps.size()) || f < 0 || f >= p.frames_per_step) {
       throw InputError("frame_request[" + std::to_string(i) + "]", "is not a frame of this run");
@@ -142,6 +147,16 @@ void Simulator::on_request(const hbirl::frame_request_t& m) {
   std::set<std::pair<int, int>> steps;  // their ground truth again too (it may be what was lost)
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
+    if (m.step[k] == -1) {
+      // Only an end that was: an optimiser that heard END_RUN (perhaps a forged one) may
+      // ask for the end of an episode still going on.
+      const auto id = static_cast<size_t>(m.episode[k]);
+      if (id < ended_.size() && ended_[id]) {
+        publish_end(m.episode[k]);
+        ++resent_;
+      }
+      continue;
+    }
     if (steps.emplace(m.episode[k], m.step[k]).second) publish_truth(m.episode[k], m.step[k]);
     publish_frame(m.episode[k], m.step[k], m.frame[k]);
     ++resent_;
@@ -210,7 +225,11 @@ void Simulator::publish_step_begin(int id, int t) {
   publish_truth(id, t);
 }
 
-void Simulator::publish_end(int id) { publish(bus_, channels::kEpisode, end_marker(id), counters_); }
+void Simulator::publish_end(int id) {
+  ended_.resize(std::max(ended_.size(), static_cast<size_t>(id) + 1), false);
+  ended_[static_cast<size_t>(id)] = true;
+  publish(bus_, channels::kEpisode, end_marker(id), counters_);
+}
 
 void Simulator::publish_end_of_run() { publish(bus_, channels::kEpisode, end_of_run(), counters_); }
 
@@ -231,10 +250,7 @@ hbirl::episode_marker_t Simulator::end_marker(int id) {
   return m;
 }
 
-void Simulator::republish_end_markers() {
-  for (int id = 0; id < episodes_in_run(); ++id) publish(bus_, channels::kEpisode, end_marker(id), counters_);
-  publish(bus_, channels::kEpisode, end_of_run(), counters_);
-}
+void Simulator::republish_end_of_run() { publish(bus_, channels::kEpisode, end_of_run(), counters_); }
 
 hbirl::episode_marker_t Simulator::end_of_run() {
   auto m = marker(0, hbirl::episode_marker_t::END_RUN, 0.0);
@@ -266,7 +282,7 @@ void Simulator::serve_until_learned(const std::function<bool()>& stop,
     bus_.handle(100);
     if (beat) beat("serving lost frames");
     if (Clock::now() >= next_markers) {
-      republish_end_markers();
+      republish_end_of_run();
       next_markers = Clock::now() + std::chrono::seconds(1);
     }
   }
@@ -293,8 +309,8 @@ bool Simulator::serve(const std::function<bool()>& stop, double start_delay_s,
   say(std::string(finished ? "run published" : "stopped") + "; " + std::to_string(counters_.messages_out) +
       " messages published" +
       (episodes_in_run_ >= 0 ? "; ended after " + std::to_string(episodes_in_run_) + " episodes, as STOP asked" : ""));
-  // Then frames lost on the way are sent again, and the end markers repeated in case they
-  // were lost, until the optimiser has published its reward.
+  // Then what was lost on the way is sent again when asked for, and END_RUN repeated in
+  // case it was lost, until the optimiser has published its reward.
   if (finished) serve_until_learned(stop, beat);
   return finished;
 }

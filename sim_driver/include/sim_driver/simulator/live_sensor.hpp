@@ -2,8 +2,9 @@
 // A sensor that publishes as it sees (the Python package's hbirl.Sensor, docs/python.md
 // "Python sensors"): episodes and steps come one at a time and go onto the bus at once, as
 // the simulator's own messages (simulator_service.hpp), and are kept: a frame lost on the
-// way is sent again on FRAME_REQUEST, the end markers are repeated until the optimiser's
-// reward, and STOP is heard -- the protocol every hbirl sensor keeps.
+// way (a frame, its step's ground truth, an episode's end marker) is sent again on
+// FRAME_REQUEST, END_RUN is repeated until the optimiser's reward, and STOP is heard -- the
+// protocol every hbirl sensor keeps.
 #include <memory>
 #include <optional>
 #include <string>
@@ -51,8 +52,8 @@ class LiveSensor {
   int handle(int timeout_ms);
   // STOP heard: the optimiser has seen enough; end the run after this episode.
   bool stop_requested() const;
-  // After end_run: answers FRAME_REQUEST and repeats the end markers until the optimiser's
-  // final REWARD (its theta) or `seconds`/`stop` (nullopt).
+  // After end_run: answers FRAME_REQUEST and repeats END_RUN until the optimiser's final
+  // REWARD (its theta) or `seconds`/`stop` (nullopt).
   std::optional<Eigen::VectorXd> wait_for_reward(double seconds, const std::function<bool()>& stop = nullptr);
   int episodes() const;
   bool in_episode() const { return in_episode_; }

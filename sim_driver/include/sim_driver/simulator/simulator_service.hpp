@@ -44,9 +44,11 @@ class Simulator {
   // Returns false if asked to stop first. `idle` runs after every frame.
   bool publish_run(const std::function<bool()>& stop, const std::function<void()>& idle = nullptr);
   std::int64_t frames_resent() const { return resent_; }
-  // Publishes every END_EPISODE marker and END_RUN again (receivers take repeats as one):
-  // the learner must not wait forever for an end marker lost on the way.
-  void republish_end_markers();
+  // Publishes END_RUN again (receivers take repeats as one): the learner must not wait
+  // forever for the end of the run lost on the way. It states how many episodes the run
+  // had, so their end markers are asked for (FRAME_REQUEST), not repeated: at 10^5
+  // episodes that was 10^5 messages a second.
+  void republish_end_of_run();
   // Which services must listen before the run starts (perception and the labeller only
   // for a camera).
   std::vector<std::string> listeners() const;
@@ -61,8 +63,8 @@ class Simulator {
   void publish_frame(int episode, int step, int frame);
   void publish_end(int episode);
   void publish_end_of_run();
-  // After the run: answers FRAME_REQUEST and repeats the end markers every second until
-  // the optimiser's final REWARD (reward()) or `stop`.
+  // After the run: answers FRAME_REQUEST (frames, ground truth, end markers) and repeats
+  // END_RUN every second until the optimiser's final REWARD (reward()) or `stop`.
   void serve_until_learned(const std::function<bool()>& stop,
                            const std::function<void(const std::string&)>& beat = nullptr);
   // Hears what comes (FRAME_REQUEST answered, STOP, REWARD) for up to `timeout_ms`.
@@ -100,6 +102,7 @@ class Simulator {
   bool told_to_stop_ = false;
   std::optional<Eigen::VectorXd> reward_;
   int episodes_in_run_ = -1;  // once stopped early; -1: all of run_
+  std::vector<bool> ended_;   // the episodes whose END_EPISODE went out (an end asked for again is one of them)
   int episodes_in_run() const;
   services::Subscriptions subs_;  // last: ends first
 };
