@@ -90,9 +90,12 @@ void print_eta(std::ostream& out, const json& eta, size_t shown, const std::stri
   if (!eta.is_array() || eta.empty()) return;
   std::vector<size_t> order(eta.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&eta](size_t a, size_t b) {
-    return eta.at(a).at("observations").get<double>() > eta.at(b).at("observations").get<double>();
-  });
+  const auto observations = [&eta](size_t i) {
+    const json& n = eta.at(i).at("observations");
+    return n.is_number() ? n.get<double>() : 0.0;
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&observations](size_t a, size_t b) { return observations(a) > observations(b); });
   order.resize(std::min(shown, order.size()));
   std::sort(order.begin(), order.end());
   out << "  learned eta (per labeller rule, the subject first): stated -> learned (observations)\n";
@@ -103,7 +106,7 @@ void print_eta(std::ostream& out, const json& eta, size_t shown, const std::stri
         << count(c.at("observations")) << ")\n";
   }
   if (eta.size() > shown)
-    out << "    ... " << eta.size() - shown << " more contexts, with fewer observations: all in " << path
+    out << "    ... " << eta.size() - shown << " more contexts, with no more observations: all in " << path
         << " \"learned_eta\"\n";
 }
 

@@ -3,10 +3,10 @@
 # --check says which files are not formatted and exits 1 (./test.sh runs that).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# One version: another formats some lines differently (install-deps.sh installs this one).
+# One version: another formats some lines differently (install-deps.sh --for-tests installs this one).
 format=clang-format-14
 if ! command -v "$format" >/dev/null 2>&1; then
-  echo "format.sh: $format not found (apt-get install clang-format-14; scripts/install-deps.sh does)" >&2
+  echo "format.sh: $format not found (apt-get install clang-format-14; scripts/install-deps.sh --for-tests does)" >&2
   exit 2
 fi
 mapfile -t files < <(git ls-files '*.cpp' '*.hpp' '*.h')

@@ -46,6 +46,9 @@ allow_incomplete=0
 incomplete_after=60
 orig_args=("$@")
 progress_open=0  # a progress line is being rewritten in the terminal (show_progress)
+end_progress() {  # the rewritten line ends before anything else is said
+  if [ "$progress_open" = 1 ]; then echo; progress_open=0; fi
+}
 
 usage() {
   cat <<USAGE
@@ -293,7 +296,7 @@ if [ -z "$url" ] && [ -z "${HBIRL_IN_NETNS:-}" ]; then
     set_pid=$!
     # The process that holds the namespace: scripts/lcm-spy.sh --run OUT enters it.
     mkdir -p "$out/logs" && echo "$set_pid" >"$out/logs/netns.pid"
-    trap 'echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; rm -f "$out/logs/netns.pid"; stop_dashboard; exit 130' INT TERM
+    trap 'end_progress; echo "launch.sh: interrupted: stopping the services"; kill -TERM "$set_pid" 2>/dev/null; wait "$set_pid" 2>/dev/null; rm -f "$out/logs/netns.pid"; stop_dashboard; exit 130' INT TERM
     set +e
     wait "$set_pid"
     status=$?
@@ -373,8 +376,8 @@ stop_all() {  # the services, then the logger (it records their last heartbeats)
     stop_process "$logger"
   fi
 }
-trap 'echo "launch.sh: interrupted: stopping the services"; stop_all; stop_dashboard; exit 130' INT TERM
-trap 'stop_all; stop_dashboard' EXIT
+trap 'end_progress; echo "launch.sh: interrupted: stopping the services"; stop_all; stop_dashboard; exit 130' INT TERM
+trap 'end_progress; stop_all; stop_dashboard' EXIT
 
 echo "launch.sh: logs and results in $out"
 if [ "$record" = 1 ]; then
@@ -507,14 +510,15 @@ show_progress() {
   [ -n "$line" ] && [ "$line" != "$shown_progress" ] || return 0
   shown_progress="$line"
   if [ -t 1 ]; then
-    printf '\r\033[Klaunch.sh: %s' "${line#hbirl-optimiser: progress: }"
+    # Cut to the terminal's width: a line that wraps cannot be rewritten in place.
+    local cols
+    cols="$(tput cols 2>/dev/null || echo 80)"
+    line="launch.sh: ${line#hbirl-optimiser: progress: }"
+    printf '\r\033[K%s' "${line:0:$((cols - 1))}"
     progress_open=1
   else
     echo "launch.sh: ${line#hbirl-optimiser: progress: }"
   fi
-}
-end_progress() {  # the rewritten line ends before anything else is said
-  if [ "$progress_open" = 1 ]; then echo; progress_open=0; fi
 }
 deadline=$((SECONDS + timeout))
 next_refusal_check=0

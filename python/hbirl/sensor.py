@@ -3,7 +3,8 @@
 (LCM, each message signed with the run's key as theirs are), and a Sensor that keeps the
 protocol -- episode markers, one OBSERVATIONS message per step, the controlled run's
 ground truth, lost steps and end markers sent again when the optimiser asks, the end of
-the run repeated until its reward, STOP heard.
+the run repeated until its reward, STOP heard. A Sensor is used from one thread (its
+handle() runs the requests it answers; it releases the GIL meanwhile).
 
     import hbirl
     sensor = hbirl.Sensor("corridor", num_symbols=2, num_sources=2, key="runs/x/run.key")

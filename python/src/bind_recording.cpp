@@ -3,6 +3,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cctype>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,15 +20,26 @@ namespace {
 
 // The readers of recordings are shared with `hbirl learn --log`, and name its flags; here
 // an error names read_log's arguments instead, as the caller wrote them.
+// A flag is a whole word (not part of a path such as /data/run--key/x.lcmlog).
 std::string with_argument_names(std::string text) {
   static const std::pair<std::string, std::string> kNames[] = {{"--allow-incomplete", "allow_incomplete=True"},
                                                                {"--log", "path"},
                                                                {"--key", "key"},
                                                                {"--domain", "domain"},
                                                                {"--eta", "eta"}};
+  const auto word_char = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '/' || c == '.';
+  };
   for (const auto& [flag, argument] : kNames) {
-    for (size_t at = text.find(flag); at != std::string::npos; at = text.find(flag, at + argument.size()))
-      text.replace(at, flag.size(), argument);
+    for (size_t at = text.find(flag); at != std::string::npos;) {
+      const size_t end = at + flag.size();
+      // (A flag ends a sentence with a full stop, a path goes on after one.)
+      const bool whole = (at == 0 || !word_char(text[at - 1])) &&
+                         (end == text.size() || !word_char(text[end]) ||
+                          (text[end] == '.' && (end + 1 == text.size() || text[end + 1] == ' ')));
+      if (whole) text.replace(at, flag.size(), argument);
+      at = text.find(flag, at + (whole ? argument.size() : flag.size()));
+    }
   }
   return text;
 }

@@ -150,8 +150,11 @@ class RunCollector {
       }
       check_contradiction();
       if (on_data_) on_data_();
-      if (builder_.frames() != frames_) {
+      // Progress: a frame, or an episode's end (a restarted optimiser asks for every end
+      // marker first, 500 a request, before any frame).
+      if (builder_.frames() != frames_ || builder_.ended_episodes() != ends_) {
         frames_ = builder_.frames();
+        ends_ = builder_.ended_episodes();
         last_frame_ = Clock::now();
       }
       if (builder_.run_ended() && !announced_end_) {
@@ -304,6 +307,7 @@ class RunCollector {
   const std::function<void(const std::string&)>& log_;
   std::function<void()> on_data_;
   std::int64_t frames_ = -1;
+  int ends_ = 0;  // ended episodes, as frames_
   Clock::time_point last_frame_ = Clock::now();
   Clock::time_point last_request_ = Clock::now();
   int frame_requests_ = 0;

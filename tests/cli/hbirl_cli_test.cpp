@@ -207,7 +207,7 @@ TEST_F(Cli, ThePolicyAndASummaryAPersonReads) {
   EXPECT_EQ(few.out.find("context 0:"), std::string::npos) << few.out;
   EXPECT_LT(few.out.find("context 1: 0.5 0.5 -> 0.3 0.7 (50)"), few.out.find("context 2: 0.5 0.5 -> 0.2 0.8 (20)"))
       << few.out;
-  EXPECT_NE(few.out.find("... 1 more contexts, with fewer observations: all in"), std::string::npos) << few.out;
+  EXPECT_NE(few.out.find("... 1 more contexts, with no more observations: all in"), std::string::npos) << few.out;
   // Anything else is refused in one line naming it.
   for (const std::string& bad :
        {write("other.json", "{\"mdp\": 1}").string(), write("x.txt", "[1, 2").string(), std::string("/dev/zero"),

@@ -164,6 +164,13 @@ def test_a_bad_recording_is_named_by_read_logs_arguments(tmp_path):
         hbirl.read_log(damaged, key=tmp_path / "absent.key")
     assert str(e.value).startswith(str(damaged) + ": key: "), str(e.value)
     assert "--" not in str(e.value), str(e.value)
+    # A flag's letters inside a path are the path's.
+    (tmp_path / "a--key").mkdir()
+    in_odd_folder = tmp_path / "a--key" / "run.lcmlog"
+    in_odd_folder.write_bytes(bytes(range(54)))
+    with pytest.raises(ValueError) as e:
+        hbirl.read_log(in_odd_folder)
+    assert str(e.value).count(str(in_odd_folder)) == 2, str(e.value)  # the prefix, and in the message
 
 
 def test_fit_releases_the_gil():

@@ -376,7 +376,10 @@ policy = json.load(open(sys.argv[1]))["policy"]
 assert [(p["state"], p["action"]) for p in policy] == [("c0", "right"), ("c1", "right"), ("c2", "right")], policy
 PY
       grep -q -- "c0 .*-> right" "$tmp/${file%.json}.out" || { cat "$tmp/${file%.json}.out"; fail "$how: no summary"; }
-      echo "published as $how: the theta of hbirl learn"
+      # A report for every run, though neither --record nor a dashboard asked for the recording.
+      grep -q "<td>c0</td><td>right</td>" "$tmp/${file%.json}/report/index.html" ||
+        { cat "$tmp/${file%.json}.out"; fail "$how: no report with the learned policy"; }
+      echo "published as $how: the theta of hbirl learn; report $tmp/${file%.json}/report/index.html"
     done
     ;;
   example_sensor)

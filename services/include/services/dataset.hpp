@@ -91,6 +91,8 @@ class DatasetBuilder {
   std::int64_t build_utime() const { return last_utime_; }
   std::int64_t frames() const { return frames_; }
   int episodes() const { return static_cast<int>(episodes_.size()); }
+  // Episodes of the run that have ended (an end marker asked for again that came is progress).
+  int ended_episodes() const { return ended_in_run_; }
   // Of them, those a marker said are controlled (the controlled run's, paper §III-B).
   int controlled_episodes() const;
   // Demonstrations of the run that ended with every frame's observations.

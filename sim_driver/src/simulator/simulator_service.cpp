@@ -134,11 +134,7 @@ void Simulator::on_request(const hbirl::frame_request_t& m) {
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
     const int id = m.episode[k], t = m.step[k], f = m.frame[k];
-    if (t == -1 && f == -1) {  // the episode's end marker
-      if (id < 0 || id >= episodes_in_run())
-        throw InputError("frame_request[" + std::to_string(i) + "]", "is not an episode of this run");
-      continue;
-    }
+    if (t == -1 && f == -1) continue;  // an episode's end marker: sent below if it was sent before
     if (id < 0 || id >= static_cast<int>(p.episodes.size()) || t < 0 ||
         t >= static_cast<int>(p.episodes[static_cast<size_t>(id)].steps.size()) || f < 0 || f >= p.frames_per_step) {
       throw InputError("frame_request[" + std::to_string(i) + "]", "is not a frame of this run");
@@ -148,10 +144,11 @@ void Simulator::on_request(const hbirl::frame_request_t& m) {
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<size_t>(i);
     if (m.step[k] == -1) {
-      // Only an end that was: an optimiser that heard END_RUN (perhaps a forged one) may
-      // ask for the end of an episode still going on.
-      const auto id = static_cast<size_t>(m.episode[k]);
-      if (id < ended_.size() && ended_[id]) {
+      // Only an end that was, and the others skipped, not refused with the request: an
+      // optimiser that heard an END_RUN (perhaps a forged one, stating more episodes) may ask
+      // for the end of an episode still going on, or of none at all.
+      const int id = m.episode[k];
+      if (id >= 0 && static_cast<size_t>(id) < ended_.size() && ended_[static_cast<size_t>(id)]) {
         publish_end(m.episode[k]);
         ++resent_;
       }
