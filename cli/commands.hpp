@@ -37,6 +37,9 @@ struct OutputError : std::runtime_error {
 // Print a JSON result to stdout, or to `path` when it is not empty. Throws OutputError
 // (stdout) or InputError("--out", ...) when it cannot be written.
 void emit(const std::string& text, const std::string& path);
+// The same, for a text written piece by piece (a problem file of millions of observations:
+// write_problem), never held whole.
+void emit_streamed(const std::function<void(std::ostream&)>& write, const std::string& path);
 // Print warnings (one line each) to stderr.
 void warn_all(const std::string& source, const std::vector<std::string>& warnings);
 

@@ -24,6 +24,20 @@ void emit(const std::string& text, const std::string& path) {
   if (!out) throw InputError("--out", "cannot write " + path);
 }
 
+void emit_streamed(const std::function<void(std::ostream&)>& write, const std::string& path) {
+  if (path.empty()) {
+    errno = 0;
+    write(std::cout);
+    std::cout << std::flush;
+    if (!std::cout) throw OutputError(std::string("stdout: ") + std::strerror(errno ? errno : EIO));
+    return;
+  }
+  std::ofstream out(path, std::ios::binary);
+  write(out);
+  out.flush();
+  if (!out) throw InputError("--out", "cannot write " + path);
+}
+
 void warn_all(const std::string& source, const std::vector<std::string>& warnings) {
   for (const auto& w : warnings) std::cerr << "hbirl: warning: " << printable(source + ": " + w) << "\n";
 }

@@ -88,13 +88,13 @@ int run_export(const ExportArgs& args) {
               << (args.out.empty() ? "" : " -> " + args.out) << "\n";
     return 0;
   }
-  nlohmann::ordered_json doc = problem_to_json(r.problem);
-  doc["comment"] =
+  nlohmann::ordered_json comment;
+  comment["comment"] =
       "Exported by hbirl export from " + args.log + " (domain " + r.domain +
       "): " + std::to_string(r.problem.demonstration.size()) + " demonstrations; the " +
       std::to_string(r.controlled_episodes) +
       " controlled-run episodes are in observation_model.subject_alpha (the prior the optimiser learned from)";
-  emit(format_json(doc), args.out);
+  emit_streamed([&](std::ostream& out) { write_problem(out, r.problem, {}, comment); }, args.out);
   std::cerr << "hbirl export: " << r.problem.demonstration.size() << " demonstrations, " << r.controlled_episodes
             << " controlled episodes (in the prior), " << r.missing_frames << " frames missing, " << r.bad_messages
             << " bad messages" << (args.out.empty() ? "" : " -> " + args.out) << "\n";

@@ -30,8 +30,7 @@ int run_gridworld(const GridworldArgs& args) {
             << " trajectories are the controlled run (the subject alone) that gives the subject prior.";
     doc["comment"] = comment.str();
   }
-  doc.update(problem_to_json(problem));
-  emit(format_json(doc), args.out);
+  emit_streamed([&](std::ostream& out) { write_problem(out, problem, doc); }, args.out);
   return 0;
 }
 
@@ -80,9 +79,7 @@ int run_random_task(const RandomTaskArgs& args) {
             << " calibration reports per terminal state plus 1";
   comment << ".";
   doc["comment"] = comment.str();
-  const nlohmann::ordered_json body = problem_to_json(problem);
-  doc.update(body);
-  emit(format_json(doc), args.out);
+  emit_streamed([&](std::ostream& out) { write_problem(out, problem, doc); }, args.out);
   return 0;
 }
 

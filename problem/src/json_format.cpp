@@ -26,7 +26,9 @@ bool is_tuple(const nlohmann::ordered_json& v) {
   return true;
 }
 
-void write(const nlohmann::ordered_json& v, int indent, std::string& out) {
+}  // namespace
+
+void format_json_into(const nlohmann::ordered_json& v, int indent, std::string& out) {
   const std::string pad(static_cast<size_t>(indent), ' ');
   const std::string inner(static_cast<size_t>(indent + 2), ' ');
   if (v.is_object()) {
@@ -40,7 +42,7 @@ void write(const nlohmann::ordered_json& v, int indent, std::string& out) {
       if (!first) out += ",\n";
       first = false;
       out += inner + nlohmann::ordered_json(item.key()).dump() + ": ";
-      write(item.value(), indent + 2, out);
+      format_json_into(item.value(), indent + 2, out);
     }
     out += "\n" + pad + "}";
   } else if (v.is_array()) {
@@ -70,7 +72,7 @@ void write(const nlohmann::ordered_json& v, int indent, std::string& out) {
         out += text;
         column += text.size() + 1;
       } else {
-        write(e, indent + 2, out);
+        format_json_into(e, indent + 2, out);
         column = kWidth;  // what follows starts a new line
       }
     }
@@ -80,11 +82,9 @@ void write(const nlohmann::ordered_json& v, int indent, std::string& out) {
   }
 }
 
-}  // namespace
-
 std::string format_json(const nlohmann::ordered_json& value) {
   std::string out;
-  write(value, 0, out);
+  format_json_into(value, 0, out);
   out += "\n";
   return out;
 }

@@ -7,11 +7,13 @@
 #include <cstring>
 #include <fcntl.h>
 #include <limits>
+#include <ostream>
 #include <sstream>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include "json_document.hpp"
+#include "problem/json_format.hpp"
 #include "problem/domain_file.hpp"
 #include "problem/json_node.hpp"
 #include "readers.hpp"
@@ -944,25 +946,87 @@ OrderedJson trajectory_to_json(const DemonstratedTrajectory& trajectory, bool ha
   return item;
 }
 
-}  // namespace
-
-nlohmann::ordered_json problem_to_json(const Problem& problem) {
-  using J = nlohmann::ordered_json;
-  const Mdp& mdp = problem.mdp;
-  J doc;
+// The fields before "demonstration" and after it, in the file's order.
+OrderedJson problem_head_json(const Problem& problem) {
+  OrderedJson doc = OrderedJson::object();
   if (!problem.name.empty()) doc["name"] = problem.name;
   doc["mdp"] = mdp_to_json(problem);
-  if (problem.observation_model) doc["observation_model"] = observation_model_to_json(*problem.observation_model, mdp);
-  J demo = J::array();
-  const bool has_terminal = std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
-  for (const auto& trajectory : problem.demonstration) demo.push_back(trajectory_to_json(trajectory, has_terminal));
-  doc["demonstration"] = demo;
+  if (problem.observation_model)
+    doc["observation_model"] = observation_model_to_json(*problem.observation_model, problem.mdp);
+  return doc;
+}
+
+OrderedJson problem_tail_json(const Problem& problem) {
+  OrderedJson doc = OrderedJson::object();
   if (!problem.context_names.empty()) doc["context_names"] = problem.context_names;
   if (problem.true_weights) {
     doc["true_weights"] =
         std::vector<double>(problem.true_weights->data(), problem.true_weights->data() + problem.true_weights->size());
   }
   return doc;
+}
+
+bool has_terminal_states(const Mdp& mdp) {
+  return std::find(mdp.terminal.begin(), mdp.terminal.end(), 1) != mdp.terminal.end();
+}
+
+}  // namespace
+
+nlohmann::ordered_json problem_to_json(const Problem& problem) {
+  OrderedJson doc = problem_head_json(problem);
+  OrderedJson demo = OrderedJson::array();
+  const bool has_terminal = has_terminal_states(problem.mdp);
+  for (const auto& trajectory : problem.demonstration) demo.push_back(trajectory_to_json(trajectory, has_terminal));
+  doc["demonstration"] = std::move(demo);
+  doc.update(problem_tail_json(problem));
+  return doc;
+}
+
+void write_problem(std::ostream& out, const Problem& problem, const nlohmann::ordered_json& before,
+                   const nlohmann::ordered_json& after) {
+  // format_json's text of the whole document (tested byte for byte), with "demonstration"
+  // written a trajectory at a time: only one trajectory's JSON is ever built.
+  constexpr size_t kFlushBytes = 1 << 20;
+  std::string text = "{\n";
+  bool first = true;
+  const auto flush = [&] {
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    text.clear();
+  };
+  const auto key = [&](const std::string& name) {
+    if (!first) text += ",\n";
+    first = false;
+    text += "  " + OrderedJson(name).dump() + ": ";
+  };
+  const auto fields = [&](const OrderedJson& object) {
+    for (const auto& item : object.items()) {
+      key(item.key());
+      format_json_into(item.value(), 2, text);
+      if (text.size() >= kFlushBytes) flush();
+    }
+  };
+  OrderedJson head = before.is_object() ? before : OrderedJson::object();
+  head.update(problem_head_json(problem));
+  fields(head);
+  key("demonstration");
+  if (problem.demonstration.empty()) {
+    text += "[]";
+  } else {
+    // A trajectory is an object, never packed: one after the other, each on its own lines.
+    const bool has_terminal = has_terminal_states(problem.mdp);
+    text += "[\n    ";
+    for (size_t i = 0; i < problem.demonstration.size(); ++i) {
+      if (i > 0) text += ",\n    ";
+      format_json_into(trajectory_to_json(problem.demonstration[i], has_terminal), 4, text);
+      if (text.size() >= kFlushBytes) flush();
+    }
+    text += "\n  ]";
+  }
+  OrderedJson tail = problem_tail_json(problem);
+  if (after.is_object()) tail.update(after);
+  fields(tail);
+  text += "\n}\n";
+  flush();
 }
 
 }  // namespace hbirl

@@ -71,8 +71,8 @@ void bind_problem(py::module_& m) {
           "save",
           [](const Problem& p, const std::string& path) {
             py::gil_scoped_release released;
-            std::ofstream out(path);
-            out << format_json(problem_to_json(p));
+            std::ofstream out(path, std::ios::binary);
+            write_problem(out, p);
             if (!out.flush()) throw InputError(path, "could not be written");
           },
           py::arg("path"),

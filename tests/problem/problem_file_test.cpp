@@ -6,8 +6,10 @@
 #include <ctime>
 #include <functional>
 #include <numeric>
+#include <sstream>
 
 #include "learner/input_error.hpp"
+#include "problem/json_format.hpp"
 
 namespace hbirl {
 namespace {
@@ -138,6 +140,36 @@ json with_end_sensor() {
   d["demonstration"][0]["end_symbols"] = {0, 0, 1};
   d["demonstration"][0]["end_state"] = 3;
   return d;
+}
+
+// write_problem streams what format_json(problem_to_json(...)) writes, byte for byte: with
+// fields before and after, with an end sensor, with true steps, and with no demonstration.
+TEST(ProblemFile, StreamedTextIsTheFormattedDocument) {
+  const auto streamed = [](const Problem& p, const nlohmann::ordered_json& before,
+                           const nlohmann::ordered_json& after) {
+    std::ostringstream out;
+    write_problem(out, p, before, after);
+    return out.str();
+  };
+  const auto whole = [](const Problem& p, const nlohmann::ordered_json& before, const nlohmann::ordered_json& after) {
+    nlohmann::ordered_json doc = before.is_object() ? before : nlohmann::ordered_json::object();
+    doc.update(problem_to_json(p));
+    if (after.is_object()) doc.update(after);
+    return format_json(doc);
+  };
+  const nlohmann::ordered_json comment = {{"comment", "first"}};
+  const nlohmann::ordered_json last = {{"note", "last"}, {"more", {1, 2}}};
+  for (const json& d : {spec_example(), with_end_sensor()}) {
+    const Problem p = parse_problem(d.dump());
+    ASSERT_FALSE(p.demonstration.empty());
+    EXPECT_EQ(streamed(p, {}, {}), format_json(problem_to_json(p)));
+    EXPECT_EQ(streamed(p, comment, {}), whole(p, comment, {}));
+    EXPECT_EQ(streamed(p, {}, last), whole(p, {}, last));
+    Problem none = p;
+    none.demonstration.clear();
+    EXPECT_EQ(streamed(none, comment, last), whole(none, comment, last));
+    EXPECT_EQ(parse_problem(streamed(p, comment, last)).demonstration.size(), p.demonstration.size());
+  }
 }
 
 TEST(ProblemFile, EndSensorAndWhatWasSeenOfTheEndRoundTrip) {

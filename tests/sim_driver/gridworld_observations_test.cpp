@@ -19,6 +19,23 @@ TEST(GridworldObservations, SubjectModelFavoursTheNearestCorner) {
   EXPECT_NEAR(o(0, 1) / o(0, 3), std::exp(4.0), 1e-9);
 }
 
+// Far from every corner each exp(-decay * distance) underflows (on a 1000x1000 grid at
+// decay 1; here a 10x10 grid at decay 100, exp(-900) = 0): every row is still a
+// distribution, and its ratios are the model's, exp(-decay * (d_k - d_j)).
+TEST(GridworldObservations, SubjectModelFarFromEveryCornerIsStillADistribution) {
+  const Eigen::MatrixXd o = gridworld_subject_observation_model(10, 100.0);
+  for (int r = 0; r < o.rows(); ++r) {
+    ASSERT_TRUE(o.row(r).allFinite()) << "row " << r;
+    EXPECT_NEAR(o.row(r).sum(), 1.0, 1e-12) << "row " << r;
+  }
+  // Cell (4, 5): 9 cells from the top-left corner, 8 from the top-right, 10 and 9 from the
+  // bottom ones.
+  const int s = 4 * 10 + 5;
+  EXPECT_NEAR(o(s * 4, 1), 1.0, 1e-12);
+  EXPECT_NEAR(std::log(o(s * 4, 0)) - std::log(o(s * 4, 1)), -100.0, 1e-9);
+  EXPECT_NEAR(std::log(o(s * 4, 2)) - std::log(o(s * 4, 1)), -200.0, 1e-9);
+}
+
 TEST(GridworldObservations, EtaKinds) {
   Rng rng(3);
   const GridworldTask task = make_gridworld_task({}, 30, 10, rng);

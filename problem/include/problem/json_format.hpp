@@ -11,6 +11,9 @@
 namespace hbirl {
 
 std::string format_json(const nlohmann::ordered_json& value);
+// The same text for a value nested `indent` spaces deep, appended to `out` (what a writer
+// that streams a document piece by piece writes each piece with).
+void format_json_into(const nlohmann::ordered_json& value, int indent, std::string& out);
 
 // Learned eta as hbirl learn and hbirl-optimiser print it: per context, its id, the
 // stated and learned source distributions and how many observations it covers; and its

@@ -4,6 +4,7 @@
 // field and position, e.g. "demonstration[3].steps[2].observations[0]: eta has 2
 // entries, expected 3". The full format is documented in docs/files.md ("Problem files").
 #include <nlohmann/json.hpp>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
@@ -63,5 +64,12 @@ Problem read_problem_file(const std::string& path, std::vector<std::string>* war
 
 // The problem as a JSON document in the same format (round-trips through parse_problem).
 nlohmann::ordered_json problem_to_json(const Problem& problem);
+
+// format_json(problem_to_json(problem)) with `before`'s fields first and `after`'s last,
+// written to `out` a trajectory at a time (keys of `before` and `after` must be neither the
+// problem's nor each other's): what a data set of millions of observations is
+// written with (hbirl export), in memory a trajectory's JSON, not the whole document's.
+void write_problem(std::ostream& out, const Problem& problem, const nlohmann::ordered_json& before = {},
+                   const nlohmann::ordered_json& after = {});
 
 }  // namespace hbirl

@@ -11,12 +11,23 @@ Eigen::MatrixXd gridworld_subject_observation_model(int size, double decay) {
   const int S = size * size;
   Eigen::MatrixXd o(S * 4, 4);
   for (int s = 0; s < S; ++s) {
-    Eigen::Vector4d row;
+    Eigen::Vector4d distance;
     for (int k = 0; k < 4; ++k) {
       const int corner = gridworld_corner_state(size, k);
-      const int distance = std::abs(s / size - corner / size) + std::abs(s % size - corner % size);
-      row[k] = std::exp(-decay * distance);
+      distance[k] = std::abs(s / size - corner / size) + std::abs(s % size - corner % size);
     }
+    // std::exp per weight, as before (a vectorised exp may round differently).
+    const auto weights = [&](double nearest) {
+      Eigen::Vector4d w;
+      for (int k = 0; k < 4; ++k) w[k] = std::exp(-decay * (distance[k] - nearest));
+      return w;
+    };
+    Eigen::Vector4d row = weights(0.0);
+    // Far from every corner (from about 745 cells away at decay 1, so only on grids over
+    // ~750 cells a side) every weight underflows to 0: measure the distances from the
+    // nearest corner instead, the same row once normalised. Only there, so that smaller
+    // grids keep their bits (and every committed result its numbers).
+    if (!(row.sum() > 0.0)) row = weights(distance.minCoeff());
     row /= row.sum();
     for (int a = 0; a < 4; ++a) o.row(s * 4 + a) = row.transpose();
   }
