@@ -8,7 +8,9 @@
 #include <fcntl.h>
 #include <limits>
 #include <ostream>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -918,7 +920,7 @@ OrderedJson observation_model_to_json(const ObservationPrior& p, const Mdp& mdp)
 // default (has_terminal: the MDP has terminal states).
 OrderedJson trajectory_to_json(const DemonstratedTrajectory& trajectory, bool has_terminal) {
   using J = OrderedJson;
-  J item;
+  J item = J::object();  // an object even when there is nothing to say (write_problem's layout)
   if (has_terminal && !trajectory.ends_in_terminal) item["ends_in_terminal"] = false;
   if (trajectory.controlled) item["controlled"] = true;
   if (trajectory.steps) {
@@ -990,7 +992,7 @@ void write_problem(std::ostream& out, const Problem& problem, const nlohmann::or
   std::string text = "{\n";
   bool first = true;
   const auto flush = [&] {
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    if (out) out.write(text.data(), static_cast<std::streamsize>(text.size()));
     text.clear();
   };
   const auto key = [&](const std::string& name) {
@@ -1005,9 +1007,19 @@ void write_problem(std::ostream& out, const Problem& problem, const nlohmann::or
       if (text.size() >= kFlushBytes) flush();
     }
   };
-  OrderedJson head = before.is_object() ? before : OrderedJson::object();
-  head.update(problem_head_json(problem));
-  fields(head);
+  const OrderedJson body = problem_head_json(problem);
+  const OrderedJson tail = problem_tail_json(problem);
+  // One key twice would be a file parse_problem refuses: a caller's mistake, said at once.
+  std::set<std::string> keys = {"demonstration"};
+  for (const OrderedJson* part : {&before, &body, &tail, &after}) {
+    if (!part->is_object()) continue;
+    for (const auto& item : part->items()) {
+      if (!keys.insert(item.key()).second)
+        throw std::logic_error("write_problem: the key \"" + item.key() + "\" would appear twice");
+    }
+  }
+  if (before.is_object()) fields(before);
+  fields(body);
   key("demonstration");
   if (problem.demonstration.empty()) {
     text += "[]";
@@ -1018,13 +1030,15 @@ void write_problem(std::ostream& out, const Problem& problem, const nlohmann::or
     for (size_t i = 0; i < problem.demonstration.size(); ++i) {
       if (i > 0) text += ",\n    ";
       format_json_into(trajectory_to_json(problem.demonstration[i], has_terminal), 4, text);
-      if (text.size() >= kFlushBytes) flush();
+      if (text.size() >= kFlushBytes) {
+        flush();
+        if (!out) return;  // the disk is full or the reader gone: the caller says so
+      }
     }
     text += "\n  ]";
   }
-  OrderedJson tail = problem_tail_json(problem);
-  if (after.is_object()) tail.update(after);
   fields(tail);
+  if (after.is_object()) fields(after);
   text += "\n}\n";
   flush();
 }

@@ -271,6 +271,10 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
   }
   Frame f;
   f.contexts.assign(m.context.begin(), m.context.begin() + m.num_context);
+  // Exactly the frame's size: grown by push_back, a frame held up to twice its bytes until
+  // the data set was taken (docs/BENCHMARKS.md "Scale to the limit").
+  f.symbols.reserve(static_cast<size_t>(m.n));
+  f.eta.reserve(static_cast<size_t>(m.n) * static_cast<size_t>(m.num_sources));
   for (int i = 0; i < m.n; ++i) {
     std::vector<double> eta = m.eta[static_cast<size_t>(i)];
     normalise_eta(eta.data(), m.num_sources);  // within its tolerance (validate): rounding brought back to a sum of 1

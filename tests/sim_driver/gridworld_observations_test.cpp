@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+#include <utility>
+
 namespace hbirl {
 namespace {
 
@@ -19,21 +23,45 @@ TEST(GridworldObservations, SubjectModelFavoursTheNearestCorner) {
   EXPECT_NEAR(o(0, 1) / o(0, 3), std::exp(4.0), 1e-9);
 }
 
-// Far from every corner each exp(-decay * distance) underflows (on a 1000x1000 grid at
-// decay 1; here a 10x10 grid at decay 100, exp(-900) = 0): every row is still a
-// distribution, and its ratios are the model's, exp(-decay * (d_k - d_j)).
-TEST(GridworldObservations, SubjectModelFarFromEveryCornerIsStillADistribution) {
-  const Eigen::MatrixXd o = gridworld_subject_observation_model(10, 100.0);
-  for (int r = 0; r < o.rows(); ++r) {
-    ASSERT_TRUE(o.row(r).allFinite()) << "row " << r;
-    EXPECT_NEAR(o.row(r).sum(), 1.0, 1e-12) << "row " << r;
+// Far from every corner each exp(-decay * distance) underflows to a subnormal, rounded to a
+// few bits, or to 0 (on a 1000x1000 grid at decay 1; here a 149x149 grid at decay 5, whose
+// centre is 148 cells from every corner: exp(-740) is 80 times the smallest subnormal, and a
+// 10x10 grid at decay 100, exp(-800) = 0). Every row is the model's distribution,
+// exp(-decay * (d_k - d_nearest)) normalised; and a row whose nearest weight is a normal
+// number has exactly the bits of exp(-decay * d_k) normalised, as before (what keeps every
+// committed result's numbers).
+TEST(GridworldObservations, SubjectModelFarFromEveryCornerIsStillTheModel) {
+  for (const auto& [size, decay] : {std::pair{10, 1.0}, std::pair{149, 5.0}, std::pair{10, 100.0}}) {
+    const Eigen::MatrixXd o = gridworld_subject_observation_model(size, decay);
+    int shifted = 0;
+    for (int s = 0; s < size * size; ++s) {
+      Eigen::Vector4d d;
+      for (int k = 0; k < 4; ++k) {
+        const int c = gridworld_corner_state(size, k);
+        d[k] = std::abs(s / size - c / size) + std::abs(s % size - c % size);
+      }
+      Eigen::Vector4d plain;
+      for (int k = 0; k < 4; ++k) plain[k] = std::exp(-decay * d[k]);
+      for (int a = 0; a < 4; ++a) {
+        const Eigen::RowVectorXd row = o.row(s * 4 + a);
+        if (plain.maxCoeff() >= std::numeric_limits<double>::min()) {
+          ASSERT_EQ(row, (plain / plain.sum()).transpose()) << "decay " << decay << ", state " << s;
+          continue;
+        }
+        ++shifted;
+        Eigen::Vector4d exact;
+        for (int k = 0; k < 4; ++k) exact[k] = std::exp(-decay * (d[k] - d.minCoeff()));
+        exact /= exact.sum();
+        for (int k = 0; k < 4; ++k) ASSERT_NEAR(row[k], exact[k], 1e-15) << "decay " << decay << ", state " << s;
+      }
+    }
+    // Shifted where the centre is far enough, never at decay 1 on a 10x10 grid.
+    if (decay == 1.0) {
+      EXPECT_EQ(shifted, 0);
+    } else {
+      EXPECT_GT(shifted, 0) << "decay " << decay;
+    }
   }
-  // Cell (4, 5): 9 cells from the top-left corner, 8 from the top-right, 10 and 9 from the
-  // bottom ones.
-  const int s = 4 * 10 + 5;
-  EXPECT_NEAR(o(s * 4, 1), 1.0, 1e-12);
-  EXPECT_NEAR(std::log(o(s * 4, 0)) - std::log(o(s * 4, 1)), -100.0, 1e-9);
-  EXPECT_NEAR(std::log(o(s * 4, 2)) - std::log(o(s * 4, 1)), -200.0, 1e-9);
 }
 
 TEST(GridworldObservations, EtaKinds) {

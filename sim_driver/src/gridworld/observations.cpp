@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "learner/controlled_prior.hpp"
 
@@ -23,11 +24,12 @@ Eigen::MatrixXd gridworld_subject_observation_model(int size, double decay) {
       return w;
     };
     Eigen::Vector4d row = weights(0.0);
-    // Far from every corner (from about 745 cells away at decay 1, so only on grids over
-    // ~750 cells a side) every weight underflows to 0: measure the distances from the
-    // nearest corner instead, the same row once normalised. Only there, so that smaller
-    // grids keep their bits (and every committed result its numbers).
-    if (!(row.sum() > 0.0)) row = weights(distance.minCoeff());
+    // Far from every corner (decay x distance above ~708: at decay 1, grids over ~700 cells
+    // a side) even the nearest corner's weight is subnormal, rounded to a few bits, or 0:
+    // measure the distances from the nearest corner instead, the same row once normalised.
+    // Only there, so that every other row keeps its bits (and every committed result its
+    // numbers).
+    if (row.maxCoeff() < std::numeric_limits<double>::min()) row = weights(distance.minCoeff());
     row /= row.sum();
     for (int a = 0; a < 4; ++a) o.row(s * 4 + a) = row.transpose();
   }
