@@ -169,17 +169,20 @@ TEST(ProblemFile, StreamedTextIsTheFormattedDocument) {
     none.demonstration.clear();
     EXPECT_EQ(streamed(none, comment, last), whole(none, comment, last));
     EXPECT_EQ(parse_problem(streamed(p, comment, last)).demonstration.size(), p.demonstration.size());
-    // Past the writer's 1 MB flushes (pieces written mid-document), and a trajectory with
-    // nothing to say (an object all the same).
-    Problem many = p;
-    for (int copy = 0; copy < 15; ++copy) {
-      const std::vector<DemonstratedTrajectory> more = many.demonstration;
-      many.demonstration.insert(many.demonstration.end(), more.begin(), more.end());
+    if (d == spec_example()) {
+      // Past the writer's 1 MB flush (a piece written mid-document), and a trajectory with
+      // nothing to say (an object all the same). Once: 16,384 trajectories cost seconds
+      // under the sanitizers.
+      Problem many = p;
+      for (int copy = 0; copy < 14; ++copy) {
+        const std::vector<DemonstratedTrajectory> more = many.demonstration;
+        many.demonstration.insert(many.demonstration.end(), more.begin(), more.end());
+      }
+      many.demonstration.push_back(DemonstratedTrajectory{});
+      const std::string text = streamed(many, comment, last);
+      EXPECT_GT(text.size(), size_t{1} << 20);
+      EXPECT_EQ(text, whole(many, comment, last));
     }
-    many.demonstration.push_back(DemonstratedTrajectory{});
-    const std::string text = streamed(many, comment, last);
-    EXPECT_GT(text.size(), size_t{3} << 20);
-    EXPECT_EQ(text, whole(many, comment, last));
     // A key that would appear twice is the caller's mistake, refused before a byte is written.
     for (const std::string k : {"demonstration", "mdp", "true_weights"}) {
       std::ostringstream out;
