@@ -12,16 +12,7 @@
 namespace hbirl::cli {
 
 void emit(const std::string& text, const std::string& path) {
-  if (path.empty()) {
-    errno = 0;
-    std::cout << text << std::flush;
-    if (!std::cout) throw OutputError(std::string("stdout: ") + std::strerror(errno ? errno : EIO));
-    return;
-  }
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.flush();
-  if (!out) throw InputError("--out", "cannot write " + path);
+  emit_streamed([&text](std::ostream& out) { out << text; }, path);
 }
 
 void emit_streamed(const std::function<void(std::ostream&)>& write, const std::string& path) {

@@ -183,9 +183,9 @@ void DatasetBuilder::on_begin_marker(const hbirl::episode_marker_t& m) {
 void DatasetBuilder::on_end_episode(const hbirl::episode_marker_t& m) {
   Episode& e = episode(m.episode);
   mark_controlled(e, m);
-  // The simulator repeats every end marker each second until the reward comes: a
-  // repeat leaves the counts as they are, without a walk over the episode's frames. An
-  // end marker that says otherwise than an earlier one contradicts the run.
+  // An end marker comes again when it was asked for (FRAME_REQUEST) or replayed: a repeat
+  // leaves the counts as they are, without a walk over the episode's frames. An end marker
+  // that says otherwise than an earlier one contradicts the run.
   auto [end_state, end_reports] = seen_end(m, expected_ends_);
   if (e.ended &&
       (e.num_steps != m.num_steps || (e.frames_per_step != 0 && e.frames_per_step != m.frames_per_step) ||
