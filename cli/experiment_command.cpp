@@ -353,8 +353,12 @@ int run_random_tasks_command(RandomTasksArgs& args) {
            << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
            << (o.threads > 0 ? o.threads : default_thread_count()) << " threads.";
   }
-  footer << " Reproduce one: `hbirl generate random-task --seed S --draw D > task.json`, then `hbirl learn --problem "
-         << "task.json`.";
+  // The data's sizes when fixed, as hbirl generate random-task takes them.
+  std::string fixed;
+  if (args.runs_csv.empty() && o.demonstrations > 0) fixed += " --demonstrations " + std::to_string(o.demonstrations);
+  if (args.runs_csv.empty() && o.controlled > 0) fixed += " --controlled " + std::to_string(o.controlled);
+  footer << " Reproduce one: `hbirl generate random-task --seed S --draw D" << fixed
+         << " > task.json`, then `hbirl learn --problem task.json`.";
   const std::string summary = random_tasks_summary(runs, footer.str());
   write_file(dir / "random_tasks_summary.md", summary);
   const std::string problem = draw_random_tasks_figure(runs, (dir / "random_tasks").string());
@@ -749,7 +753,8 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       "with the default posterior update (c = 0.1, and 0.5, 0.02; 4 restarts); and the information limit's oracles\n"
       "(the true O's and each eta read as the simulator's rules say, nothing learned; also told which terminal\n"
       "state each trajectory entered; the true O's, or the subject's (all of it, or where the controlled run saw\n"
-      "it) or the elements' alone, with the rest learned; the default with the prior strength fixed at 1, 1000),\n"
+      "it) or the elements' alone, with the rest learned; the default with the prior strength fixed at 1, 1000,\n"
+      "and started at the oracle's O's and eta),\n"
       "the default with a sensor that sees which, and the default and the oracle with the task's noisy end\n"
       "sensor (1-3 reports of the terminal state entered). Writes random_tasks_runs.csv (one row\n"
       "per run), random_tasks_summary.md (share of runs with an optimal learned policy and relative ILE per\n"
@@ -767,6 +772,11 @@ CLI::App* add_random_tasks_experiment(CLI::App* cmd, RandomTasksArgs& args) {
       ->add_option("--controlled", args.options.controlled,
                    "Trajectories of every task's controlled run (default: as each task draws it, 5-30): how "
                    "much of the learner's gap to the oracles is the subject prior's information")
+      ->check(CLI::Range(1, 100000));
+  tasks_cmd
+      ->add_option("--demonstrations", args.options.demonstrations,
+                   "Demonstrations of every data set (default: as each draws it, 5-40): does the learner's gap to "
+                   "the oracles close as it sees more of the expert?")
       ->check(CLI::Range(1, 100000));
   tasks_cmd->add_option("--methods", args.methods, "Comma-separated: " + random_task_method_keys() + "; or all")
       ->capture_default_str();

@@ -55,22 +55,34 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
   return r;
 }
 
+// The prior that holds O at the truth while eta is learned (oracle_o): the true O's as
+// Dirichlet parameters of 10^6 pseudo-counts a row (what a demonstration's counts move by
+// less than 10^-4), every row counted (a base of 0) and weighed as given (strength 1).
+// oracle_subject_o and oracle_elements_o hold one of the two (the elements' prior is not
+// weighed by the strength: holding them leaves the subject's learning as the default's).
+constexpr double kPseudoCounts = 1e6;
+
 // The oracles' data (issue 33): what the simulator used, nothing learned -- the true
 // subject O and element O's as the prior's fixed means, every observation's eta what its
 // stated eta says of the true source under the simulator's own rules (calibrated_eta: the
 // source mixture -- the subject with probability subject_share, else an element chosen
 // evenly -- and how the labeller states eta). A first version used the mixture alone,
 // which throws away what a plausible eta says: the default, learning eta, beat it.
+Eigen::RowVectorXd source_mixture(const RandomTask& task) {
+  const int E = task.num_confounders;
+  Eigen::RowVectorXd mixture(1 + E);
+  mixture[0] = task.subject_share;
+  for (int e = 0; e < E; ++e) mixture[1 + e] = (1.0 - task.subject_share) / E;
+  return mixture;
+}
+
 std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task) {
   ObservationPrior prior = task.prior;
   prior.subject_alpha = task.subject_o;  // its Dirichlet mean is the true O
   prior.confounder_alpha = task.confounder_o;
   prior.learn = false;
   prior.learn_eta = false;
-  const int E = task.num_confounders;
-  Eigen::RowVectorXd mixture(1 + E);
-  mixture[0] = task.subject_share;
-  for (int e = 0; e < E; ++e) mixture[1 + e] = (1.0 - task.subject_share) / E;
+  const Eigen::RowVectorXd mixture = source_mixture(task);
   std::vector<ObservedTrajectory> observed = task.observed.trajectories;
   for (size_t i = 0; i < observed.size(); ++i) {
     for (Eigen::Index n = 0; n < observed[i].eta.rows(); ++n)
@@ -79,12 +91,45 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
   return {std::move(prior), std::move(observed)};
 }
 
-// The prior that holds O at the truth while eta is learned (oracle_o): the true O's as
-// Dirichlet parameters of 10^6 pseudo-counts a row (what a demonstration's counts move by
-// less than 10^-4), every row counted (a base of 0) and weighed as given (strength 1).
-// oracle_subject_o and oracle_elements_o hold one of the two (the elements' prior is not
-// weighed by the strength: holding them leaves the subject's learning as the default's).
-constexpr double kPseudoCounts = 1e6;
+// posterior_from_truth: the default's E-step, its first pass at the oracle's values -- the
+// true O's, and each context's eta what its stated eta says under the simulator's rules --
+// instead of the prior's mean and the stated eta. Everything after is the default's
+// learning: does EM stay at the truth, and does the learner's own criterion (the restart
+// score) prefer where it ends to where the default ends? If EM leaves the truth for the
+// default's answer, the data's posterior mode is not the truth: no learner that follows
+// the data's likelihood under this model finds it (issue 33).
+class StartedAtTruth final : public EStep {
+ public:
+  StartedAtTruth(const ObservationEStep& inner, const RandomTask& task) : inner_(inner), task_(task) {}
+
+  EStepState initial_state(std::uint64_t seed) const override {
+    EStepState state = inner_.initial_state(seed);
+    ObservationPrior& alpha = *state.alpha;
+    alpha.subject_alpha = kPseudoCounts * task_.subject_o;  // a Dirichlet whose mean is the truth
+    alpha.confounder_alpha = kPseudoCounts * task_.confounder_o;
+    if (inner_.num_contexts() > 0) {
+      const Eigen::RowVectorXd mixture = source_mixture(task_);
+      for (Eigen::Index c = 0; c < alpha.eta_alpha.rows(); ++c)
+        alpha.eta_alpha.row(c) = calibrated_eta(inner_.context_eta().row(c), mixture, task_.eta);
+    }
+    return state;
+  }
+  EStepResult expect(const SoftSolution& policy, EStepState& state) const override {
+    return inner_.expect(policy, state);
+  }
+  bool depends_on_policy() const override { return inner_.depends_on_policy(); }
+  std::vector<int> trajectory_lengths() const override { return inner_.trajectory_lengths(); }
+  EStepResult fixed_model_statistics(const SoftSolution& policy, const EStepState& state) const override {
+    return inner_.fixed_model_statistics(policy, state);
+  }
+  std::optional<StrengthChoice> choose_strength(const SoftSolution& policy, const EStepState& state) const override {
+    return inner_.choose_strength(policy, state);
+  }
+
+ private:
+  const ObservationEStep& inner_;
+  const RandomTask& task_;
+};
 
 void hold_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
   prior.subject_alpha = kPseudoCounts * task.subject_o;
@@ -161,7 +206,10 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     estep_options.max_alpha_iterations = 1;
     const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, task.observed.trajectories), prior,
                                  estep_options);
-    learned = learn_reward(task.mdp, estep, options);
+    if (method.kind == "from_truth")
+      learned = learn_reward(task.mdp, StartedAtTruth(estep, task), options);
+    else
+      learned = learn_reward(task.mdp, estep, options);
   }
   const RestartResult& best = learned.restarts[static_cast<size_t>(learned.selected_restart)];
   const PolicyMetrics metrics = policy_metrics(task.mdp, task.true_weights, learned.theta);
@@ -174,6 +222,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   r.log_likelihood = learned.log_likelihood;
   if (best.alpha && best.alpha->learn && best.alpha->update == AlphaUpdate::kPosterior)
     r.strength = best.alpha->strength;
+  r.score = best.score;
   r.theta.assign(learned.theta.data(), learned.theta.data() + learned.theta.size());
 }
 
@@ -289,6 +338,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_s1", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 1.0},
       {"oracle_seen_subject_o", "oracle_seen_subject_o", 0.1, 1},
       {"posterior_s1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 1000.0},
+      {"posterior_from_truth", "from_truth", 0.1, 1},
   };
   return methods;
 }
@@ -319,6 +369,7 @@ std::vector<RandomTaskRun> run_random_tasks(const RandomTasksOptions& o) {
   if (seeds.empty() || o.draws < 1) throw InputError("tasks", "need at least one task and one draw");
   RandomTaskOverrides overrides;
   overrides.controlled = o.controlled;
+  overrides.demonstrations = o.demonstrations;
   std::vector<RandomTaskRun> runs = on_random_data_sets<RandomTaskRun>(
       seeds, o.draws, o.methods.size(), o.threads, o.progress,
       [&](const RandomTask& task, size_t m, RandomTaskRun& run) {
@@ -336,7 +387,7 @@ std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
   out << "seed,draw,method,layout,states,actions,features,goals,traps,symbols,confounders,per_step,demonstrations,"
          "controlled,decisiveness,informativeness,subject_share,occlusion,discount,eta,ile,ile_relative,optimal,policy_"
          "agreement,"
-         "em_evaluations,converged,log_likelihood,strength,theta,seconds,error\n";
+         "em_evaluations,converged,log_likelihood,strength,score,theta,seconds,error\n";
   for (const auto& r : runs) {
     out << r.seed << "," << r.draw << "," << r.method << "," << r.layout << "," << r.states << "," << r.actions << ","
         << r.features << "," << r.goals << "," << r.traps << "," << r.symbols << "," << r.confounders << ","
@@ -345,6 +396,8 @@ std::string random_task_runs_csv(const std::vector<RandomTaskRun>& runs) {
         << r.ile << "," << r.ile_relative << "," << (r.optimal ? 1 : 0) << "," << r.policy_agreement << ","
         << r.em_evaluations << "," << (r.converged ? 1 : 0) << "," << r.log_likelihood << ",";
     if (r.strength >= 0.0) out << r.strength;
+    out << ",";
+    if (std::isfinite(r.score)) out << r.score;
     out << ",";
     for (size_t k = 0; k < r.theta.size(); ++k) out << (k ? ";" : "") << r.theta[k];
     const std::string error = csv_text(r.error);
@@ -390,6 +443,8 @@ std::vector<RandomTaskRun> random_task_runs_from_csv(const std::string& csv) {
       r.log_likelihood = std::stod(f[i++]);
       const std::string strength = f[i++];
       if (!strength.empty()) r.strength = std::stod(strength);
+      const std::string score = f[i++];
+      if (!score.empty()) r.score = std::stod(score);
       std::istringstream theta(f[i++]);
       for (std::string x; std::getline(theta, x, ';');) r.theta.push_back(std::stod(x));
       r.seconds = std::stod(f[i++]);
@@ -488,6 +543,8 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("oracle_o", "oracle_sensor");
   compare("posterior", "oracle_subject_o");
   compare("posterior", "oracle_elements_o");
+  compare("posterior", "posterior_from_truth");
+  compare("posterior_from_truth", "oracle_sensor");
 }
 
 // Does the default's answer depend on c?
@@ -533,6 +590,47 @@ void write_restart_effect(std::ostream& out, const std::vector<RandomTaskRun>& r
   }
 }
 
+// posterior_from_truth against the default (issue 33): where EM started at the oracle's
+// values ends, and which end the learner's own criterion (the restart score) prefers.
+void write_truth_start(std::ostream& out, const std::vector<RandomTaskRun>& runs) {
+  int n = 0, same = 0, only_default = 0, only_truth = 0, both = 0, neither = 0;
+  int truth_scores_higher = 0, default_scores_higher = 0, near_truth_scores_higher = 0, near_truth_differs = 0;
+  int near_by_score = 0;  // within 5% when the end with the higher score is kept
+  paired(runs, "posterior", "posterior_from_truth", [&](const RandomTaskRun& d, const RandomTaskRun& t) {
+    ++n;
+    const bool dn = d.ile_relative <= kNearOptimalShare;
+    const bool tn = t.ile_relative <= kNearOptimalShare;
+    both += dn && tn ? 1 : 0;
+    only_default += dn && !tn ? 1 : 0;
+    only_truth += tn && !dn ? 1 : 0;
+    neither += !dn && !tn ? 1 : 0;
+    near_by_score += (t.score > d.score ? tn : dn) ? 1 : 0;
+    if (same_answer(d, t)) {
+      ++same;
+      return;
+    }
+    if (!std::isfinite(d.score) || !std::isfinite(t.score)) return;
+    (t.score > d.score ? truth_scores_higher : default_scores_higher) += 1;
+    if (tn && !dn) {
+      ++near_truth_differs;
+      near_truth_scores_higher += t.score > d.score ? 1 : 0;
+    }
+  });
+  if (n == 0) return;
+  out << "\n## Does EM started at the truth stay there?\n\n"
+      << "posterior_from_truth starts the default's EM at oracle_sensor's O's and eta. Of " << n
+      << " data sets, it ends at the default's answer (the same learned policy value) in " << same << " ("
+      << percent(static_cast<double>(same) / n) << "). Within 5% of the optimal value: both " << both
+      << ", only the default " << only_default << ", only from the truth " << only_truth << ", neither " << neither
+      << ". Where the two ends differ, the learner's criterion (the restart score) is higher at the end from the "
+         "truth in "
+      << truth_scores_higher << " and at the default's in " << default_scores_higher
+      << "; of the data sets where only the end from the truth is within 5%, it scores higher in "
+      << near_truth_scores_higher << " of " << near_truth_differs
+      << ". Keeping, of the two, the end the criterion prefers: " << near_by_score << " within 5% ("
+      << percent(static_cast<double>(near_by_score) / n) << ").\n";
+}
+
 // Per method: how often EM converged, its median evaluations and seconds; and the failed runs.
 void write_em_table(std::ostream& out, const std::vector<RandomTaskRun>& runs,
                     const std::vector<std::string>& methods) {
@@ -573,6 +671,7 @@ std::string random_tasks_summary(const std::vector<RandomTaskRun>& runs, const s
   write_paired_comparisons(out, runs);
   write_c_dependence(out, runs);
   write_restart_effect(out, runs);
+  write_truth_start(out, runs);
   write_em_table(out, runs, methods);
   out << "\n" << footer << "\n";
   return out.str();

@@ -35,12 +35,17 @@
 //   posterior_s1, posterior_s1000  the default with the subject prior's strength fixed
 //                      at 1 (the counts at face value) or 1000 (the controlled run's O
 //                      held) instead of chosen by held-out likelihood
+//   posterior_from_truth  the default, its first E-step at oracle_sensor's O's and eta
+//                      instead of the prior's mean and the stated eta: does the data's
+//                      likelihood keep EM at the truth, and does the learner's criterion
+//                      prefer it to the default's answer?
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
 // policy is optimal under the true reward (ILE 0 to 1e-8 of the value scale).
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -52,7 +57,7 @@ namespace hbirl {
 struct RandomTaskMethod {
   std::string key;   // as above
   std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o",
-                     // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o"
+                     // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o", "from_truth"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
@@ -72,6 +77,7 @@ struct RandomTasksOptions {
   std::vector<std::uint64_t> seeds;  // these task seeds instead, when not empty
   int draws = 3;                     // data sets per task
   int controlled = -1;               // trajectories of every task's controlled run (-1: as drawn, 5-30)
+  int demonstrations = -1;           // demonstrations of every data set (-1: as drawn, 5-40)
   std::vector<RandomTaskMethod> methods = all_random_task_methods();
   int threads = 0;
   std::function<void(int done, int total)> progress;  // called from worker threads
@@ -96,6 +102,10 @@ struct RandomTaskRun {
   bool converged = false;
   double log_likelihood = 0.0;
   double strength = -1.0;  // the posterior update's chosen prior strength; -1 if n/a
+  // The learner's own criterion for the returned point (RestartResult::score: the held-out
+  // log-likelihood that chose the strength, else EM's objective); NaN in runs from before
+  // it was recorded.
+  double score = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> theta;
   double seconds = 0.0;
   std::string error;
