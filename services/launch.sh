@@ -372,7 +372,16 @@ stop_all() {  # the services, then the logger (it records their last heartbeats)
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -KILL "$pid" 2>/dev/null || true; done
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || wait "$pid" 2>/dev/null || true; done
   if [ -n "$logger" ]; then
-    sleep 0.2
+    # What the services sent last (their last heartbeats, the result) may still be on its
+    # socket on a loaded machine: stop it once the recording has stopped growing (0.2 s
+    # apart), after 3 s at most.
+    local size=-1 now
+    for _ in $(seq 1 15); do
+      sleep 0.2
+      now="$(stat -c %s "$out/run.lcmlog" 2>/dev/null || echo 0)"
+      [ "$now" != "$size" ] || break
+      size="$now"
+    done
     stop_process "$logger"
   fi
 }

@@ -18,9 +18,27 @@ EngineFactory exact_engine_factory() {
 ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTrajectory>& trajectories,
                                    ObservationPrior prior, ObservationEStepOptions options)
     : mdp_(mdp), prior_(std::move(prior)), options_(std::move(options)) {
+  check_data(trajectories);
+  trajectories_.reserve(trajectories.size());
   for (const auto& t : trajectories) trajectories_.push_back(merge_identical_observations(t));
-  if (trajectories_.empty()) throw InputError("demonstration", "no trajectories with observations");
-  if (options_.watch < -1 || options_.watch >= static_cast<int>(trajectories_.size())) {
+  finish();
+}
+
+ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory>&& trajectories,
+                                   ObservationPrior prior, ObservationEStepOptions options)
+    : mdp_(mdp), prior_(std::move(prior)), options_(std::move(options)) {
+  check_data(trajectories);  // refused: they are the caller's still
+  trajectories_ = std::move(trajectories);
+  for (auto& t : trajectories_) t = merge_identical_observations(t);  // one trajectory's copy at a time
+  finish();
+}
+
+// Whatever refuses the data is checked on them as given, before any is merged or taken
+// over: merging changes none of it.
+void ObservationEStep::check_data(const std::vector<ObservedTrajectory>& trajectories) const {
+  const Mdp& mdp = mdp_;
+  if (trajectories.empty()) throw InputError("demonstration", "no trajectories with observations");
+  if (options_.watch < -1 || options_.watch >= static_cast<int>(trajectories.size())) {
     throw InputError("watch", std::to_string(options_.watch) + " is not a trajectory of the data");
   }
   if (prior_.subject_alpha.rows() != mdp.num_pairs() || prior_.subject_alpha.cols() != prior_.num_symbols ||
@@ -31,8 +49,8 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
   if (prior_.end_alpha.size() > 0 && prior_.end_alpha.rows() != mdp.num_states)
     throw InputError("end_alpha", "has " + std::to_string(prior_.end_alpha.rows()) + " rows, expected one per state (" +
                                       std::to_string(mdp.num_states) + ")");
-  for (size_t i = 0; i < trajectories_.size(); ++i) {
-    const ObservedTrajectory& t = trajectories_[i];
+  for (size_t i = 0; i < trajectories.size(); ++i) {
+    const ObservedTrajectory& t = trajectories[i];
     if (t.length() < 1) throw InputError("demonstration[" + std::to_string(i) + "].steps", "is empty");
     if (t.num_observations() > 0 && t.eta.cols() != 1 + prior_.num_confounders) {
       throw InputError("demonstration[" + std::to_string(i) + "].steps", "eta has the wrong number of sources");
@@ -47,10 +65,32 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
       throw InputError("demonstration[" + std::to_string(i) + "]." + e.field(), e.message());
     }
   }
+  if (!learns_eta()) return;
+  if (!(prior_.eta_strength > 0.0)) throw InputError("observation_model.eta_prior_strength", "must be positive");
+  // Explicit contexts (assign_contexts): every observation has one, or none has.
+  const bool given = std::any_of(trajectories.begin(), trajectories.end(),
+                                 [](const ObservedTrajectory& t) { return !t.contexts.empty(); });
+  if (!given) return;
+  for (const auto& t : trajectories) {
+    if (t.num_observations() > 0 && t.contexts.size() != static_cast<size_t>(t.num_observations())) {
+      throw InputError("demonstration", "some observations have a context and others not");
+    }
+    for (int c : t.contexts) {
+      if (c < 0 || c >= kMaxContexts) {
+        throw InputError("demonstration",
+                         "context " + std::to_string(c) + " is outside [0, " + std::to_string(kMaxContexts - 1) + "]");
+      }
+    }
+  }
+}
+
+// What the merged trajectories are read for: the executor's digest, learned eta's
+// contexts and the kind table (nothing here refuses what check_data accepted).
+void ObservationEStep::finish() {
   if (options_.executor) {
     input_digest_ = dataset_digest(trajectories_);
   }
-  if (prior_.learn && prior_.learn_eta && prior_.num_confounders > 0) assign_contexts();
+  if (learns_eta()) assign_contexts();
   long long rows = 0;
   for (const auto& t : trajectories_) rows += t.num_observations();
   if (options_.max_kinds > 0 && options_.kind_table.value_or(true)) {
@@ -59,28 +99,26 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, const std::vector<ObservedTra
   }
 }
 
+std::vector<ObservedTrajectory> ObservationEStep::take_trajectories() && {
+  if (numbered_contexts_) {
+    for (auto& t : trajectories_) t.contexts.clear();
+  }
+  return std::move(trajectories_);
+}
+
 void ObservationEStep::assign_contexts() {
-  if (!(prior_.eta_strength > 0.0)) throw InputError("observation_model.eta_prior_strength", "must be positive");
-  // Explicit contexts are numbered from 0; without them each distinct eta is one. A
-  // context's stated eta is the weighted mean of its observations' eta.
+  // Explicit contexts are numbered from 0 (check_data has checked them); without them each
+  // distinct eta is one. A context's stated eta is the weighted mean of its observations' eta.
   const bool given = std::any_of(trajectories_.begin(), trajectories_.end(),
                                  [](const ObservedTrajectory& t) { return !t.contexts.empty(); });
   std::map<std::vector<double>, int> index;
   int contexts = 0;
   for (auto& t : trajectories_) {
     if (given) {
-      if (t.num_observations() > 0 && t.contexts.size() != static_cast<size_t>(t.num_observations())) {
-        throw InputError("demonstration", "some observations have a context and others not");
-      }
-      for (int c : t.contexts) {
-        if (c < 0 || c >= kMaxContexts) {
-          throw InputError("demonstration", "context " + std::to_string(c) + " is outside [0, " +
-                                                std::to_string(kMaxContexts - 1) + "]");
-        }
-        contexts = std::max(contexts, c + 1);
-      }
+      for (int c : t.contexts) contexts = std::max(contexts, c + 1);
       continue;
     }
+    numbered_contexts_ = true;
     t.contexts.resize(static_cast<size_t>(t.num_observations()));
     for (int n = 0; n < t.num_observations(); ++n) {
       std::vector<double> key(t.eta.row(n).data(), t.eta.row(n).data() + t.eta.cols());

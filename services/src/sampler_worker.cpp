@@ -36,32 +36,31 @@ struct LocalBlocks {
   size_t trajectories = 0;
 };
 
+// `size(digest)`: the trajectories of a held block (0: not held).
+template <class Size>
 LocalBlocks local_blocks(const hbirl::estep_request_t& m, const std::map<int, std::uint64_t>& assigned,
-                         const std::map<std::uint64_t, std::vector<ObservedTrajectory>>& held) {
+                         const Size& size) {
   LocalBlocks out;
   for (const auto& [b, digest] : assigned) {
-    const auto it = held.find(digest);
-    if (it == held.end()) continue;
-    if (!out.blocks.empty() &&
-        static_cast<int>(held.at(out.blocks.back().second).size()) != ObservationEStep::kBlockSize) {
+    const size_t n = size(digest);
+    if (n == 0) continue;
+    if (!out.blocks.empty() && size(out.blocks.back().second) != static_cast<size_t>(ObservationEStep::kBlockSize)) {
       throw InputError("estep_request.block_digest", "puts a short block before others");
     }
     if (m.watch >= 0 && m.watch / ObservationEStep::kBlockSize == b &&
-        m.watch % ObservationEStep::kBlockSize < static_cast<int>(it->second.size())) {
+        m.watch % ObservationEStep::kBlockSize < static_cast<int>(n)) {
       out.watch = static_cast<int>(out.trajectories) + m.watch % ObservationEStep::kBlockSize;
     }
     out.blocks.emplace_back(b, digest);
-    out.trajectories += it->second.size();
+    out.trajectories += n;
   }
   return out;
 }
 
-// The local blocks' trajectories, checked against the request's W symbols and 1 + E sources.
-std::vector<ObservedTrajectory> local_block_data(const LocalBlocks& local,
-                                                 const std::map<std::uint64_t, std::vector<ObservedTrajectory>>& held,
-                                                 int W, int E) {
-  std::vector<ObservedTrajectory> data;
-  data.reserve(local.trajectories);
+// The held blocks' trajectories checked against the request's W symbols and 1 + E sources
+// (before any is lent: a request that does not fit them must leave them as they were).
+void check_blocks(const LocalBlocks& local, const std::map<std::uint64_t, std::vector<ObservedTrajectory>>& held, int W,
+                  int E) {
   for (const auto& [b, digest] : local.blocks) {
     for (const auto& t : held.at(digest)) {
       for (int w : t.symbols) {
@@ -69,10 +68,8 @@ std::vector<ObservedTrajectory> local_block_data(const LocalBlocks& local,
       }
       if (t.num_observations() > 0 && t.eta.cols() != 1 + E)
         throw InputError("estep_request.num_confounders", "does not fit the blocks' eta");
-      data.push_back(t);
     }
   }
-  return data;
 }
 
 // The worker never refines alpha or eta: only the prior's shape matters here. With
@@ -242,8 +239,7 @@ void SamplerWorker::on_mdp(const hbirl::mdp_t& m) {
   if (static_cast<std::uint64_t>(m.mdp_digest) == mdp_digest_ && mdp_) return;  // have it already
   std::optional<Mdp> mdp = incoming_mdp_.add(m);
   if (!mdp) return;
-  estep_.reset();  // it computes on the old MDP
-  estep_blocks_.clear();
+  take_back_lent();  // it computes on the old MDP
   mdp_ = std::move(mdp);
   mdp_digest_ = static_cast<std::uint64_t>(m.mdp_digest);
   publish_status();  // tell the optimiser at once
@@ -307,7 +303,7 @@ void SamplerWorker::on_trajectory(const hbirl::trajectory_t& m, int bytes) {
 
 void SamplerWorker::held_changed() {
   int n = 0;
-  for (const auto& [digest, block] : held_) n += static_cast<int>(block.size());
+  for (const auto& [digest, block] : held_) n += static_cast<int>(held_size(digest));
   trajectories_held_ = n;
 }
 
@@ -331,11 +327,65 @@ void SamplerWorker::drop_unassigned(bool incoming_too) {
     return dropped;
   };
   if (incoming_too) drop_from(incoming_);
-  if (drop_from(held_)) {
-    held_changed();
-    estep_.reset();  // it may hold copies of what was dropped
-    estep_blocks_.clear();
+  // A block the E-step holds is taken back first, to go with the rest.
+  if (std::any_of(lent_.begin(), lent_.end(), [&](const auto& x) { return !keep.count(x.first); })) take_back_lent();
+  if (drop_from(held_)) held_changed();
+}
+
+size_t SamplerWorker::held_size(std::uint64_t digest) const {
+  const auto lent = lent_.find(digest);
+  if (lent != lent_.end()) return lent->second;
+  const auto it = held_.find(digest);
+  return it == held_.end() ? 0 : it->second.size();
+}
+
+// The listed held blocks' trajectories in order, moved out of held_ (a block listed twice
+// -- two blocks of the same content -- is copied for its second place).
+std::vector<ObservedTrajectory> SamplerWorker::gather(const std::vector<std::pair<int, std::uint64_t>>& blocks) {
+  std::vector<ObservedTrajectory> data;
+  std::map<std::uint64_t, std::pair<size_t, size_t>> placed;  // digest -> (first index, size)
+  for (const auto& [b, digest] : blocks) {
+    const auto seen = placed.find(digest);
+    if (seen != placed.end()) {
+      const auto [first, n] = seen->second;
+      for (size_t i = 0; i < n; ++i) data.push_back(data[first + i]);
+      continue;
+    }
+    std::vector<ObservedTrajectory>& block = held_.at(digest);
+    placed[digest] = {data.size(), block.size()};
+    lent_[digest] = block.size();
+    for (auto& t : block) data.push_back(std::move(t));
+    block = {};  // its place in held_ stays: the block is held, by the E-step
   }
+  return data;
+}
+
+// What gather() took, back into held_ in the same order (the E-step's trajectories are
+// the blocks merged, which the optimiser's already are: merging again changes nothing).
+void SamplerWorker::give_back(std::vector<ObservedTrajectory>&& data,
+                              const std::vector<std::pair<int, std::uint64_t>>& blocks) {
+  size_t at = 0;
+  for (const auto& [b, digest] : blocks) {
+    std::vector<ObservedTrajectory>& block = held_.at(digest);
+    const auto lent = lent_.find(digest);
+    if (lent == lent_.end()) {  // its second place, a copy: given back already
+      at += block.size();
+      continue;
+    }
+    block.reserve(lent->second);
+    for (size_t i = 0; i < lent->second; ++i) block.push_back(std::move(data[at + i]));
+    at += lent->second;
+    lent_.erase(lent);
+  }
+}
+
+// The blocks the E-step holds, back into held_; the E-step goes.
+void SamplerWorker::take_back_lent() {
+  if (!estep_) return;
+  std::vector<ObservedTrajectory> data = std::move(*estep_).take_trajectories();
+  estep_.reset();
+  give_back(std::move(data), estep_blocks_);
+  estep_blocks_.clear();
 }
 
 // The memory a block took is free again.
@@ -406,20 +456,37 @@ void SamplerWorker::serve(bool all_here_only) {
   if (ready.empty() || (all_here_only && ready.size() < pending_.size())) return;
   const int P = mdp_->num_pairs(), W = m.num_symbols, E = m.num_confounders;
   const bool learned_eta = m.num_contexts > 0;
-  const LocalBlocks local = local_blocks(m, assigned_, held_);
+  const LocalBlocks local = local_blocks(m, assigned_, [this](std::uint64_t d) { return held_size(d); });
   const std::vector<std::pair<int, std::uint64_t>>& blocks = local.blocks;
   const auto shape = std::make_tuple(W, E, m.max_kinds, static_cast<bool>(m.kind_table), local.watch, learned_eta,
                                      m.num_end_rows, m.num_end_symbols);
   if (!estep_ || blocks != estep_blocks_ || shape != estep_shape_) {
-    std::vector<ObservedTrajectory> data = local_block_data(local, held_, W, E);
+    take_back_lent();
+    check_blocks(local, held_, W, E);
     ObservationEStepOptions options;
     options.max_kinds = m.max_kinds;
     options.kind_table = static_cast<bool>(m.kind_table);
     options.watch = local.watch;
-    estep_.reset();
-    estep_blocks_.clear();
-    estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta, m.num_end_rows, m.num_end_symbols),
-                   options);
+    // The E-step takes the blocks over (merged in place: merging the optimiser's merged
+    // trajectories again changes nothing), so each is held once.
+    std::vector<ObservedTrajectory> data = gather(blocks);
+    try {
+      estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta, m.num_end_rows, m.num_end_symbols),
+                     options);
+    } catch (...) {
+      // Refused before it took them (a request that does not fit): nothing accepted is lost.
+      if (data.size() == local.trajectories) {
+        give_back(std::move(data), blocks);
+      } else {  // out of memory while taking them over: they are gone
+        for (const auto& [digest, size] : lent_) {
+          release(digest);
+          held_.erase(digest);
+        }
+        lent_.clear();
+        held_changed();
+      }
+      throw;
+    }
     estep_blocks_ = blocks;
     estep_shape_ = shape;
   }

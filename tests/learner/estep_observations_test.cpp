@@ -99,6 +99,44 @@ TEST(ObservationEStep, SameBitsWhateverTheThreadCount) {
   EXPECT_EQ(x.alpha_dot.subject, y.alpha_dot.subject);
 }
 
+// An E-step that takes its trajectories over (a sampler worker's, which holds its share
+// once) computes what one that copies them computes, bit for bit, with learned eta's
+// contexts too; refused, it leaves them as they were; and take_trajectories() gives back
+// what it holds, which makes the same E-step again.
+TEST(ObservationEStep, TakingTheTrajectoriesOverIsCopyingThem) {
+  ObservedGridworld g = observed_gridworld(3, 2, 10, EtaKind::kPlausible);
+  g.prior.learn_eta = true;
+  const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d(0.3, 0, 0, 0.2)));
+  const ObservationEStep copied(g.task.mdp, g.observations.trajectories, g.prior);
+  std::vector<ObservedTrajectory> data = g.observations.trajectories;
+  ObservationEStep taken(g.task.mdp, std::move(data), g.prior);
+  const auto same = [&](const ObservationEStep& a, const ObservationEStep& b) {
+    const RowMatrix eta = a.context_eta();
+    ASSERT_EQ(eta, b.context_eta());
+    const EStepStatistics x = a.statistics(policy, dirichlet_mean(g.prior), 7, &eta);
+    const EStepStatistics y = b.statistics(policy, dirichlet_mean(g.prior), 7, &eta);
+    EXPECT_EQ(x.log_likelihood, y.log_likelihood);
+    EXPECT_EQ(x.counts, y.counts);
+    EXPECT_EQ(x.alpha_dot.subject, y.alpha_dot.subject);
+    EXPECT_EQ(x.source_counts, y.source_counts);
+  };
+  same(copied, taken);
+  std::vector<ObservedTrajectory> back = std::move(taken).take_trajectories();
+  ASSERT_EQ(back.size(), g.observations.trajectories.size());
+  const ObservationEStep again(g.task.mdp, std::move(back), g.prior);
+  same(copied, again);
+  // Refused (an eta of the wrong width): thrown before anything is taken.
+  std::vector<ObservedTrajectory> bad = g.observations.trajectories;
+  bad.back().eta.conservativeResize(Eigen::NoChange, 1);
+  const std::vector<ObservedTrajectory> before = bad;
+  EXPECT_THROW(ObservationEStep(g.task.mdp, std::move(bad), g.prior), InputError);
+  ASSERT_EQ(bad.size(), before.size());
+  for (size_t i = 0; i < bad.size(); ++i) {
+    EXPECT_EQ(bad[i].symbols, before[i].symbols) << i;
+    EXPECT_EQ(bad[i].eta, before[i].eta) << i;
+  }
+}
+
 // A watched trajectory's posterior comes out of the E-step's pass, with the kinds table
 // and without it (max_kinds 0), equal to the engine's posterior of that trajectory
 // computed alone; watching changes none of the sums.

@@ -1,6 +1,8 @@
 #include "services/estep_service.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <sys/resource.h>
 
 #include "expect_refused.hpp"
@@ -644,6 +646,73 @@ TEST(SamplerWorker, AnotherAttemptWithOtherBlocksIsRefused) {
   EXPECT_NE(counters.last_problem.find("estep_request.block_digest"), std::string::npos) << counters.last_problem;
   worker.handle(300);  // past the quiet time: what is pending is served, within its own request's arrays
   EXPECT_EQ(worker.blocks_computed(), 0);
+}
+
+// The E-step a worker computes with holds the worker's blocks (each trajectory held once,
+// issue 35): a request that does not fit them -- refused by the worker's check, or by the
+// E-step as it is made -- leaves them as they were, and the next request gets the same
+// answer, bit for bit, as before.
+TEST(SamplerWorker, ARequestThatDoesNotFitLeavesItsBlocksAsTheyWere) {
+  auto hub = std::make_shared<MemoryHub>();
+  MemoryBus bus(hub), sender(hub);
+  Counters counters = quiet("sampler"), out = quiet("sender");
+  SamplerWorker worker(bus, "sampler-a", counters);
+  std::vector<hbirl::estep_result_t> answers;
+  subscribe(sender, channels::kEStepResult, out,
+            [&](const hbirl::estep_result_t& m, const Message&) { answers.push_back(m); });
+  for (const auto& m : to_messages(task().task.mdp, "gridworld")) publish(sender, channels::kMdp, m, out);
+  bus.handle(0);
+  const std::span<const ObservedTrajectory> first = block_of(task().observed, 0);
+  const std::vector<ObservedTrajectory> block(first.begin(), first.end());
+  for (int i = 0; i < ObservationEStep::kBlockSize; ++i) {
+    publish(
+        sender, channels::trajectory_channel("sampler-a"),
+        to_message(block[static_cast<size_t>(i)], i, ObservationEStep::kBlockSize, dataset_digest(block), "sampler-a"),
+        out);
+  }
+  bus.handle(0);
+  ASSERT_EQ(worker.trajectories_held(), ObservationEStep::kBlockSize);
+  const int P = task().task.mdp.num_pairs();
+  hbirl::estep_request_t r{};
+  r.mdp_digest = static_cast<std::int64_t>(worker.mdp_digest());
+  r.num_trajectories = ObservationEStep::kBlockSize, r.block_size = ObservationEStep::kBlockSize, r.num_blocks = 1;
+  r.assigned_worker = {"sampler-a"};
+  r.block_digest = {static_cast<std::int64_t>(dataset_digest(block))};
+  r.engine = "exact", r.watch = -1, r.max_kinds = 1024;
+  r.num_pairs = P, r.log_policy.assign(static_cast<size_t>(P), std::log(0.25));
+  r.policy.assign(static_cast<size_t>(P), 0.25);
+  r.num_symbols = 4, r.num_confounders = 3;
+  r.subject_o.assign(static_cast<size_t>(P), std::vector<double>{0.4, 0.3, 0.2, 0.1});
+  r.confounder_o.assign(3, std::vector<double>(4, 0.25));
+  const auto ask = [&](std::int64_t id) {
+    r.request_id = id;
+    publish(sender, channels::kEStepRequest, r, out);
+    bus.handle(0);
+    sender.handle(0);
+  };
+  ask(1);
+  ASSERT_EQ(answers.size(), 1u) << counters.last_problem;
+  // Refused by the worker's check: fewer symbols than the blocks use.
+  r.num_symbols = 2;
+  r.subject_o.assign(static_cast<size_t>(P), std::vector<double>{0.5, 0.5});
+  r.confounder_o.assign(3, std::vector<double>(2, 0.5));
+  ask(2);
+  EXPECT_NE(counters.last_problem.find("estep_request.num_symbols"), std::string::npos) << counters.last_problem;
+  // Refused by the E-step as it is made: an end sensor's model of one row, not one per state.
+  r.num_symbols = 4;
+  r.subject_o.assign(static_cast<size_t>(P), std::vector<double>{0.4, 0.3, 0.2, 0.1});
+  r.confounder_o.assign(3, std::vector<double>(4, 0.25));
+  r.num_end_rows = 1, r.num_end_symbols = 2, r.end_o = {{0.5, 0.5}};
+  ask(3);
+  EXPECT_NE(counters.last_problem.find("end_alpha"), std::string::npos) << counters.last_problem;
+  EXPECT_EQ(worker.trajectories_held(), ObservationEStep::kBlockSize);
+  r.num_end_rows = 0, r.num_end_symbols = 0, r.end_o.clear();
+  ask(4);
+  ASSERT_EQ(answers.size(), 2u) << counters.last_problem;
+  EXPECT_EQ(answers[1].counts, answers[0].counts);
+  EXPECT_EQ(answers[1].alpha_subject, answers[0].alpha_subject);
+  EXPECT_EQ(answers[1].log_likelihood, answers[0].log_likelihood);
+  EXPECT_EQ(counters.bad_messages, 2);
 }
 
 // A worker that lies about its blocks is caught by the optimiser's spot check in the first

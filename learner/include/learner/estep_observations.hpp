@@ -76,6 +76,10 @@ class ObservationEStep final : public EStep {
  public:
   ObservationEStep(const Mdp& mdp, const std::vector<ObservedTrajectory>& trajectories, ObservationPrior prior,
                    ObservationEStepOptions options = {});
+  // The same, taking the trajectories over (merged in place, one at a time: the data are
+  // never held twice). Refused, it throws with them left as they were.
+  ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajectory>&& trajectories, ObservationPrior prior,
+                   ObservationEStepOptions options = {});
 
   // The learned source distribution of each context at `alpha` (its eta_alpha's mean),
   // or null when eta is not learned.
@@ -118,6 +122,10 @@ class ObservationEStep final : public EStep {
   const Mdp& mdp() const { return mdp_; }
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
+  // The trajectories handed over as they were given, merged (merging them again gives them
+  // unchanged; contexts this E-step numbered are taken off), leaving this E-step empty -- for a holder that lends its
+  // data to an E-step and takes it back rather than keep a copy (services/sampler_worker.cpp).
+  std::vector<ObservedTrajectory> take_trajectories() &&;
   // The digest (dataset_digest) of the trajectories as given, merged, before learned eta
   // gave them contexts: how a BlockExecutor tells the E-steps it serves apart (the
   // trajectories it sends workers are trajectories(), contexts included). Set only with an
@@ -135,6 +143,11 @@ class ObservationEStep final : public EStep {
   // Learned eta: gives every observation a context (each distinct eta, unless given) and
   // fills context_eta_.
   void assign_contexts();
+  bool learns_eta() const { return prior_.learn && prior_.learn_eta && prior_.num_confounders > 0; }
+  // Refuses data this E-step cannot use (InputError naming the field), before it takes any.
+  void check_data(const std::vector<ObservedTrajectory>& trajectories) const;
+  // Reads the merged trajectories for the digest, the contexts and the kind table.
+  void finish();
   // sum over contexts and sources of eta_strength * stated eta * log(learned eta).
   double log_eta_prior_term(const RowMatrix& eta) const;
 
@@ -144,6 +157,7 @@ class ObservationEStep final : public EStep {
   RowMatrix context_eta_;
   Eigen::VectorXd context_observations_;
   std::uint64_t input_digest_ = 0;
+  bool numbered_contexts_ = false;  // assign_contexts gave the observations their contexts
   ObservationPrior prior_;
   ObservationEStepOptions options_;
 };

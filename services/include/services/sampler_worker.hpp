@@ -62,6 +62,13 @@ class SamplerWorker {
   void drop_unassigned(bool incoming_too);
   void release(std::uint64_t digest);
   void held_changed();
+  // The trajectories of a held block, whether in held_ or lent to the E-step (0: not held).
+  size_t held_size(std::uint64_t digest) const;
+  // The E-step takes the blocks it computes from held_ (gather) and gives them back when it
+  // is made again or goes (take_back_lent): each trajectory is held once (issue 35).
+  std::vector<ObservedTrajectory> gather(const std::vector<std::pair<int, std::uint64_t>>& blocks);
+  void give_back(std::vector<ObservedTrajectory>&& data, const std::vector<std::pair<int, std::uint64_t>>& blocks);
+  void take_back_lent();
 
   Bus& bus_;
   MdpAssembler incoming_mdp_;
@@ -70,8 +77,10 @@ class SamplerWorker {
   std::string id_;
   Counters& counters_;
   std::int64_t max_dataset_bytes_;
-  // The blocks held, by digest, and the bytes they and the incoming ones take.
+  // The blocks held, by digest, and the bytes they and the incoming ones take. A block the
+  // E-step holds keeps its place here, empty, with its size in lent_.
   std::map<std::uint64_t, std::vector<ObservedTrajectory>> held_;
+  std::map<std::uint64_t, size_t> lent_;
   std::map<std::uint64_t, Incoming> incoming_;
   std::int64_t bytes_ = 0;
   std::map<std::uint64_t, std::int64_t> block_bytes_;
