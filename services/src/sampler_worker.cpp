@@ -341,21 +341,28 @@ size_t SamplerWorker::held_size(std::uint64_t digest) const {
 
 // The listed held blocks' trajectories in order, moved out of held_ (a block listed twice
 // -- two blocks of the same content -- is copied for its second place).
-std::vector<ObservedTrajectory> SamplerWorker::gather(const std::vector<std::pair<int, std::uint64_t>>& blocks) {
+std::vector<ObservedTrajectory> SamplerWorker::gather(const std::vector<std::pair<int, std::uint64_t>>& blocks,
+                                                      size_t trajectories) {
   std::vector<ObservedTrajectory> data;
+  data.reserve(trajectories);  // moving in allocates nothing: only a second place's copy can fail
   std::map<std::uint64_t, std::pair<size_t, size_t>> placed;  // digest -> (first index, size)
-  for (const auto& [b, digest] : blocks) {
-    const auto seen = placed.find(digest);
-    if (seen != placed.end()) {
-      const auto [first, n] = seen->second;
-      for (size_t i = 0; i < n; ++i) data.push_back(data[first + i]);
-      continue;
+  try {
+    for (const auto& [b, digest] : blocks) {
+      const auto seen = placed.find(digest);
+      if (seen != placed.end()) {
+        const auto [first, n] = seen->second;
+        for (size_t i = 0; i < n; ++i) data.push_back(data[first + i]);
+        continue;
+      }
+      std::vector<ObservedTrajectory>& block = held_.at(digest);
+      placed[digest] = {data.size(), block.size()};
+      lent_[digest] = block.size();
+      for (auto& t : block) data.push_back(std::move(t));
+      block = {};  // its place in held_ stays: the block is held, by the E-step
     }
-    std::vector<ObservedTrajectory>& block = held_.at(digest);
-    placed[digest] = {data.size(), block.size()};
-    lent_[digest] = block.size();
-    for (auto& t : block) data.push_back(std::move(t));
-    block = {};  // its place in held_ stays: the block is held, by the E-step
+  } catch (...) {  // out of memory copying a second place: what was moved goes back
+    give_back(std::move(data), blocks);
+    throw;
   }
   return data;
 }
@@ -469,7 +476,7 @@ void SamplerWorker::serve(bool all_here_only) {
     options.watch = local.watch;
     // The E-step takes the blocks over (merged in place: merging the optimiser's merged
     // trajectories again changes nothing), so each is held once.
-    std::vector<ObservedTrajectory> data = gather(blocks);
+    std::vector<ObservedTrajectory> data = gather(blocks, local.trajectories);
     try {
       estep_.emplace(*mdp_, std::move(data), worker_prior(P, W, E, learned_eta, m.num_end_rows, m.num_end_symbols),
                      options);

@@ -66,7 +66,7 @@ class SamplerWorker {
   size_t held_size(std::uint64_t digest) const;
   // The E-step takes the blocks it computes from held_ (gather) and gives them back when it
   // is made again or goes (take_back_lent): each trajectory is held once (issue 35).
-  std::vector<ObservedTrajectory> gather(const std::vector<std::pair<int, std::uint64_t>>& blocks);
+  std::vector<ObservedTrajectory> gather(const std::vector<std::pair<int, std::uint64_t>>& blocks, size_t trajectories);
   void give_back(std::vector<ObservedTrajectory>&& data, const std::vector<std::pair<int, std::uint64_t>>& blocks);
   void take_back_lent();
 
