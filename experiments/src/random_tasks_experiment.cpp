@@ -62,12 +62,8 @@ RandomTaskRun describe(const RandomTask& task, const RandomTaskMethod& method) {
 // weighed by the strength: holding them leaves the subject's learning as the default's).
 constexpr double kPseudoCounts = 1e6;
 
-// The oracles' data (issue 33): what the simulator used, nothing learned -- the true
-// subject O and element O's as the prior's fixed means, every observation's eta what its
-// stated eta says of the true source under the simulator's own rules (calibrated_eta: the
-// source mixture -- the subject with probability subject_share, else an element chosen
-// evenly -- and how the labeller states eta). A first version used the mixture alone,
-// which throws away what a plausible eta says: the default, learning eta, beat it.
+// The simulator's source mixture: the subject with probability subject_share, else an
+// element chosen evenly.
 Eigen::RowVectorXd source_mixture(const RandomTask& task) {
   const int E = task.num_confounders;
   Eigen::RowVectorXd mixture(1 + E);
@@ -76,6 +72,11 @@ Eigen::RowVectorXd source_mixture(const RandomTask& task) {
   return mixture;
 }
 
+// The oracles' data (issue 33): what the simulator used, nothing learned -- the true
+// subject O and element O's as the prior's fixed means, every observation's eta what its
+// stated eta says of the true source under the simulator's own rules (calibrated_eta: the
+// source mixture and how the labeller states eta). A first version used the mixture alone,
+// which throws away what a plausible eta says: the default, learning eta, beat it.
 std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const RandomTask& task) {
   ObservationPrior prior = task.prior;
   prior.subject_alpha = task.subject_o;  // its Dirichlet mean is the true O
@@ -95,9 +96,9 @@ std::pair<ObservationPrior, std::vector<ObservedTrajectory>> oracle_data(const R
 // true O's, and each context's eta what its stated eta says under the simulator's rules --
 // instead of the prior's mean and the stated eta. Everything after is the default's
 // learning: does EM stay at the truth, and does the learner's own criterion (the restart
-// score) prefer where it ends to where the default ends? If EM leaves the truth for the
-// default's answer, the data's posterior mode is not the truth: no learner that follows
-// the data's likelihood under this model finds it (issue 33).
+// score) prefer where it ends to where the default ends? EM climbs the posterior, so where
+// it leaves the truth the data, with the prior, favour another O (issue 33;
+// docs/results.md "Random tasks").
 class StartedAtTruth final : public EStep {
  public:
   StartedAtTruth(const ObservationEStep& inner, const RandomTask& task) : inner_(inner), task_(task) {}
@@ -604,12 +605,13 @@ void write_truth_start(std::ostream& out, const std::vector<RandomTaskRun>& runs
     only_default += dn && !tn ? 1 : 0;
     only_truth += tn && !dn ? 1 : 0;
     neither += !dn && !tn ? 1 : 0;
-    near_by_score += (t.score > d.score ? tn : dn) ? 1 : 0;
     if (same_answer(d, t)) {
       ++same;
+      near_by_score += dn ? 1 : 0;
       return;
     }
-    if (!std::isfinite(d.score) || !std::isfinite(t.score)) return;
+    if (!std::isfinite(d.score) || !std::isfinite(t.score)) return;  // runs from before the score was recorded
+    near_by_score += (t.score > d.score ? tn : dn) ? 1 : 0;
     (t.score > d.score ? truth_scores_higher : default_scores_higher) += 1;
     if (tn && !dn) {
       ++near_truth_differs;
@@ -622,8 +624,8 @@ void write_truth_start(std::ostream& out, const std::vector<RandomTaskRun>& runs
       << " data sets, it ends at the default's answer (the same learned policy value) in " << same << " ("
       << percent(static_cast<double>(same) / n) << "). Within 5% of the optimal value: both " << both
       << ", only the default " << only_default << ", only from the truth " << only_truth << ", neither " << neither
-      << ". Where the two ends differ, the learner's criterion (the restart score) is higher at the end from the "
-         "truth in "
+      << ". Where the two ends differ, the learner's own criterion for choosing between answers (the restart "
+         "score: the held-out likelihood that chose the prior's strength) is higher at the end from the truth in "
       << truth_scores_higher << " and at the default's in " << default_scores_higher
       << "; of the data sets where only the end from the truth is within 5%, it scores higher in "
       << near_truth_scores_higher << " of " << near_truth_differs

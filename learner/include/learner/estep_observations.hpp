@@ -123,8 +123,9 @@ class ObservationEStep final : public EStep {
 
   const std::vector<ObservedTrajectory>& trajectories() const { return trajectories_; }
   // The trajectories handed over as they were given, merged (merging them again gives them
-  // unchanged; contexts this E-step numbered are taken off), leaving this E-step empty -- for a holder that lends its
-  // data to an E-step and takes it back rather than keep a copy (services/sampler_worker.cpp).
+  // unchanged; contexts this E-step numbered are taken off), leaving this E-step empty: for
+  // a holder that lends its data to an E-step and takes it back rather than keep a copy
+  // (services/sampler_worker.cpp).
   std::vector<ObservedTrajectory> take_trajectories() &&;
   // The digest (dataset_digest) of the trajectories as given, merged, before learned eta
   // gave them contexts: how a BlockExecutor tells the E-steps it serves apart (the
