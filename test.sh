@@ -75,13 +75,16 @@ finish_background "the sanitizer and fuzz build" build-sanitize-fuzz/build.log
 
 # Run in the Release build only: the multi-process tests (label multiprocess: whole
 # service sets over LCM in network namespaces; the same service code runs under the
-# sanitizers in the in-process tests), and twenty-two statistics-heavy tests that take
+# sanitizers in the in-process tests), twenty-three statistics-heavy tests that take
 # seconds in Release and up to two minutes each under the sanitizers (the E-step, EM and the
-# experiment runners they drive run under the sanitizers in the other tests).
-heavy='^(EtaSensitivity\.LearnedEtaFindsTheCalibrationAndSameBitsForAnyThreads|LearnReward\.RecordedObjectiveNeverDecreasesOnRandomTasks|Cli\.EtaExperimentsAtSmallScale|Unlisted\.MethodsRunAndTheOracleIsToldEverything|HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal|ObservationEStep\.LearnedEtaRecoversTheLabellersCalibration|Cli\.EveryGeneratedRandomTaskValidates|Cli\.OnionExperimentAtSmallScale|LearnAnytime\.EachEstimateIsLearnOnThePrefixFromThePreviousAndNoWorseThanFresh|StoppingExperiment\.AnEstimatePerDemonstration|CalibrationExperiment\.RunsAndReadsBack|RewardPosterior\.OneFeatureFromObservationsAgreesWithEnumerationOnAGrid|JudgedTasks\.StoppingOnTheGridworld|JudgedTasks\.TasksOfTheFigures|CalibrationExperiment\.OnTheGridworldFiguresRuns|Learn\.IsTheLearnersPartsBitForBit|Cli\.AnytimeEstimatesAreReproducedOneByOne)$'
+# experiment runners they drive run under the sanitizers in the other tests), and one that
+# compares CPU times (the reader it times is fuzzed under the sanitizers).
+heavy='^(EtaSensitivity\.LearnedEtaFindsTheCalibrationAndSameBitsForAnyThreads|LearnReward\.RecordedObjectiveNeverDecreasesOnRandomTasks|Cli\.EtaExperimentsAtSmallScale|Unlisted\.MethodsRunAndTheOracleIsToldEverything|HiddenDataEm\.AccelerationConvergesFasterToNoWorseLikelihood|HiddenDataEm\.GridworldWithThreeConfoundersAndPlausibleEtaRecoversTheGoal|RandomTasks\.DefaultIsRightAtLeastAsOftenAsTheFixedPrior|Cli\.GridworldExperimentAtSmallScale|OnionData\.QualitiesAlternate|Pipeline\.GridworldOfSizeTenLearnsTheGoal|ObservationEStep\.LearnedEtaRecoversTheLabellersCalibration|Cli\.EveryGeneratedRandomTaskValidates|Cli\.OnionExperimentAtSmallScale|LearnAnytime\.EachEstimateIsLearnOnThePrefixFromThePreviousAndNoWorseThanFresh|StoppingExperiment\.AnEstimatePerDemonstration|CalibrationExperiment\.RunsAndReadsBack|RewardPosterior\.OneFeatureFromObservationsAgreesWithEnumerationOnAGrid|JudgedTasks\.StoppingOnTheGridworld|JudgedTasks\.TasksOfTheFigures|CalibrationExperiment\.OnTheGridworldFiguresRuns|Learn\.IsTheLearnersPartsBitForBit|Cli\.AnytimeEstimatesAreReproducedOneByOne|RandomTasks\.EmStartedAtTheTruthStartsThere|ProblemFile\.ReadingIsLinearInATrajectorysLength)$'
 # The learner-only check builds in the background meanwhile.
 mkdir -p build-learner-only
-background build-learner-only/check.log scripts/learner-only-check.sh build-learner-only "$jobs"
+# (Without the heavy tests: what it checks is that the maths builds and runs alone; the
+# Release build ran them.)
+background build-learner-only/check.log scripts/learner-only-check.sh build-learner-only "$jobs" -E "$heavy"
 stage "sanitizer tests (the learner-only build and tests in the background)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-sanitize-fuzz --output-on-failure -j"$jobs" -LE multiprocess -E "$heavy"

@@ -11,6 +11,11 @@ if ! command -v "$format" >/dev/null 2>&1; then
 fi
 mapfile -t files < <(git ls-files '*.cpp' '*.hpp' '*.h')
 if [ "${1:-}" = --check ]; then
+  # Forty files to a process, on every core: one process per file took 34 s of ./test.sh,
+  # this takes about one. Only when a batch fails are its files looked at one by one.
+  if printf '%s\0' "${files[@]}" | xargs -0 -n 40 -P "$(nproc)" "$format" --style=file --dry-run --Werror >/dev/null 2>&1; then
+    exit 0
+  fi
   bad=()
   for f in "${files[@]}"; do
     "$format" --style=file --dry-run --Werror "$f" >/dev/null 2>&1 || bad+=("$f")

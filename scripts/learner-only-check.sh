@@ -3,10 +3,12 @@
 # problem/ and their tests) the way it would go on a machine without OpenCV, LCM, CLI11
 # or cpp-httplib: in a private mount namespace (unshare -rm) where their headers and
 # libraries are hidden, so a stray dependency fails the build here. Nothing outside the
-# namespace changes.   scripts/learner-only-check.sh BUILD_DIR [JOBS]
+# namespace changes.   scripts/learner-only-check.sh BUILD_DIR [JOBS [CTEST_ARGS...]]
+# (CTEST_ARGS: ./test.sh leaves out the heavy tests the Release build ran.)
 set -euo pipefail
 build="$1"
 jobs="${2:-$(nproc)}"
+ctest_args=("${@:3}")
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 if [ -z "${HBIRL_HIDDEN:-}" ]; then
   if unshare -rm true 2>/dev/null; then
@@ -30,4 +32,4 @@ echo "learner-only: hidden ${#hidden[@]} headers and libraries of OpenCV, LCM, C
 cmake -S "$repo" -B "$build" -DHBIRL_LEARNER_ONLY=ON -DHBIRL_WERROR=ON -DHBIRL_BUILD_BENCH=OFF \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -DNDEBUG" >/dev/null
 cmake --build "$build" -j"$jobs"
-ctest --test-dir "$build" --output-on-failure -j"$jobs"
+ctest --test-dir "$build" --output-on-failure -j"$jobs" "${ctest_args[@]}"

@@ -122,7 +122,9 @@ TEST(Learn, DrawsThePosteriorWhenAsked) {
 // and never worse by EM's selection score than a start from scratch on the same n -- from
 // observations and from true trajectories (where the score is the log-likelihood).
 TEST(LearnAnytime, EachEstimateIsLearnOnThePrefixFromThePreviousAndNoWorseThanFresh) {
-  for (std::uint64_t seed : {4u, 9u}) {
+  // One task: each of its 5 estimates is learned three times from observations (the
+  // test's CPU time is most of a minute with two).
+  for (std::uint64_t seed : {4u}) {
     const RandomTask task = small_task(seed);
     LearnSettings settings;
     settings.em.threads = 2;
