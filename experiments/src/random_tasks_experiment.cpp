@@ -151,6 +151,35 @@ void hold_seen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior
   prior.strength = 1.0;
 }
 
+// oracle_unseen_subject_o: the complement -- the true subject O held on the pairs the
+// controlled run never visited, the others the prior's counts at strength 1.
+void hold_unseen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
+  const Eigen::MatrixXd& alpha = task.prior.subject_alpha;
+  for (Eigen::Index r = 0; r < alpha.rows(); ++r) {
+    if (!(alpha.row(r).array() > task.prior.subject_alpha_base).any())
+      prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
+  }
+  prior.automatic_strength = false;
+  prior.strength = 1.0;
+}
+
+// A base pseudo-count b in place of the stated one: alpha - base + b everywhere.
+void rebase_subject_prior(ObservationPrior& prior, double b) {
+  prior.subject_alpha = (prior.subject_alpha.array() - prior.subject_alpha_base).cwiseMax(0.0) + b;
+  prior.subject_alpha_base = b;
+}
+
+// posterior_unheld: the pairs the controlled run never visited learned from the
+// demonstrations like the others, not held at the prior's mean (weighed_subject_prior's
+// rule): each such row is given a count too small to move anything (1e-9 on its first
+// symbol), which is what makes weighed_subject_prior weigh it as counted.
+void unhold_unseen_pairs(ObservationPrior& prior) {
+  for (Eigen::Index r = 0; r < prior.subject_alpha.rows(); ++r) {
+    if (!(prior.subject_alpha.row(r).array() > prior.subject_alpha_base).any())
+      prior.subject_alpha(r, 0) = prior.subject_alpha_base + 1e-9;
+  }
+}
+
 void hold_elements_at_true_o(const RandomTask& task, ObservationPrior& prior) {
   prior.confounder_alpha = kPseudoCounts * task.confounder_o;
 }
@@ -196,6 +225,9 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     if (method.kind == "oracle_subject_o") hold_subject_at_true_o(task, prior);
     if (method.kind == "oracle_elements_o") hold_elements_at_true_o(task, prior);
     if (method.kind == "oracle_seen_subject_o") hold_seen_subject_at_true_o(task, prior);
+    if (method.kind == "oracle_unseen_subject_o") hold_unseen_subject_at_true_o(task, prior);
+    if (method.base >= 0.0) rebase_subject_prior(prior, method.base);
+    if (method.kind == "unheld") unhold_unseen_pairs(prior);
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
     prior.c = method.c;
@@ -340,6 +372,10 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"oracle_seen_subject_o", "oracle_seen_subject_o", 0.1, 1},
       {"posterior_s1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 1000.0},
       {"posterior_from_truth", "from_truth", 0.1, 1},
+      {"oracle_unseen_subject_o", "oracle_unseen_subject_o", 0.1, 1},
+      {"posterior_base0.1", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, 0.1},
+      {"posterior_base0.3", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, 0.3},
+      {"posterior_unheld", "unheld", 0.1, 1},
   };
   return methods;
 }
@@ -546,6 +582,11 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "oracle_elements_o");
   compare("posterior", "posterior_from_truth");
   compare("posterior_from_truth", "oracle_sensor");
+  compare("posterior_s1", "oracle_seen_subject_o");
+  compare("posterior_s1", "oracle_unseen_subject_o");
+  compare("posterior", "posterior_unheld");
+  compare("posterior", "posterior_base0.1");
+  compare("posterior", "posterior_base0.3");
 }
 
 // Does the default's answer depend on c?

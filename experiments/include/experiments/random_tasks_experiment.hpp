@@ -31,7 +31,14 @@
 //                      default learns them; oracle_elements_o: the true element O's held,
 //                      the subject's O and eta learned: O's part split between the two
 //   oracle_seen_subject_o  the true subject O held on the pairs the controlled run saw
-//                      only (the others kept at the prior's mean, as the default keeps them)
+//                      only (the others kept at the prior's mean, as the default keeps them),
+//                      the strength fixed at 1: compare with posterior_s1
+//   oracle_unseen_subject_o  its complement: the true subject O held on the pairs the
+//                      controlled run never saw, the others its counts at strength 1
+//   posterior_unheld   the default with the pairs the controlled run never saw learned
+//                      from the demonstrations instead of held at the prior's mean
+//   posterior_base0.1, posterior_base0.3  the default with a base pseudo-count of 0.1 or
+//                      0.3 per symbol instead of the stated 1 (less pull towards uniform)
 //   posterior_s1, posterior_s1000  the default with the subject prior's strength fixed
 //                      at 1 (the counts at face value) or 1000 (the controlled run's O
 //                      held) instead of chosen by held-out likelihood
@@ -57,7 +64,8 @@ namespace hbirl {
 struct RandomTaskMethod {
   std::string key;   // as above
   std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o",
-                     // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o", "from_truth"
+                     // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o",
+                     // "oracle_unseen_subject_o", "unheld", "from_truth"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
@@ -65,6 +73,7 @@ struct RandomTaskMethod {
   enum class End { kUnseen, kState, kSensor };
   End end = End::kUnseen;
   double strength = 0.0;  // the subject prior's strength; 0: chosen from the data (the default)
+  double base = -1.0;     // the subject prior's base pseudo-count instead of the stated one (-1: as stated)
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();
