@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <sodium.h>
 
@@ -287,13 +288,14 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
     watch_frame(m, f);
     return;
   }
+  if (tally_only_) f = Frame{{}, {}, {}, frame_digest(f)};
   Episode& e = episode(m.episode);
   // A repeat is ignored: the first copy is kept. A frame's observations are the same every
   // time its sensor sends them (perception and the labeller are deterministic): another
   // copy that differs means one of the two is not the sensor's.
   if (const auto seen = e.frames.find({m.step, m.frame}); seen != e.frames.end()) {
     const Frame& first = seen->second;
-    if (first.symbols != f.symbols || first.eta != f.eta || first.contexts != f.contexts) {
+    if (first.symbols != f.symbols || first.eta != f.eta || first.contexts != f.contexts || first.digest != f.digest) {
       contradicted("two different observations of episode " + std::to_string(m.episode) + ", step " +
                    std::to_string(m.step) + ", frame " + std::to_string(m.frame));
     }
@@ -507,6 +509,7 @@ Dataset first_demonstrations(Dataset data, size_t n) {
 }
 
 Dataset DatasetBuilder::build() const {
+  if (tally_only_) throw std::logic_error("DatasetBuilder::build: a tally keeps no observations");
   Dataset d = empty_dataset();
   for (const auto& [id, e] : episodes_) add_episode(d, id, e);
   finish_dataset(d);
@@ -533,6 +536,7 @@ std::uint64_t DatasetBuilder::frame_digest(const Frame& f) const {
 }
 
 Dataset DatasetBuilder::take() {
+  if (tally_only_) throw std::logic_error("DatasetBuilder::take: a tally keeps no observations");
   // A complete run is closed: an episode it did not have contradicts it from now on, and
   // so does an END_RUN stating another number than the episodes 0 .. n-1 it had.
   taken_complete_ = complete();

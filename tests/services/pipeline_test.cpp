@@ -813,6 +813,22 @@ TEST(DatasetBuilder, CopiesThatDisagreeContradictTheRun) {
     EXPECT_FALSE(b.contradiction().empty());
   }
   {
+    // A tally (RecordingWatch's) keeps only each frame's digest: a copy that differs still
+    // contradicts, an identical one does not, and it has no data set to give.
+    DatasetBuilder tally;
+    tally.tally_only();
+    tally.on_observations(o);
+    tally.on_observations(o);
+    EXPECT_TRUE(tally.contradiction().empty()) << tally.contradiction();
+    hbirl::observations_t other = o;
+    other.eta = {{0.6, 0.4}};
+    tally.on_observations(other);
+    EXPECT_NE(tally.contradiction().find("two different observations of episode 0, step 0, frame 0"), std::string::npos)
+        << tally.contradiction();
+    EXPECT_THROW((void)tally.build(), std::logic_error);
+    EXPECT_THROW((void)tally.take(), std::logic_error);
+  }
+  {
     DatasetBuilder b;
     b.on_truth(t);
     hbirl::ground_truth_t other = t;
@@ -1097,6 +1113,8 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     Rng rng(seed);
     DatasetBuilder b;
+    DatasetBuilder tally;  // the same messages, only counted (RecordingWatch's)
+    tally.tally_only();
     std::map<int, Sent> sent;
     bool run_ended = false;
     const int stated = static_cast<int>(1 + rng.uniform_int(6));  // what an END_RUN that says states
@@ -1119,6 +1137,7 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
         o.symbol = {1};
         o.eta = {{1.0}};
         b.on_observations(o);
+        tally.on_observations(o);
         e.frames.insert({o.step, o.frame});
       } else if (kind <= 6) {
         hbirl::ground_truth_t t{};
@@ -1126,6 +1145,7 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
         t.episode = id;
         t.step = static_cast<int>(rng.uniform_int(5));
         b.on_truth(t);
+        tally.on_truth(t);
         e.truth.insert(t.step);
       } else {
         hbirl::episode_marker_t m{};
@@ -1140,8 +1160,10 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
           if (!known) sent.erase(id);  // END_RUN names no episode
           if (!any_ended) {
             EXPECT_THROW(b.on_marker(m), InputError);
+            EXPECT_THROW(tally.on_marker(m), InputError);
           } else {
             b.on_marker(m);
+            tally.on_marker(m);
             run_ended = true;
             if (m.num_steps > 0) run_episodes = m.num_steps;
           }
@@ -1150,6 +1172,7 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
           m.controlled = !e.controlled;
           m.num_steps = 1;
           EXPECT_THROW(b.on_marker(m), InputError);
+          EXPECT_THROW(tally.on_marker(m), InputError);
         } else if (kind == 10) {  // frames per step out of range: refused before any reader (messages.hpp)
           m.kind = hbirl::episode_marker_t::BEGIN_EPISODE;
           m.frames_per_step = 0;
@@ -1159,12 +1182,14 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
           m.kind = hbirl::episode_marker_t::END_EPISODE;
           m.num_steps = static_cast<int>(1 + rng.uniform_int(4));
           b.on_marker(m);
+          tally.on_marker(m);
           e.marked = e.ended = true;
           e.steps = m.num_steps;
           e.per_step = m.frames_per_step;
         } else {
           m.kind = kind == 7 ? hbirl::episode_marker_t::BEGIN_EPISODE : hbirl::episode_marker_t::BEGIN_STEP;
           b.on_marker(m);
+          tally.on_marker(m);
           e.marked = true;
           e.per_step = m.frames_per_step;
         }
@@ -1206,6 +1231,14 @@ TEST(DatasetBuilder, KeepsCountOfWhatIsMissing) {
       }
       ASSERT_EQ(b.complete_demonstrations(), complete_demonstrations) << "message " << message;
       ASSERT_EQ(b.complete_demonstration_prefix(), prefix) << "message " << message;
+      // The tally says the same of the run.
+      ASSERT_EQ(tally.frames(), b.frames()) << "message " << message;
+      ASSERT_EQ(tally.missing_frames(), b.missing_frames()) << "message " << message;
+      ASSERT_EQ(tally.missing_truth(), b.missing_truth()) << "message " << message;
+      ASSERT_EQ(tally.unfinished_episodes(), b.unfinished_episodes()) << "message " << message;
+      ASSERT_EQ(tally.complete(), b.complete()) << "message " << message;
+      ASSERT_EQ(tally.missing_frame_keys(1000), b.missing_frame_keys(1000)) << "message " << message;
+      ASSERT_EQ(tally.contradiction(), b.contradiction()) << "message " << message;
     }
   }
 }

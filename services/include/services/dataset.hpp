@@ -58,6 +58,11 @@ class DatasetBuilder {
   // set past it is refused (InputError naming --max-dataset-mb) and not kept, whoever
   // floods the bus with made-up frames.
   void limit(std::int64_t max_bytes) { max_bytes_ = max_bytes; }
+  // Keeps of each frame only that it came and its digest, not its observations: a builder
+  // that counts what a run holds (RecordingWatch: is the recording the whole run?) and
+  // still finds a later copy that differs, without a second copy of the data. Its
+  // counts are a full builder's; build() and take() throw std::logic_error.
+  void tally_only() { tally_only_ = true; }
   // Each throws InputError naming the field of a message that does not fit. Messages come
   // as typed subscribe() hands them over: having passed their type's validate() (messages.hpp).
   void on_marker(const hbirl::episode_marker_t& m);
@@ -118,6 +123,7 @@ class DatasetBuilder {
     std::vector<int> symbols;
     std::vector<double> eta;    // rows of num_sources
     std::vector<int> contexts;  // one per symbol, or none
+    std::uint64_t digest = 0;   // tally_only(): frame_digest of what the three held
   };
   std::uint64_t frame_digest(const Frame& f) const;
   void watch_frame(const hbirl::observations_t& m, const Frame& f);
@@ -161,6 +167,7 @@ class DatasetBuilder {
   int last_episode_ = -1;  // the highest episode any message was about
   std::int64_t end_runs_heard_ = 0;
   bool watching_ = false;  // taken: only watching for a contradiction
+  bool tally_only_ = false;
   // What was taken, to check later copies against: (episode, step, frame) -> the frame's
   // digest, and (episode, step) -> its truth; sorted (24 and 16 bytes a frame and a step).
   std::vector<std::pair<std::tuple<int, int, int>, std::uint64_t>> taken_frames_;
