@@ -81,11 +81,12 @@ BENCHMARK(BM_PerceiveFrame)->Arg(320)->Arg(640);
 
 // The fixed workload perception is measured against (issue 35; docs/BENCHMARKS.md "Onion
 // camera and perception"): perception's kind of work, frozen here so that it never changes
-// when perception does -- per pixel of a 640x480 frame of 64 colours (40 discs on a
-// background, drawn from a fixed seed) one lookup in a 16 MB table, then OpenCV's connected
-// components of the mask that gives. A neighbour's use of the caches and the memory bus
-// slows it as it slows perception, so the ratio of the two holds while frames/s moves
-// with the hour.
+// when perception does -- per pixel of a 640x480 frame one lookup in a table of 2^24
+// colours, then OpenCV's connected components of the mask that gives. The frame (40 discs
+// on a background, from a fixed seed) has at most 41 colours, so the lookups touch a few
+// cache lines, as the rendered scene's do; the full-frame connected components is what
+// leans on memory. The ratio moved less with the machine's load than frames/s did, not
+// nothing (the figures are in docs/BENCHMARKS.md).
 class ReferenceWorkload {
  public:
   ReferenceWorkload() : table_(std::size_t{1} << 24), frame_(480, 640, CV_8UC3), mask_(480, 640, CV_8UC1) {

@@ -163,7 +163,9 @@ void hold_unseen_subject_at_true_o(const RandomTask& task, ObservationPrior& pri
   prior.strength = 1.0;
 }
 
-// A base pseudo-count b in place of the stated one: alpha - base + b everywhere.
+// A base pseudo-count b in place of the stated one: the counts above the base kept, the
+// base b (rows with no counts stay uncounted, so weighed_subject_prior still holds them,
+// at 1000 b).
 void rebase_subject_prior(ObservationPrior& prior, double b) {
   prior.subject_alpha = (prior.subject_alpha.array() - prior.subject_alpha_base).cwiseMax(0.0) + b;
   prior.subject_alpha_base = b;
@@ -172,7 +174,8 @@ void rebase_subject_prior(ObservationPrior& prior, double b) {
 // posterior_unheld: the pairs the controlled run never visited learned from the
 // demonstrations like the others, not held at the prior's mean (weighed_subject_prior's
 // rule): each such row is given a count too small to move anything (1e-9 on its first
-// symbol), which is what makes weighed_subject_prior weigh it as counted.
+// symbol: random tasks' base is 1, far from where 1e-9 would round away), which is what
+// makes weighed_subject_prior weigh it as counted.
 void unhold_unseen_pairs(ObservationPrior& prior) {
   for (Eigen::Index r = 0; r < prior.subject_alpha.rows(); ++r) {
     if (!(prior.subject_alpha.row(r).array() > prior.subject_alpha_base).any())

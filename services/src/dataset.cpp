@@ -288,6 +288,10 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
     watch_frame(m, f);
     return;
   }
+  // What the frame costs against --max-dataset-mb, as the data set holds it: a tally
+  // refuses what a full builder would (and holds less).
+  const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
+                             8 * static_cast<std::int64_t>(f.eta.size());
   if (tally_only_) f = Frame{{}, {}, {}, frame_digest(f)};
   Episode& e = episode(m.episode);
   // A repeat is ignored: the first copy is kept. A frame's observations are the same every
@@ -301,8 +305,6 @@ void DatasetBuilder::on_observations(const hbirl::observations_t& m) {
     }
     return;
   }
-  const std::int64_t bytes = 96 + 4 * static_cast<std::int64_t>(f.symbols.size() + f.contexts.size()) +
-                             8 * static_cast<std::int64_t>(f.eta.size());
   if (bytes_ + bytes > max_bytes_) {
     throw InputError("observations", "the run's data would take more than --max-dataset-mb " +
                                          std::to_string(max_bytes_ >> 20) + " MB: frame not kept");
@@ -508,6 +510,19 @@ Dataset first_demonstrations(Dataset data, size_t n) {
   return data;
 }
 
+void DatasetBuilder::tally_only() {
+  if (frames_ > 0) throw std::logic_error("DatasetBuilder::tally_only: frames are kept already");
+  tally_only_ = true;
+}
+
+std::int64_t DatasetBuilder::held_observations() const {
+  std::int64_t n = 0;
+  for (const auto& [id, e] : episodes_) {
+    for (const auto& [key, f] : e.frames) n += static_cast<std::int64_t>(f.symbols.size());
+  }
+  return n;
+}
+
 Dataset DatasetBuilder::build() const {
   if (tally_only_) throw std::logic_error("DatasetBuilder::build: a tally keeps no observations");
   Dataset d = empty_dataset();
@@ -527,7 +542,10 @@ std::uint64_t DatasetBuilder::frame_digest(const Frame& f) const {
   const std::uint64_t sizes[3] = {f.symbols.size(), f.eta.size(), f.contexts.size()};
   add(sizes, sizeof sizes);
   add(f.symbols.data(), f.symbols.size() * sizeof(int));
-  add(f.eta.data(), f.eta.size() * sizeof(double));
+  for (double v : f.eta) {
+    v += 0.0;  // -0 as +0: equal digests exactly where the frames compare equal (==)
+    add(&v, sizeof v);
+  }
   add(f.contexts.data(), f.contexts.size() * sizeof(int));
   std::uint64_t out = 0;
   static_assert(crypto_shorthash_BYTES == sizeof out, "an 8-byte digest");

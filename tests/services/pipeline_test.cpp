@@ -699,33 +699,37 @@ TEST(DatasetBuilder, ContextsAreAllOrNoneAndInRange) {
   EXPECT_NE(some.contexts_note.find("contexts ignored"), std::string::npos) << some.contexts_note;
 }
 
+// (A tally, which keeps no observation, refuses the same frames: RecordingWatch says of a
+// recording what its readers, full builders, will.)
 TEST(DatasetBuilder, ObservationsBeyondTheLimitAreRefused) {
-  DatasetBuilder b;
-  b.limit(64 * 1024);
-  hbirl::observations_t o{};
-  o.num_symbols = 4;
-  o.num_sources = 2;
-  o.n = 8;
-  o.symbol.assign(8, 1);
-  o.eta.assign(8, {0.5, 0.5});
-  int kept = 0, refused = 0;
-  for (int k = 0; k < 2000; ++k) {
-    o.episode = k / 100;
-    o.step = k % 100;
-    try {
-      b.on_observations(o);
-      ++kept;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("--max-dataset-mb"), std::string::npos) << e.what();
-      ++refused;
+  for (const bool tally : {false, true}) {
+    DatasetBuilder b;
+    if (tally) b.tally_only();
+    b.limit(64 * 1024);
+    hbirl::observations_t o{};
+    o.num_symbols = 4;
+    o.num_sources = 2;
+    o.n = 8;
+    o.symbol.assign(8, 1);
+    o.eta.assign(8, {0.5, 0.5});
+    int kept = 0, refused = 0;
+    for (int k = 0; k < 2000; ++k) {
+      o.episode = k / 100;
+      o.step = k % 100;
+      try {
+        b.on_observations(o);
+        ++kept;
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--max-dataset-mb"), std::string::npos) << e.what();
+        ++refused;
+      }
     }
+    EXPECT_EQ(kept, 64 * 1024 / (96 + 4 * 8 + 8 * 16)) << "tally " << tally;
+    EXPECT_EQ(refused, 2000 - kept);
+    o.episode = 0;
+    o.step = 0;
+    EXPECT_NO_THROW(b.on_observations(o));  // a repeat of a kept frame
   }
-  EXPECT_GT(kept, 100);
-  EXPECT_GT(refused, 1000);
-  EXPECT_LE(kept * (96 + 4 * 8 + 8 * 16), 64 * 1024);
-  o.episode = 0;
-  o.step = 0;
-  EXPECT_NO_THROW(b.on_observations(o));  // a repeat of a kept frame
 }
 
 // A marker that relabels an episode (controlled run vs demonstration) after its first
@@ -813,20 +817,35 @@ TEST(DatasetBuilder, CopiesThatDisagreeContradictTheRun) {
     EXPECT_FALSE(b.contradiction().empty());
   }
   {
-    // A tally (RecordingWatch's) keeps only each frame's digest: a copy that differs still
-    // contradicts, an identical one does not, and it has no data set to give.
-    DatasetBuilder tally;
-    tally.tally_only();
-    tally.on_observations(o);
-    tally.on_observations(o);
-    EXPECT_TRUE(tally.contradiction().empty()) << tally.contradiction();
-    hbirl::observations_t other = o;
-    other.eta = {{0.6, 0.4}};
-    tally.on_observations(other);
-    EXPECT_NE(tally.contradiction().find("two different observations of episode 0, step 0, frame 0"), std::string::npos)
-        << tally.contradiction();
-    EXPECT_THROW((void)tally.build(), std::logic_error);
-    EXPECT_THROW((void)tally.take(), std::logic_error);
+    // A tally (RecordingWatch's) keeps only each frame's digest, no observation: a copy
+    // that differs -- in eta, symbol or context -- contradicts it exactly as a full builder,
+    // an identical one does not, nor one whose eta has -0 for 0 (equal to both), and it
+    // has no data set to give.
+    hbirl::observations_t first = one_observation(2, {1.0, 0.0});
+    first.num_context = 1;
+    first.context = {0};
+    hbirl::observations_t other_eta = first, other_symbol = first, other_context = first, minus_zero = first;
+    other_eta.eta = {{0.6, 0.4}};
+    other_symbol.symbol = {1};
+    other_context.context = {1};
+    minus_zero.eta = {{1.0, -0.0}};
+    for (const hbirl::observations_t* other : {&other_eta, &other_symbol, &other_context, &minus_zero}) {
+      DatasetBuilder full, tally;
+      tally.tally_only();
+      for (DatasetBuilder* b : {&full, &tally}) {
+        b->on_observations(first);
+        b->on_observations(first);
+        EXPECT_TRUE(b->contradiction().empty()) << b->contradiction();
+        b->on_observations(*other);
+      }
+      EXPECT_EQ(tally.contradiction(), full.contradiction());
+      EXPECT_EQ(full.contradiction().empty(), other == &minus_zero) << full.contradiction();
+      EXPECT_EQ(full.held_observations(), 1);
+      EXPECT_EQ(tally.held_observations(), 0);
+      EXPECT_THROW((void)tally.build(), std::logic_error);
+      EXPECT_THROW((void)tally.take(), std::logic_error);
+      EXPECT_THROW(full.tally_only(), std::logic_error);  // too late: a frame is kept
+    }
   }
   {
     DatasetBuilder b;

@@ -61,8 +61,11 @@ class DatasetBuilder {
   // Keeps of each frame only that it came and its digest, not its observations: a builder
   // that counts what a run holds (RecordingWatch: is the recording the whole run?) and
   // still finds a later copy that differs, without a second copy of the data. Its
-  // counts are a full builder's; build() and take() throw std::logic_error.
-  void tally_only() { tally_only_ = true; }
+  // counts and refusals are a full builder's; build() and take() throw std::logic_error.
+  // Called before any frame (else std::logic_error).
+  void tally_only();
+  // The observations its frames hold now (0 for a tally).
+  std::int64_t held_observations() const;
   // Each throws InputError naming the field of a message that does not fit. Messages come
   // as typed subscribe() hands them over: having passed their type's validate() (messages.hpp).
   void on_marker(const hbirl::episode_marker_t& m);
