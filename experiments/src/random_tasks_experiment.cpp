@@ -13,6 +13,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "learner/observation_model.hpp"
 #include "learner/parallel.hpp"
 #include "sim_driver/file/random_task.hpp"
 
@@ -142,10 +143,9 @@ void hold_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
 // oracle_seen_subject_o: the true subject O held only on the pairs the controlled run
 // visited (rows with counts); the others keep the prior's mean, as the default keeps them.
 void hold_seen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
-  const Eigen::MatrixXd& alpha = task.prior.subject_alpha;
-  for (Eigen::Index r = 0; r < alpha.rows(); ++r) {
-    if ((alpha.row(r).array() > task.prior.subject_alpha_base).any())
-      prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = counted_subject_pairs(task.prior);
+  for (Eigen::Index r = 0; r < counted.size(); ++r) {
+    if (counted[r]) prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
   }
   prior.automatic_strength = false;
   prior.strength = 1.0;
@@ -154,10 +154,9 @@ void hold_seen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior
 // oracle_unseen_subject_o: the complement -- the true subject O held on the pairs the
 // controlled run never visited, the others the prior's counts at strength 1.
 void hold_unseen_subject_at_true_o(const RandomTask& task, ObservationPrior& prior) {
-  const Eigen::MatrixXd& alpha = task.prior.subject_alpha;
-  for (Eigen::Index r = 0; r < alpha.rows(); ++r) {
-    if (!(alpha.row(r).array() > task.prior.subject_alpha_base).any())
-      prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = counted_subject_pairs(task.prior);
+  for (Eigen::Index r = 0; r < counted.size(); ++r) {
+    if (!counted[r]) prior.subject_alpha.row(r) = kPseudoCounts * task.subject_o.row(r);
   }
   prior.automatic_strength = false;
   prior.strength = 1.0;
@@ -177,9 +176,9 @@ void rebase_subject_prior(ObservationPrior& prior, double b) {
 // symbol: random tasks' base is 1, far from where 1e-9 would round away), which is what
 // makes weighed_subject_prior weigh it as counted.
 void unhold_unseen_pairs(ObservationPrior& prior) {
-  for (Eigen::Index r = 0; r < prior.subject_alpha.rows(); ++r) {
-    if (!(prior.subject_alpha.row(r).array() > prior.subject_alpha_base).any())
-      prior.subject_alpha(r, 0) = prior.subject_alpha_base + 1e-9;
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = counted_subject_pairs(prior);
+  for (Eigen::Index r = 0; r < counted.size(); ++r) {
+    if (!counted[r]) prior.subject_alpha(r, 0) = prior.subject_alpha_base + 1e-9;
   }
 }
 

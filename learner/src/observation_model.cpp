@@ -36,6 +36,10 @@ ObservationModel dirichlet_mean(const ObservationPrior& prior) {
   return {dirichlet_mean(prior.subject_alpha), dirichlet_mean(prior.confounder_alpha), dirichlet_mean(prior.end_alpha)};
 }
 
+Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPrior& prior) {
+  return (prior.subject_alpha.array() > prior.subject_alpha_base).rowwise().any();
+}
+
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
   const double base = prior.subject_alpha_base;
   Eigen::MatrixXd out = prior.subject_alpha.array().min(base) + s * (prior.subject_alpha.array() - base).max(0.0);
@@ -43,7 +47,7 @@ Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
   // model"): a pair whose O the demonstration alone could set would explain observations
   // by the expert doing what it did not do. Unless no pair has counts (no controlled run:
   // then O can only come from the demonstration).
-  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = (prior.subject_alpha.array() > base).rowwise().any();
+  const Eigen::Array<bool, Eigen::Dynamic, 1> counted = counted_subject_pairs(prior);
   if (counted.any()) {
     for (Eigen::Index r = 0; r < out.rows(); ++r) {
       if (!counted[r]) out.row(r) *= ObservationPrior::kMaxStrength;

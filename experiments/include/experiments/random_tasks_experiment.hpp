@@ -38,7 +38,8 @@
 //   posterior_unheld   the default with the pairs the controlled run never saw learned
 //                      from the demonstrations instead of held at the prior's mean
 //   posterior_base0.1, posterior_base0.3  the default with a base pseudo-count of 0.1 or
-//                      0.3 per symbol instead of the stated 1 (less pull towards uniform)
+//                      0.3 per symbol instead of the stated 1: less pull towards uniform on
+//                      the seen pairs, and the unseen ones held at 1000 b instead of 1000
 //   posterior_s1, posterior_s1000  the default with the subject prior's strength fixed
 //                      at 1 (the counts at face value) or 1000 (the controlled run's O
 //                      held) instead of chosen by held-out likelihood

@@ -41,6 +41,11 @@ struct AlphaCounts {
 Eigen::MatrixXd dirichlet_mean(const Eigen::MatrixXd& alpha);
 ObservationModel dirichlet_mean(const ObservationPrior& prior);
 
+// Per (s, a) row of the subject's prior: whether the prior has counts for it (an entry above
+// subject_alpha_base). weighed_subject_prior weighs those by the strength and holds the
+// others at the prior's mean (docs/MODEL.md, "The observation model").
+Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPrior& prior);
+
 // The subject's power prior at strength s: min(alpha, base) + s * max(alpha - base, 0)
 // (ObservationPrior).
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s);
