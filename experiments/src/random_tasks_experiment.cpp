@@ -230,6 +230,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     if (method.kind == "oracle_unseen_subject_o") hold_unseen_subject_at_true_o(task, prior);
     if (method.base >= 0.0) rebase_subject_prior(prior, method.base);
     if (method.kind == "unheld") unhold_unseen_pairs(prior);
+    prior.confounder_alpha *= method.elements;
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
     prior.c = method.c;
@@ -239,6 +240,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     }
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = 1;
+    estep_options.cross_fit = method.cross_fit;
     const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, task.observed.trajectories), prior,
                                  estep_options);
     if (method.kind == "from_truth")
@@ -378,6 +380,11 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_base0.1", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, 0.1},
       {"posterior_base0.3", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, 0.3},
       {"posterior_unheld", "unheld", 0.1, 1},
+      {"posterior_cross_fit", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, true},
+      {"posterior_elements0.1", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 0.1},
+      {"posterior_elements10", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 10.0},
+      {"posterior_elements100", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 100.0},
+      {"posterior_elements1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 1000.0},
   };
   return methods;
 }
@@ -589,6 +596,10 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "posterior_unheld");
   compare("posterior", "posterior_base0.1");
   compare("posterior", "posterior_base0.3");
+  compare("posterior", "posterior_cross_fit");
+  compare("posterior", "posterior_elements100");
+  compare("posterior", "posterior_elements1000");
+  compare("oracle_elements_o", "posterior_elements1000");
 }
 
 // Does the default's answer depend on c?

@@ -253,6 +253,60 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
   return total;
 }
 
+namespace {
+// The mean of Dir(alpha - own), alpha held at or above `floor` (the weighed prior): O
+// without one trajectory's counts. Only rows the trajectory has counts in change.
+Eigen::MatrixXd mean_without(const Eigen::MatrixXd& mean, const Eigen::MatrixXd& alpha, const Eigen::MatrixXd& own,
+                             const Eigen::MatrixXd& floor) {
+  Eigen::MatrixXd out = mean;
+  for (Eigen::Index r = 0; r < own.rows(); ++r) {
+    if (!(own.row(r).array() > 0.0).any()) continue;
+    const Eigen::RowVectorXd row = (alpha.row(r) - own.row(r)).cwiseMax(floor.row(r));
+    const double total = row.sum();
+    out.row(r) = total > 0.0 ? Eigen::RowVectorXd(row / total) : mean.row(r);
+  }
+  return out;
+}
+}  // namespace
+
+EStepStatistics ObservationEStep::cross_fitted_statistics(const SoftSolution& policy, const ObservationPrior& alpha,
+                                                          std::uint64_t seed, const RowMatrix* eta) const {
+  const int n = static_cast<int>(trajectories_.size());
+  const int P = mdp_.num_pairs();
+  const ObservationModel model = dirichlet_mean(alpha);
+  const int E = model.num_confounders();
+  const int W = model.num_symbols();
+  const AlphaCounts floor = dirichlet_posterior(prior_, alpha.strength, AlphaCounts::zero(P, E, W));
+  std::vector<EStepStatistics> partial(static_cast<size_t>(num_blocks()));
+  const Rng root(seed);
+  parallel_for(num_blocks(), options_.threads, [&](int b) {
+    std::unique_ptr<PosteriorEngine> engine = options_.engine(mdp_);
+    EStepStatistics& out = partial[static_cast<size_t>(b)];
+    out = EStepStatistics::zero(P, E, W, num_contexts());
+    for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
+      const ObservedTrajectory& given = trajectories_[static_cast<size_t>(i)];
+      const ObservedTrajectory trajectory = eta ? with_eta(given, *eta) : given;
+      Rng rng = root.split(static_cast<std::uint64_t>(i));
+      Rng own_rng = rng.split(1);
+      EStepStatistics own = EStepStatistics::zero(P, E, W, num_contexts());
+      engine->accumulate(policy, model, trajectory, own_rng, own);
+      ObservationModel without{
+          mean_without(model.subject, alpha.subject_alpha, own.alpha_dot.subject, floor.subject),
+          mean_without(model.confounders, alpha.confounder_alpha, own.alpha_dot.confounders, floor.confounders),
+          model.end};
+      if (own.alpha_dot.end.size() > 0 && alpha.end_alpha.size() > 0)
+        without.end = mean_without(model.end, alpha.end_alpha, own.alpha_dot.end, floor.end);
+      if (i == options_.watch)
+        engine->accumulate_watched(policy, without, trajectory, rng, out);
+      else
+        engine->accumulate(policy, without, trajectory, rng, out);
+    }
+  });
+  EStepStatistics total = EStepStatistics::zero(P, E, W, num_contexts());
+  for (const auto& part : partial) total += part;
+  return total;
+}
+
 EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& state) const {
   if (!state.alpha) state.alpha = prior_;
   ObservationPrior& alpha = *state.alpha;
@@ -263,7 +317,9 @@ EStepResult ObservationEStep::expect(const SoftSolution& policy, EStepState& sta
   EStepStatistics stats;
   for (int it = 0; it < std::max(1, options_.max_alpha_iterations); ++it) {
     const std::uint64_t call_seed = Rng(state.seed, state.calls++).next_u64();
-    stats = statistics(policy, model, call_seed, eta ? &*eta : nullptr);
+    const bool cross_fit = options_.cross_fit && alpha.learn && alpha.update == AlphaUpdate::kPosterior;
+    stats = cross_fit ? cross_fitted_statistics(policy, alpha, call_seed, eta ? &*eta : nullptr)
+                      : statistics(policy, model, call_seed, eta ? &*eta : nullptr);
     if (it == 0) {
       // The objective at the input point (theta, alpha): what EM's convergence test, its
       // acceleration and the choice of restart compare.

@@ -73,21 +73,25 @@ TEST(RandomTasks, EmStartedAtTheTruthStartsThere) {
 
 // The diagnostics of the subject's O (issue 33) each change what is learned: the true O
 // held on the pairs the controlled run saw, or on those it never saw (both against the
-// counts at strength 1), the unseen pairs learned instead of held, and a smaller base.
+// counts at strength 1), the unseen pairs learned instead of held, a smaller base, a
+// cross-fitted E-step, and a stronger prior on the elements' O.
 TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
   RandomTasksOptions o;
   o.seeds = {1};
   o.draws = 1;
   o.methods = parse_random_task_methods(
-      "posterior,posterior_unheld,posterior_base0.3,posterior_s1,oracle_seen_subject_o,oracle_unseen_subject_o");
+      "posterior,posterior_unheld,posterior_base0.3,posterior_s1,oracle_seen_subject_o,oracle_unseen_subject_o,"
+      "posterior_cross_fit,posterior_elements1000");
   const std::vector<RandomTaskRun> runs = run_random_tasks(o);
-  ASSERT_EQ(runs.size(), 6u);
+  ASSERT_EQ(runs.size(), 8u);
   for (const RandomTaskRun& r : runs) EXPECT_EQ(r.error, "") << r.method;
   EXPECT_NE(runs[1].theta, runs[0].theta) << "posterior_unheld";
   EXPECT_NE(runs[2].theta, runs[0].theta) << "posterior_base0.3";
   EXPECT_NE(runs[4].theta, runs[3].theta) << "oracle_seen_subject_o";
   EXPECT_NE(runs[5].theta, runs[3].theta) << "oracle_unseen_subject_o";
   EXPECT_NE(runs[5].theta, runs[4].theta);
+  EXPECT_NE(runs[6].theta, runs[0].theta) << "posterior_cross_fit";
+  EXPECT_NE(runs[7].theta, runs[0].theta) << "posterior_elements1000";
 }
 
 // A committed runs CSV can be summarised again (hbirl experiment random-tasks --summarise):

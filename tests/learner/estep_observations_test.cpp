@@ -558,6 +558,51 @@ TEST(ObservationEStep, HeldOutLikelihoodByHand) {
   EXPECT_FALSE(fixed.choose_strength(policy, fixed.initial_state(1)));
 }
 
+// A cross-fitted pass by hand (ObservationEStepOptions::cross_fit): each trajectory's own
+// expected counts under the current O, O_{-i} the mean of the Dirichlet without them
+// (never below the weighed prior), and the trajectory's posterior under O_{-i}.
+TEST(ObservationEStep, CrossFittedPassByHand) {
+  ObservedGridworld g = observed_gridworld(9, 2, 6, EtaKind::kPlausible);
+  g.prior.learn_eta = false;
+  g.prior.automatic_strength = false;
+  g.prior.strength = std::sqrt(10.0);
+  std::vector<ObservedTrajectory> data(g.observations.trajectories.begin(), g.observations.trajectories.begin() + 4);
+  ObservationEStepOptions options;
+  options.max_alpha_iterations = 1;
+  const ObservationEStep plain(g.task.mdp, data, g.prior, options);
+  options.cross_fit = true;
+  const ObservationEStep cross(g.task.mdp, data, g.prior, options);
+  const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(g.task.true_weights));
+  EStepState state = plain.initial_state(1);
+  plain.expect(policy, state);  // away from the prior, where O_{-i} is O
+  EStepState copy = state;
+  const EStepResult fitted = cross.expect(policy, copy);
+
+  const int P = g.task.mdp.num_pairs();
+  const ObservationPrior& alpha = *state.alpha;
+  const ObservationModel model = dirichlet_mean(alpha);
+  const Eigen::MatrixXd floor = weighed_subject_prior(g.prior, g.prior.strength);
+  ExactEngine engine(g.task.mdp);
+  EStepStatistics by_hand = EStepStatistics::zero(P, 2, 4);
+  for (const ObservedTrajectory& t : cross.trajectories()) {
+    EStepStatistics own = EStepStatistics::zero(P, 2, 4);
+    engine.accumulate(policy, model, t, own);
+    const ObservationModel without{
+        dirichlet_mean(Eigen::MatrixXd((alpha.subject_alpha - own.alpha_dot.subject).cwiseMax(floor))),
+        dirichlet_mean(
+            Eigen::MatrixXd((alpha.confounder_alpha - own.alpha_dot.confounders).cwiseMax(g.prior.confounder_alpha))),
+        {}};
+    engine.accumulate(policy, without, t, by_hand);
+  }
+  EXPECT_LT((fitted.counts - by_hand.counts).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_NEAR(fitted.log_likelihood, by_hand.log_likelihood, 1e-9 * std::abs(by_hand.log_likelihood));
+  // And it is not the plain pass: leaving a trajectory out moves its posterior.
+  EStepState again = state;
+  const EStepResult ordinary = plain.expect(policy, again);
+  EXPECT_GT((fitted.counts - ordinary.counts).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT(fitted.log_likelihood, ordinary.log_likelihood);
+}
+
 // Learned eta recovers a known miscalibration. The Gridworld's plausible eta gives the
 // favoured source 0.6, but observations are drawn from the sources evenly and the
 // favoured one is the true one with probability 0.8 (else any of the n sources): so

@@ -73,8 +73,10 @@ struct RandomTaskMethod {
   // state entered (ObservedTrajectory::end_state), or the task's end sensor's reports.
   enum class End { kUnseen, kState, kSensor };
   End end = End::kUnseen;
-  double strength = 0.0;  // the subject prior's strength; 0: chosen from the data (the default)
-  double base = -1.0;     // the subject prior's base pseudo-count instead of the stated one (-1: as stated)
+  double strength = 0.0;   // the subject prior's strength; 0: chosen from the data (the default)
+  double base = -1.0;      // the subject prior's base pseudo-count instead of the stated one (-1: as stated)
+  bool cross_fit = false;  // cross-fitted E-step passes (ObservationEStepOptions::cross_fit)
+  double elements = 1.0;   // the elements' prior (confounder_alpha) times this; the task's is 1 per symbol
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();

@@ -62,6 +62,11 @@ struct ObservationEStepOptions {
   // Keep this trajectory's posterior from every pass (the exact engine; -1: none): what a
   // display shows of the E-step without computing it again (EStepResult::watched).
   int watch = -1;
+  // Cross-fitted passes (docs/MODEL.md, "Cross-fitting", a diagnostic, not the default): with the posterior update,
+  // each trajectory's posterior is taken under O_{-i}, the Dirichlet posterior without that trajectory's own expected
+  // counts, so that what a trajectory guesses of its own path does not also vote for the model it is judged by. Costs a
+  // second forward-backward per trajectory; computed here (an executor is not used for these passes).
+  bool cross_fit = false;
 };
 
 // Learned eta as a report shows it: per context (row), the eta its observations stated
@@ -149,6 +154,10 @@ class ObservationEStep final : public EStep {
   void check_data(const std::vector<ObservedTrajectory>& trajectories) const;
   // Reads the merged trajectories for the digest, the contexts and the kind table.
   void finish();
+  // statistics() with each trajectory's posterior under O_{-i} (options.cross_fit), O_{-i}
+  // the Dirichlet posterior `alpha` less the trajectory's expected counts under its mean.
+  EStepStatistics cross_fitted_statistics(const SoftSolution& policy, const ObservationPrior& alpha, std::uint64_t seed,
+                                          const RowMatrix* eta) const;
   // sum over contexts and sources of eta_strength * stated eta * log(learned eta).
   double log_eta_prior_term(const RowMatrix& eta) const;
 
