@@ -1,6 +1,8 @@
 // Speed of the learner core (docs/BENCHMARKS.md has the figures and the command).
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include "learner/hidden_data_em.hpp"
 #include "learner/maxcausalent.hpp"
 #include "learner/metrics.hpp"
@@ -62,6 +64,27 @@ BENCHMARK(BM_Gradient)
     ->Args({100, 30})
     ->Args({200, 30})
     ->Unit(benchmark::kMicrosecond);
+
+// One evaluation as an optimiser pays for it: warm, its soft Bellman solve and its adjoint
+// solve started from the evaluation before, at weights that differ from those by a relative
+// step of 10^-k (k = range(1)); evaluations alternate between the two points.
+void BM_GradientWarm(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  const GridworldTask t = task(size, 20, 30);
+  CausalLikelihood objective(t.mdp, visit_counts(t.mdp, t.trajectories));
+  const Eigen::VectorXd theta = probe_weights();
+  const Eigen::VectorXd step = std::pow(10.0, -static_cast<double>(state.range(1))) * theta.norm() *
+                               Eigen::Vector4d(1.0, 1.0, -1.0, 1.0).normalized();
+  Eigen::VectorXd gradient(4);
+  objective.evaluate(theta, &gradient);
+  bool away = false;
+  for (auto _ : state) {
+    away = !away;
+    benchmark::DoNotOptimize(objective.evaluate(away ? Eigen::VectorXd(theta + step) : theta, &gradient));
+  }
+  state.counters["states"] = t.mdp.num_states;
+}
+BENCHMARK(BM_GradientWarm)->ArgsProduct({{45, 200}, {1, 2, 3}})->Unit(benchmark::kMicrosecond);
 
 // A full MaxCausalEnt solve on the 5x5 gridworld with 20 trajectories of 10 steps: the
 // whole of `hbirl learn --from truth` but for reading the file (one thread).

@@ -38,6 +38,8 @@ ObservationEStep::ObservationEStep(const Mdp& mdp, std::vector<ObservedTrajector
 void ObservationEStep::check_data(const std::vector<ObservedTrajectory>& trajectories) const {
   const Mdp& mdp = mdp_;
   if (trajectories.empty()) throw InputError("demonstration", "no trajectories with observations");
+  if (options_.cross_fit && options_.executor)
+    throw InputError("cross_fit", "cross-fitted passes are computed here, not by an executor");
   if (options_.watch < -1 || options_.watch >= static_cast<int>(trajectories.size())) {
     throw InputError("watch", std::to_string(options_.watch) + " is not a trajectory of the data");
   }
@@ -253,22 +255,6 @@ EStepStatistics ObservationEStep::statistics(const SoftSolution& policy, const O
   return total;
 }
 
-namespace {
-// The mean of Dir(alpha - own), alpha held at or above `floor` (the weighed prior): O
-// without one trajectory's counts. Only rows the trajectory has counts in change.
-Eigen::MatrixXd mean_without(const Eigen::MatrixXd& mean, const Eigen::MatrixXd& alpha, const Eigen::MatrixXd& own,
-                             const Eigen::MatrixXd& floor) {
-  Eigen::MatrixXd out = mean;
-  for (Eigen::Index r = 0; r < own.rows(); ++r) {
-    if (!(own.row(r).array() > 0.0).any()) continue;
-    const Eigen::RowVectorXd row = (alpha.row(r) - own.row(r)).cwiseMax(floor.row(r));
-    const double total = row.sum();
-    out.row(r) = total > 0.0 ? Eigen::RowVectorXd(row / total) : mean.row(r);
-  }
-  return out;
-}
-}  // namespace
-
 EStepStatistics ObservationEStep::cross_fitted_statistics(const SoftSolution& policy, const ObservationPrior& alpha,
                                                           std::uint64_t seed, const RowMatrix* eta) const {
   const int n = static_cast<int>(trajectories_.size());
@@ -276,7 +262,10 @@ EStepStatistics ObservationEStep::cross_fitted_statistics(const SoftSolution& po
   const ObservationModel model = dirichlet_mean(alpha);
   const int E = model.num_confounders();
   const int W = model.num_symbols();
-  const AlphaCounts floor = dirichlet_posterior(prior_, alpha.strength, AlphaCounts::zero(P, E, W));
+  // Every trajectory's expected counts under the current O, then each one's own under the
+  // same O: O_{-i} is what choose_strength scores trajectory i with.
+  const AlphaCounts all = statistics(policy, model, Rng(seed, 1).next_u64(), eta).alpha_dot;
+  const Rng own_root(seed, 2);
   std::vector<EStepStatistics> partial(static_cast<size_t>(num_blocks()));
   const Rng root(seed);
   parallel_for(num_blocks(), options_.threads, [&](int b) {
@@ -286,16 +275,11 @@ EStepStatistics ObservationEStep::cross_fitted_statistics(const SoftSolution& po
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
       const ObservedTrajectory& given = trajectories_[static_cast<size_t>(i)];
       const ObservedTrajectory trajectory = eta ? with_eta(given, *eta) : given;
-      Rng rng = root.split(static_cast<std::uint64_t>(i));
-      Rng own_rng = rng.split(1);
+      Rng own_rng = own_root.split(static_cast<std::uint64_t>(i));
       EStepStatistics own = EStepStatistics::zero(P, E, W, num_contexts());
       engine->accumulate(policy, model, trajectory, own_rng, own);
-      ObservationModel without{
-          mean_without(model.subject, alpha.subject_alpha, own.alpha_dot.subject, floor.subject),
-          mean_without(model.confounders, alpha.confounder_alpha, own.alpha_dot.confounders, floor.confounders),
-          model.end};
-      if (own.alpha_dot.end.size() > 0 && alpha.end_alpha.size() > 0)
-        without.end = mean_without(model.end, alpha.end_alpha, own.alpha_dot.end, floor.end);
+      const ObservationModel without = leave_one_out_mean(prior_, alpha.strength, all, own.alpha_dot);
+      Rng rng = root.split(static_cast<std::uint64_t>(i));
       if (i == options_.watch)
         engine->accumulate_watched(policy, without, trajectory, rng, out);
       else
@@ -425,14 +409,8 @@ std::optional<StrengthChoice> ObservationEStep::choose_strength(const SoftSoluti
       Rng rng = root.split(static_cast<std::uint64_t>(i));
       engine->accumulate(policy, model, trajectory, rng, own);
     }
-    AlphaCounts others = all;
-    others.subject = (others.subject - own.alpha_dot.subject).cwiseMax(0.0);
-    others.confounders = (others.confounders - own.alpha_dot.confounders).cwiseMax(0.0);
-    if (own.alpha_dot.end.size() > 0) others.end = (others.end - own.alpha_dot.end).cwiseMax(0.0);
     for (size_t k = 0; k < strengths.size(); ++k) {
-      const AlphaCounts posterior = dirichlet_posterior(prior_, strengths[k], others);
-      const ObservationModel without{dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders),
-                                     dirichlet_mean(posterior.end)};
+      const ObservationModel without = leave_one_out_mean(prior_, strengths[k], all, own.alpha_dot);
       held_out(i, static_cast<Eigen::Index>(k)) =
           exact.log_likelihood(policy, trajectory, kinds.of.front(), kind_emissions(without, kinds));
     }

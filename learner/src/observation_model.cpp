@@ -85,6 +85,16 @@ AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const A
           end_posterior(prior, counts)};
 }
 
+ObservationModel leave_one_out_mean(const ObservationPrior& prior, double s, const AlphaCounts& all,
+                                    const AlphaCounts& own) {
+  AlphaCounts others = all;
+  others.subject = (others.subject - own.subject).cwiseMax(0.0);
+  others.confounders = (others.confounders - own.confounders).cwiseMax(0.0);
+  if (own.end.size() > 0) others.end = (others.end - own.end).cwiseMax(0.0);
+  const AlphaCounts posterior = dirichlet_posterior(prior, s, others);
+  return {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders), dirichlet_mean(posterior.end)};
+}
+
 namespace {
 // sum beta log(O / mean of beta): the prior's term, 0 at the prior's mean (so its size is
 // that of the data's log-likelihood, whatever the prior's strength).

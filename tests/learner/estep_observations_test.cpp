@@ -558,9 +558,11 @@ TEST(ObservationEStep, HeldOutLikelihoodByHand) {
   EXPECT_FALSE(fixed.choose_strength(policy, fixed.initial_state(1)));
 }
 
-// A cross-fitted pass by hand (ObservationEStepOptions::cross_fit): each trajectory's own
-// expected counts under the current O, O_{-i} the mean of the Dirichlet without them
-// (never below the weighed prior), and the trajectory's posterior under O_{-i}.
+// A cross-fitted pass by hand (ObservationEStepOptions::cross_fit): every trajectory's
+// expected counts under the current O, each one's own, O_{-i} the Dirichlet posterior at
+// the state's strength from the others' counts, and the trajectory's posterior under it.
+// The strength is changed after the last refinement, as HiddenDataEM does when it chooses
+// another: O_{-i} is the posterior at the new strength, not alpha less the own counts.
 TEST(ObservationEStep, CrossFittedPassByHand) {
   ObservedGridworld g = observed_gridworld(9, 2, 6, EtaKind::kPlausible);
   g.prior.learn_eta = false;
@@ -574,25 +576,29 @@ TEST(ObservationEStep, CrossFittedPassByHand) {
   const ObservationEStep cross(g.task.mdp, data, g.prior, options);
   const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(g.task.true_weights));
   EStepState state = plain.initial_state(1);
-  plain.expect(policy, state);  // away from the prior, where O_{-i} is O
+  plain.expect(policy, state);  // away from the prior
+  state.alpha->strength = 100.0;
   EStepState copy = state;
   const EStepResult fitted = cross.expect(policy, copy);
 
   const int P = g.task.mdp.num_pairs();
-  const ObservationPrior& alpha = *state.alpha;
-  const ObservationModel model = dirichlet_mean(alpha);
-  const Eigen::MatrixXd floor = weighed_subject_prior(g.prior, g.prior.strength);
+  const ObservationModel model = dirichlet_mean(*state.alpha);
   ExactEngine engine(g.task.mdp);
-  EStepStatistics by_hand = EStepStatistics::zero(P, 2, 4);
+  std::vector<EStepStatistics> own;
+  AlphaCounts all = AlphaCounts::zero(P, 2, 4);
   for (const ObservedTrajectory& t : cross.trajectories()) {
-    EStepStatistics own = EStepStatistics::zero(P, 2, 4);
-    engine.accumulate(policy, model, t, own);
-    const ObservationModel without{
-        dirichlet_mean(Eigen::MatrixXd((alpha.subject_alpha - own.alpha_dot.subject).cwiseMax(floor))),
-        dirichlet_mean(
-            Eigen::MatrixXd((alpha.confounder_alpha - own.alpha_dot.confounders).cwiseMax(g.prior.confounder_alpha))),
-        {}};
-    engine.accumulate(policy, without, t, by_hand);
+    own.push_back(EStepStatistics::zero(P, 2, 4));
+    engine.accumulate(policy, model, t, own.back());
+    all += own.back().alpha_dot;
+  }
+  EStepStatistics by_hand = EStepStatistics::zero(P, 2, 4);
+  for (size_t i = 0; i < own.size(); ++i) {
+    AlphaCounts others = all;
+    others.subject -= own[i].alpha_dot.subject;
+    others.confounders -= own[i].alpha_dot.confounders;
+    const AlphaCounts posterior = dirichlet_posterior(g.prior, 100.0, others);
+    engine.accumulate(policy, {dirichlet_mean(posterior.subject), dirichlet_mean(posterior.confounders), {}},
+                      cross.trajectories()[i], by_hand);
   }
   EXPECT_LT((fitted.counts - by_hand.counts).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_NEAR(fitted.log_likelihood, by_hand.log_likelihood, 1e-9 * std::abs(by_hand.log_likelihood));
@@ -600,7 +606,15 @@ TEST(ObservationEStep, CrossFittedPassByHand) {
   EStepState again = state;
   const EStepResult ordinary = plain.expect(policy, again);
   EXPECT_GT((fitted.counts - ordinary.counts).cwiseAbs().maxCoeff(), 1e-6);
-  EXPECT_LT(fitted.log_likelihood, ordinary.log_likelihood);
+  // An executor would compute plain passes: refused.
+  struct Elsewhere final : BlockExecutor {
+    std::vector<EStepStatistics> run(const ObservationEStep&, const SoftSolution&, const ObservationModel&,
+                                     std::uint64_t, const RowMatrix*) override {
+      return {};
+    }
+  };
+  options.executor = std::make_shared<Elsewhere>();
+  EXPECT_THROW(ObservationEStep(g.task.mdp, data, g.prior, options), InputError);
 }
 
 // Learned eta recovers a known miscalibration. The Gridworld's plausible eta gives the

@@ -62,10 +62,12 @@ struct ObservationEStepOptions {
   // Keep this trajectory's posterior from every pass (the exact engine; -1: none): what a
   // display shows of the E-step without computing it again (EStepResult::watched).
   int watch = -1;
-  // Cross-fitted passes (docs/MODEL.md, "Cross-fitting", a diagnostic, not the default): with the posterior update,
-  // each trajectory's posterior is taken under O_{-i}, the Dirichlet posterior without that trajectory's own expected
-  // counts, so that what a trajectory guesses of its own path does not also vote for the model it is judged by. Costs a
-  // second forward-backward per trajectory; computed here (an executor is not used for these passes).
+  // Cross-fitted passes (docs/MODEL.md, "Cross-fitting", a diagnostic, not the default):
+  // with the posterior update, each trajectory's posterior is taken under O_{-i}
+  // (leave_one_out_mean: the Dirichlet posterior from the other trajectories' expected
+  // counts), so that what a trajectory guesses of its own path does not also vote for the
+  // model it is judged by. Learned eta is not left out. Costs a pass and two forward-backward
+  // passes per trajectory; computed here (refused with an executor).
   bool cross_fit = false;
 };
 
@@ -154,8 +156,8 @@ class ObservationEStep final : public EStep {
   void check_data(const std::vector<ObservedTrajectory>& trajectories) const;
   // Reads the merged trajectories for the digest, the contexts and the kind table.
   void finish();
-  // statistics() with each trajectory's posterior under O_{-i} (options.cross_fit), O_{-i}
-  // the Dirichlet posterior `alpha` less the trajectory's expected counts under its mean.
+  // statistics() with each trajectory's posterior under O_{-i} (options.cross_fit) at
+  // alpha's strength, the counts left out those under alpha's mean.
   EStepStatistics cross_fitted_statistics(const SoftSolution& policy, const ObservationPrior& alpha, std::uint64_t seed,
                                           const RowMatrix* eta) const;
   // sum over contexts and sources of eta_strength * stated eta * log(learned eta).

@@ -60,6 +60,14 @@ Eigen::MatrixXd weighed_end_prior(const ObservationPrior& prior);
 // + counts.confounders, weighed_end_prior(prior) + counts.end.
 AlphaCounts dirichlet_posterior(const ObservationPrior& prior, double s, const AlphaCounts& counts);
 
+// The mean O of the posterior update without one trajectory (docs/MODEL.md, "How much the
+// controlled run weighs"): dirichlet_posterior(prior, s, others) with others = all - own,
+// clipped at 0, `all` the expected counts of every trajectory and `own` that trajectory's,
+// both under the same O. What the prior strength is chosen by, and what a cross-fitted
+// E-step computes each trajectory under.
+ObservationModel leave_one_out_mean(const ObservationPrior& prior, double s, const AlphaCounts& all,
+                                    const AlphaCounts& own);
+
 // The prior's term of the posterior update's objective (MAP-EM maximises log Pr(data |
 // theta, O) plus this): sum over entries of beta * log(O / O_prior) with beta the weighed
 // prior and O_prior its mean (entries with beta 0 left out), i.e. log Dir(O; beta + 1) up
