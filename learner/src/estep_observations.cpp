@@ -274,7 +274,9 @@ EStepStatistics ObservationEStep::cross_fitted_statistics(const SoftSolution& po
     out = EStepStatistics::zero(P, E, W, num_contexts());
     for (int i = b * kBlockSize; i < std::min(n, (b + 1) * kBlockSize); ++i) {
       const ObservedTrajectory& given = trajectories_[static_cast<size_t>(i)];
-      const ObservedTrajectory trajectory = eta ? with_eta(given, *eta) : given;
+      std::optional<ObservedTrajectory> calibrated;  // a copy only when learned eta replaces the stated
+      if (eta) calibrated = with_eta(given, *eta);
+      const ObservedTrajectory& trajectory = calibrated ? *calibrated : given;
       Rng own_rng = own_root.split(static_cast<std::uint64_t>(i));
       EStepStatistics own = EStepStatistics::zero(P, E, W, num_contexts());
       engine->accumulate(policy, model, trajectory, own_rng, own);
