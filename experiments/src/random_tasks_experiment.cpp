@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "experiments/summary.hpp"
@@ -191,6 +192,87 @@ void hold_at_true_o(const RandomTask& task, ObservationPrior& prior) {
   hold_elements_at_true_o(task, prior);
 }
 
+// The prior plus every demonstration's labelled counts (random_tasks_experiment.hpp).
+AlphaCounts labelled_o_counts(const RandomTask& task) {
+  AlphaCounts all{task.prior.subject_alpha, task.prior.confounder_alpha, {}};
+  for (size_t i = 0; i < task.demonstrations.size(); ++i) all += labelled_counts(task, i);
+  return all;
+}
+
+// oracle_sensor_labelled_o_cf: the labelled O without the trajectory it judges. The
+// labelled O of oracle_sensor_labelled_o has counted each trajectory's own symbols at its
+// true pairs, so it points each posterior at its true path (it beats the true O); here
+// trajectory i's posterior is taken under the labelled O of the controlled run and the
+// other demonstrations, which is what the rest of the data could at best say of O. One
+// E-step per trajectory, their sum the pass (eta is the oracle's, not learned).
+// With `learn_own` (oracle_sensor_labelled_others) that O is the prior of trajectory i's
+// own O, learned from its own observations by the default's posterior update (strength 1:
+// the labelled counts at face value; pairs nobody labelled held at the prior's mean, the
+// default's rule): a learner that knows everything the default knows and, besides, every
+// label of the other trajectories. Its O is refined to convergence from that prior at
+// every evaluation (O profiled out: each call a function of theta alone), then the pass
+// is taken at the converged O.
+class EachFromTheOthers final : public EStep {
+ public:
+  EachFromTheOthers(const RandomTask& task, const ObservationPrior& oracle_prior,
+                    const std::vector<ObservedTrajectory>& observed, bool learn_own) {
+    const AlphaCounts all = labelled_o_counts(task);
+    ObservationEStepOptions options;
+    options.max_alpha_iterations = kMaxOwnRefinements;
+    for (size_t i = 0; i < observed.size(); ++i) {
+      const AlphaCounts own = labelled_counts(task, i);
+      ObservationPrior prior = oracle_prior;
+      prior.subject_alpha = all.subject - own.subject;
+      prior.confounder_alpha = all.confounders - own.confounders;
+      prior.learn = learn_own;
+      prior.automatic_strength = false;
+      prior.strength = 1.0;
+      each_.push_back(
+          std::make_unique<ObservationEStep>(task.mdp, std::vector<ObservedTrajectory>{observed[i]}, prior, options));
+    }
+  }
+  EStepResult expect(const SoftSolution& policy, EStepState& state) const override {
+    EStepResult total;
+    for (const auto& estep : each_) {
+      EStepState own = estep->initial_state(state.seed);
+      EStepResult r = estep->expect(policy, own);  // O refined to convergence (when learned)
+      if (own.alpha->learn) {
+        total.alpha_converged = total.alpha_converged && r.alpha_converged;
+        r = estep->expect(policy, own);  // the objective and the pass at the converged O
+      }
+      total.counts = total.counts.size() == 0 ? r.counts : Eigen::VectorXd(total.counts + r.counts);
+      total.log_likelihood += r.log_likelihood;
+      total.objective += r.objective;
+      total.impossible_trajectories += r.impossible_trajectories;
+    }
+    ++state.calls;
+    return total;
+  }
+  bool depends_on_policy() const override { return true; }
+  std::vector<int> trajectory_lengths() const override {
+    std::vector<int> lengths;
+    for (const auto& estep : each_) {
+      for (int length : estep->trajectory_lengths()) lengths.push_back(length);
+    }
+    return lengths;
+  }
+
+ private:
+  static constexpr int kMaxOwnRefinements = 1000;
+  std::vector<std::unique_ptr<ObservationEStep>> each_;
+};
+
+// oracle_labelled_o: the labelled O's held (as oracle_o holds the true ones), eta learned
+// as the default learns it.
+void hold_at_labelled_o(const RandomTask& task, ObservationPrior& prior) {
+  const AlphaCounts labelled = labelled_o_counts(task);
+  prior.subject_alpha = kPseudoCounts * dirichlet_mean(labelled.subject);
+  prior.subject_alpha_base = 0.0;
+  prior.automatic_strength = false;
+  prior.strength = 1.0;
+  prior.confounder_alpha = kPseudoCounts * dirichlet_mean(labelled.confounders);
+}
+
 // What was seen of each trajectory's end (RandomTaskMethod::End) added to `observed`.
 std::vector<ObservedTrajectory> seeing_the_end(const RandomTask& task, RandomTaskMethod::End end,
                                                std::vector<ObservedTrajectory> observed) {
@@ -215,8 +297,17 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   LearnResult learned;
   if (method.kind == "truth") {
     learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
-  } else if (method.kind == "oracle") {
+  } else if (method.kind == "oracle_labelled_cf" || method.kind == "oracle_labelled_others") {
+    const auto [prior, observed] = oracle_data(task);
+    learned = learn_reward(task.mdp, EachFromTheOthers(task, prior, observed, method.kind == "oracle_labelled_others"),
+                           options);
+  } else if (method.kind == "oracle" || method.kind == "oracle_labelled") {
     auto [prior, observed] = oracle_data(task);
+    if (method.kind == "oracle_labelled") {
+      AlphaCounts labelled = labelled_o_counts(task);  // their means are O
+      prior.subject_alpha = std::move(labelled.subject);
+      prior.confounder_alpha = std::move(labelled.confounders);
+    }
     if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_o;  // its mean is the truth
     const ObservationEStep estep(task.mdp, seeing_the_end(task, method.end, observed), prior, {});
     learned = learn_reward(task.mdp, estep, options);
@@ -224,6 +315,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     ObservationPrior prior = task.prior;
     if (method.end == RandomTaskMethod::End::kSensor) prior.end_alpha = task.end_alpha;
     if (method.kind == "oracle_o") hold_at_true_o(task, prior);
+    if (method.kind == "labelled_o") hold_at_labelled_o(task, prior);
     if (method.kind == "oracle_subject_o") hold_subject_at_true_o(task, prior);
     if (method.kind == "oracle_elements_o") hold_elements_at_true_o(task, prior);
     if (method.kind == "oracle_seen_subject_o") hold_seen_subject_at_true_o(task, prior);
@@ -354,6 +446,27 @@ std::string percent(double x) {
 
 }  // namespace
 
+AlphaCounts labelled_counts(const RandomTask& task, size_t i) {
+  AlphaCounts own = AlphaCounts::zero(static_cast<int>(task.prior.subject_alpha.rows()),
+                                      static_cast<int>(task.prior.confounder_alpha.rows()),
+                                      static_cast<int>(task.prior.subject_alpha.cols()));
+  const ObservedTrajectory& observed = task.observed.trajectories[i];
+  const std::vector<int>& sources = task.observed.true_sources[i];
+  for (int t = 0; t < observed.length(); ++t) {
+    const StateAction& step = task.demonstrations[i][static_cast<size_t>(t)];
+    for (int n = observed.step_begin[static_cast<size_t>(t)]; n < observed.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
+      const int z = sources[static_cast<size_t>(n)];
+      const int symbol = observed.symbols[static_cast<size_t>(n)];
+      if (z == 0)
+        own.subject(task.mdp.pair(step.state, step.action), symbol) += observed.weight(n);
+      else
+        own.confounders(z - 1, symbol) += observed.weight(n);
+    }
+  }
+  return own;
+}
+
 const std::vector<RandomTaskMethod>& all_random_task_methods() {
   static const std::vector<RandomTaskMethod> methods = {
       {"true_trajectories", "truth", 0.1, 1},
@@ -385,6 +498,10 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_elements10", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 10.0},
       {"posterior_elements100", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 100.0},
       {"posterior_elements1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 1000.0},
+      {"oracle_labelled_o", "labelled_o", 0.1, 1},
+      {"oracle_sensor_labelled_o", "oracle_labelled", 0.1, 1},
+      {"oracle_sensor_labelled_o_cf", "oracle_labelled_cf", 0.1, 1},
+      {"oracle_sensor_labelled_others", "oracle_labelled_others", 0.1, 1},
   };
   return methods;
 }
@@ -600,6 +717,13 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "posterior_elements100");
   compare("posterior", "posterior_elements1000");
   compare("oracle_elements_o", "posterior_elements1000");
+  compare("posterior", "oracle_labelled_o");
+  compare("oracle_labelled_o", "oracle_o");
+  compare("oracle_sensor_labelled_o", "oracle_sensor");
+  compare("oracle_sensor_labelled_o_cf", "oracle_sensor");
+  compare("posterior", "oracle_sensor_labelled_o_cf");
+  compare("posterior", "oracle_sensor_labelled_others");
+  compare("oracle_sensor_labelled_others", "oracle_sensor");
 }
 
 // Does the default's answer depend on c?

@@ -71,20 +71,29 @@ TEST(RandomTasks, EmStartedAtTheTruthStartsThere) {
   EXPECT_NE(summary.find("Does EM started at the truth stay there?"), std::string::npos) << summary;
 }
 
+// One data set of task `seed` learned by each of `methods` (comma-separated), in their
+// order, every run without error.
+std::vector<RandomTaskRun> runs_on_one_data_set(std::uint64_t seed, const std::string& methods) {
+  RandomTasksOptions o;
+  o.seeds = {seed};
+  o.draws = 1;
+  o.methods = parse_random_task_methods(methods);
+  std::vector<RandomTaskRun> runs = run_random_tasks(o);
+  EXPECT_EQ(runs.size(), o.methods.size());
+  for (const RandomTaskRun& r : runs) EXPECT_EQ(r.error, "") << r.method;
+  return runs;
+}
+
 // The diagnostics of the subject's O (issue 33) each change what is learned: the true O
 // held on the pairs the controlled run saw, or on those it never saw (both against the
 // counts at strength 1), the unseen pairs learned instead of held, a smaller base, a
 // cross-fitted E-step, and a stronger prior on the elements' O.
 TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
-  RandomTasksOptions o;
-  o.seeds = {1};
-  o.draws = 1;
-  o.methods = parse_random_task_methods(
+  const std::vector<RandomTaskRun> runs = runs_on_one_data_set(
+      1,
       "posterior,posterior_unheld,posterior_base0.3,posterior_s1,oracle_seen_subject_o,oracle_unseen_subject_o,"
       "posterior_cross_fit,posterior_elements1000");
-  const std::vector<RandomTaskRun> runs = run_random_tasks(o);
   ASSERT_EQ(runs.size(), 8u);
-  for (const RandomTaskRun& r : runs) EXPECT_EQ(r.error, "") << r.method;
   EXPECT_NE(runs[1].theta, runs[0].theta) << "posterior_unheld";
   EXPECT_NE(runs[2].theta, runs[0].theta) << "posterior_base0.3";
   EXPECT_NE(runs[4].theta, runs[3].theta) << "oracle_seen_subject_o";
@@ -92,6 +101,52 @@ TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
   EXPECT_NE(runs[5].theta, runs[4].theta);
   EXPECT_NE(runs[6].theta, runs[0].theta) << "posterior_cross_fit";
   EXPECT_NE(runs[7].theta, runs[0].theta) << "posterior_elements1000";
+}
+
+// The labelled oracles' counts (issue 33): each observation of a demonstration counted
+// once, at its true (s, a) when the subject made it and at its element otherwise --
+// against totals counted another way: per source from the true sources, per pair from the
+// steps and their observations, per symbol from the symbols the elements made.
+TEST(RandomTasks, LabelledCountsCountEachObservationOnceWhereItWasMade) {
+  const RandomTask task = make_random_task(3);
+  const int E = task.num_confounders;
+  ASSERT_GT(E, 0);
+  ASSERT_GT(task.demonstrations.size(), 1u);
+  for (size_t i = 0; i < task.demonstrations.size(); ++i) {
+    const AlphaCounts c = labelled_counts(task, i);
+    const ObservedTrajectory& observed = task.observed.trajectories[i];
+    const std::vector<int>& sources = task.observed.true_sources[i];
+    Eigen::VectorXd per_pair = Eigen::VectorXd::Zero(task.mdp.num_pairs());
+    Eigen::MatrixXd element_symbols = Eigen::MatrixXd::Zero(E, task.num_symbols);
+    for (int t = 0; t < observed.length(); ++t) {
+      const StateAction& step = task.demonstrations[i][static_cast<size_t>(t)];
+      for (int n = observed.step_begin[static_cast<size_t>(t)]; n < observed.step_begin[static_cast<size_t>(t) + 1];
+           ++n) {
+        const int z = sources[static_cast<size_t>(n)];
+        if (z == 0) per_pair[task.mdp.pair(step.state, step.action)] += 1.0;
+        if (z > 0) element_symbols(z - 1, observed.symbols[static_cast<size_t>(n)]) += 1.0;
+      }
+    }
+    EXPECT_EQ(c.subject.sum() + c.confounders.sum(), observed.num_observations()) << i;
+    EXPECT_EQ(c.subject.rowwise().sum(), per_pair) << i;
+    EXPECT_EQ(c.confounders, element_symbols) << i;
+    EXPECT_EQ(c.end.size(), 0) << i;
+  }
+}
+
+// The labelled oracles each learn something else: the labelled O with each trajectory's
+// own symbols (a leak), without them, and without them but learned from them as the
+// default learns O.
+TEST(RandomTasks, EachLabelledOracleChangesTheAnswer) {
+  const std::vector<RandomTaskRun> runs = runs_on_one_data_set(
+      3,
+      "oracle_sensor,oracle_sensor_labelled_o,oracle_sensor_labelled_o_cf,oracle_sensor_labelled_others,"
+      "oracle_labelled_o");
+  ASSERT_EQ(runs.size(), 5u);
+  EXPECT_NE(runs[1].theta, runs[0].theta) << "oracle_sensor_labelled_o";
+  EXPECT_NE(runs[2].theta, runs[1].theta) << "oracle_sensor_labelled_o_cf";
+  EXPECT_NE(runs[3].theta, runs[2].theta) << "oracle_sensor_labelled_others";
+  EXPECT_NE(runs[4].theta, runs[1].theta) << "oracle_labelled_o";
 }
 
 // A committed runs CSV can be summarised again (hbirl experiment random-tasks --summarise):

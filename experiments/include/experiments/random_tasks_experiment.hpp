@@ -47,6 +47,20 @@
 //                      instead of the prior's mean and the stated eta: does the data's
 //                      likelihood keep EM at the truth, and does the learner's criterion
 //                      prefer it to the default's answer?
+//   posterior_cross_fit  the default with cross-fitted E-step passes (each trajectory's
+//                      posterior under the O of the others' expected counts)
+//   posterior_elements0.1 .. posterior_elements1000  the default with the elements' flat
+//                      prior weighed 0.1-1000 times
+//   oracle_labelled_o, oracle_sensor_labelled_o  O at what the data set says of it with
+//                      every label revealed (labelled_counts: the controlled run and each
+//                      observation at its true (s, a) and source), held while eta is
+//                      learned / with oracle_sensor's eta. Each trajectory's own symbols
+//                      then point its posterior at its true path: not a limit, a leak
+//   oracle_sensor_labelled_o_cf  each trajectory's posterior under the labelled O of the
+//                      controlled run and the other demonstrations only (oracle_sensor's eta)
+//   oracle_sensor_labelled_others  that O as the prior of each trajectory's own O, learned
+//                      from its own observations as the default learns O (strength 1): the
+//                      default's knowledge plus every label of the other trajectories
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -58,6 +72,7 @@
 #include <vector>
 
 #include "experiments/data_sets.hpp"
+#include "learner/observation_model.hpp"
 #include "sim_driver/file/random_task.hpp"
 
 namespace hbirl {
@@ -66,7 +81,8 @@ struct RandomTaskMethod {
   std::string key;   // as above
   std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o",
                      // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o",
-                     // "oracle_unseen_subject_o", "unheld", "from_truth"
+                     // "oracle_unseen_subject_o", "unheld", "from_truth", "labelled_o",
+                     // "oracle_labelled", "oracle_labelled_cf", "oracle_labelled_others"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
@@ -80,6 +96,12 @@ struct RandomTaskMethod {
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();
+
+// Demonstration i's labelled counts: each of its observations' symbol counted at its true
+// (s, a) (subject) or its true element (confounders), with its weight; no end counts.
+// What a labeller that knew every source and every step would add to O's Dirichlet prior
+// (the labelled oracles above).
+AlphaCounts labelled_counts(const RandomTask& task, size_t i);
 // The listed keys (comma-separated) or "all"; throws InputError naming an unknown key.
 std::vector<RandomTaskMethod> parse_random_task_methods(const std::string& keys);
 
