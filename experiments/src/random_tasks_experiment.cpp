@@ -199,31 +199,46 @@ AlphaCounts labelled_o_counts(const RandomTask& task) {
   return all;
 }
 
-// oracle_sensor_labelled_o_cf: the labelled O without the trajectory it judges. The
-// labelled O of oracle_sensor_labelled_o has counted each trajectory's own symbols at its
-// true pairs, so it points each posterior at its true path (it beats the true O); here
-// trajectory i's posterior is taken under the labelled O of the controlled run and the
-// other demonstrations, which is what the rest of the data could at best say of O. One
-// E-step per trajectory, their sum the pass (eta is the oracle's, not learned).
-// With `learn_own` (oracle_sensor_labelled_others) that O is the prior of trajectory i's
-// own O, learned from its own observations by the default's posterior update (strength 1:
-// the labelled counts at face value; pairs nobody labelled held at the prior's mean, the
-// default's rule): a learner that knows everything the default knows and, besides, every
-// label of the other trajectories. Its O is refined to convergence from that prior at
-// every evaluation (O profiled out: each call a function of theta alone), then the pass
-// is taken at the converged O.
-class EachFromTheOthers final : public EStep {
+// Each trajectory judged by an O of its own (oracle_sensor's eta, not learned; one E-step
+// per trajectory, their sum the pass), from a prior of the controlled run's counts and,
+// with `others_labelled`, every *other* demonstration's labelled counts
+// (others_labelled_prior):
+//   oracle_sensor_labelled_o_cf     that O held: what the rest of the data, labelled, say
+//                                   of O (the labelled O of oracle_sensor_labelled_o also
+//                                   counts the trajectory's own symbols at its true pairs,
+//                                   which points its posterior at its true path)
+//   oracle_sensor_labelled_others   that O as the prior of the trajectory's own O, learned
+//                                   from its own observations by the posterior update at
+//                                   strength 1
+//   oracle_sensor_own_o             the same without the others' labels (the controlled
+//                                   run alone): what the others' labels add, all else equal
+// The pairs the controlled run never saw are held at the prior's mean, as the default holds
+// them (weighed_subject_prior), also where other trajectories' labels counted a few symbols
+// of them: unheld, the trajectory's own guesses reshape those rows (posterior_unheld).
+// A learned O is refined to convergence from the prior at every evaluation (O profiled
+// out: each call a function of theta alone), and the pass is taken at the converged O.
+class PerTrajectoryO final : public EStep {
  public:
-  EachFromTheOthers(const RandomTask& task, const ObservationPrior& oracle_prior,
-                    const std::vector<ObservedTrajectory>& observed, bool learn_own) {
-    const AlphaCounts all = labelled_o_counts(task);
+  PerTrajectoryO(const RandomTask& task, const ObservationPrior& oracle_prior,
+                 const std::vector<ObservedTrajectory>& observed, bool others_labelled, bool learn_own) {
     ObservationEStepOptions options;
     options.max_alpha_iterations = kMaxOwnRefinements;
+    const Eigen::Array<bool, Eigen::Dynamic, 1> seen = counted_subject_pairs(task.prior);
     for (size_t i = 0; i < observed.size(); ++i) {
-      const AlphaCounts own = labelled_counts(task, i);
       ObservationPrior prior = oracle_prior;
-      prior.subject_alpha = all.subject - own.subject;
-      prior.confounder_alpha = all.confounders - own.confounders;
+      if (others_labelled) {
+        AlphaCounts others = others_labelled_prior(task, i);
+        if (learn_own) {
+          for (Eigen::Index r = 0; r < seen.size(); ++r) {
+            if (!seen[r]) others.subject.row(r) *= ObservationPrior::kMaxStrength;
+          }
+        }
+        prior.subject_alpha = std::move(others.subject);
+        prior.confounder_alpha = std::move(others.confounders);
+      } else {
+        prior.subject_alpha = task.prior.subject_alpha;
+        prior.confounder_alpha = task.prior.confounder_alpha;
+      }
       prior.learn = learn_own;
       prior.automatic_strength = false;
       prior.strength = 1.0;
@@ -237,8 +252,9 @@ class EachFromTheOthers final : public EStep {
       EStepState own = estep->initial_state(state.seed);
       EStepResult r = estep->expect(policy, own);  // O refined to convergence (when learned)
       if (own.alpha->learn) {
-        total.alpha_converged = total.alpha_converged && r.alpha_converged;
+        const bool converged = r.alpha_converged;
         r = estep->expect(policy, own);  // the objective and the pass at the converged O
+        total.alpha_converged = total.alpha_converged && converged && r.alpha_converged;
       }
       total.counts = total.counts.size() == 0 ? r.counts : Eigen::VectorXd(total.counts + r.counts);
       total.log_likelihood += r.log_likelihood;
@@ -297,10 +313,12 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
   LearnResult learned;
   if (method.kind == "truth") {
     learned = learn_reward(task.mdp, TruthEStep(task.mdp, task.demonstrations), options);
-  } else if (method.kind == "oracle_labelled_cf" || method.kind == "oracle_labelled_others") {
+  } else if (method.kind == "oracle_labelled_cf" || method.kind == "oracle_labelled_others" ||
+             method.kind == "oracle_own_o") {
     const auto [prior, observed] = oracle_data(task);
-    learned = learn_reward(task.mdp, EachFromTheOthers(task, prior, observed, method.kind == "oracle_labelled_others"),
-                           options);
+    const bool others_labelled = method.kind != "oracle_own_o";
+    const bool learn_own = method.kind != "oracle_labelled_cf";
+    learned = learn_reward(task.mdp, PerTrajectoryO(task, prior, observed, others_labelled, learn_own), options);
   } else if (method.kind == "oracle" || method.kind == "oracle_labelled") {
     auto [prior, observed] = oracle_data(task);
     if (method.kind == "oracle_labelled") {
@@ -446,6 +464,14 @@ std::string percent(double x) {
 
 }  // namespace
 
+AlphaCounts others_labelled_prior(const RandomTask& task, size_t i) {
+  AlphaCounts prior{task.prior.subject_alpha, task.prior.confounder_alpha, {}};
+  for (size_t j = 0; j < task.demonstrations.size(); ++j) {
+    if (j != i) prior += labelled_counts(task, j);
+  }
+  return prior;
+}
+
 AlphaCounts labelled_counts(const RandomTask& task, size_t i) {
   AlphaCounts own = AlphaCounts::zero(static_cast<int>(task.prior.subject_alpha.rows()),
                                       static_cast<int>(task.prior.confounder_alpha.rows()),
@@ -502,6 +528,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"oracle_sensor_labelled_o", "oracle_labelled", 0.1, 1},
       {"oracle_sensor_labelled_o_cf", "oracle_labelled_cf", 0.1, 1},
       {"oracle_sensor_labelled_others", "oracle_labelled_others", 0.1, 1},
+      {"oracle_sensor_own_o", "oracle_own_o", 0.1, 1},
   };
   return methods;
 }
@@ -724,6 +751,7 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "oracle_sensor_labelled_o_cf");
   compare("posterior", "oracle_sensor_labelled_others");
   compare("oracle_sensor_labelled_others", "oracle_sensor");
+  compare("oracle_sensor_own_o", "oracle_sensor_labelled_others");
 }
 
 // Does the default's answer depend on c?

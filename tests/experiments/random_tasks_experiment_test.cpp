@@ -2,9 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "learner/controlled_prior.hpp"
 #include "learner/input_error.hpp"
 
 namespace hbirl {
@@ -103,50 +105,102 @@ TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
   EXPECT_NE(runs[7].theta, runs[0].theta) << "posterior_elements1000";
 }
 
-// The labelled oracles' counts (issue 33): each observation of a demonstration counted
-// once, at its true (s, a) when the subject made it and at its element otherwise --
-// against totals counted another way: per source from the true sources, per pair from the
-// steps and their observations, per symbol from the symbols the elements made.
-TEST(RandomTasks, LabelledCountsCountEachObservationOnceWhereItWasMade) {
-  const RandomTask task = make_random_task(3);
+// The subject's observations of demonstration i alone (those whose true source is the
+// subject), with their steps and weights: what a controlled run would have recorded.
+ObservedTrajectory subject_only(const RandomTask& task, size_t i) {
+  const ObservedTrajectory& observed = task.observed.trajectories[i];
+  const std::vector<int>& sources = task.observed.true_sources[i];
+  ObservedTrajectory out;
+  for (int t = 0; t < observed.length(); ++t) {
+    for (int n = observed.step_begin[static_cast<size_t>(t)]; n < observed.step_begin[static_cast<size_t>(t) + 1];
+         ++n) {
+      if (sources[static_cast<size_t>(n)] != 0) continue;
+      out.symbols.push_back(observed.symbols[static_cast<size_t>(n)]);
+      out.weights.push_back(observed.weight(n));
+    }
+    out.step_begin.push_back(static_cast<int>(out.symbols.size()));
+  }
+  return out;
+}
+
+// The labelled oracles' counts (issue 33): the subject's observations counted at their
+// true (s, a) as the controlled run's prior counts them (controlled_run_prior on the
+// subject's observations alone, pseudo-count 0), the elements' by source and symbol, and
+// each with its weight (every weight 2 doubles the counts).
+TEST(RandomTasks, LabelledCountsAreWhatAControlledRunWouldCount) {
+  RandomTask task = make_random_task(3);
   const int E = task.num_confounders;
   ASSERT_GT(E, 0);
   ASSERT_GT(task.demonstrations.size(), 1u);
   for (size_t i = 0; i < task.demonstrations.size(); ++i) {
     const AlphaCounts c = labelled_counts(task, i);
+    ControlledPriorOptions counts_only;
+    counts_only.pseudo_count = 0.0;
+    const Eigen::MatrixXd subject = controlled_run_prior(task.mdp, {task.demonstrations[i]}, {subject_only(task, i)},
+                                                         task.num_symbols, counts_only);
+    EXPECT_EQ(c.subject, subject) << i;
+    Eigen::MatrixXd elements = Eigen::MatrixXd::Zero(E, task.num_symbols);
     const ObservedTrajectory& observed = task.observed.trajectories[i];
-    const std::vector<int>& sources = task.observed.true_sources[i];
-    Eigen::VectorXd per_pair = Eigen::VectorXd::Zero(task.mdp.num_pairs());
-    Eigen::MatrixXd element_symbols = Eigen::MatrixXd::Zero(E, task.num_symbols);
-    for (int t = 0; t < observed.length(); ++t) {
-      const StateAction& step = task.demonstrations[i][static_cast<size_t>(t)];
-      for (int n = observed.step_begin[static_cast<size_t>(t)]; n < observed.step_begin[static_cast<size_t>(t) + 1];
-           ++n) {
-        const int z = sources[static_cast<size_t>(n)];
-        if (z == 0) per_pair[task.mdp.pair(step.state, step.action)] += 1.0;
-        if (z > 0) element_symbols(z - 1, observed.symbols[static_cast<size_t>(n)]) += 1.0;
-      }
+    for (int n = 0; n < observed.num_observations(); ++n) {
+      const int z = task.observed.true_sources[i][static_cast<size_t>(n)];
+      if (z > 0) elements(z - 1, observed.symbols[static_cast<size_t>(n)]) += 1.0;
     }
+    EXPECT_EQ(c.confounders, elements) << i;
     EXPECT_EQ(c.subject.sum() + c.confounders.sum(), observed.num_observations()) << i;
-    EXPECT_EQ(c.subject.rowwise().sum(), per_pair) << i;
-    EXPECT_EQ(c.confounders, element_symbols) << i;
     EXPECT_EQ(c.end.size(), 0) << i;
+  }
+  const AlphaCounts once = labelled_counts(task, 0);
+  task.observed.trajectories[0].weights.assign(static_cast<size_t>(task.observed.trajectories[0].num_observations()),
+                                               2.0);
+  const AlphaCounts twice = labelled_counts(task, 0);
+  EXPECT_EQ(twice.subject, 2.0 * once.subject);
+  EXPECT_EQ(twice.confounders, 2.0 * once.confounders);
+}
+
+// The prior of a trajectory in the oracles that leave it out: the controlled run's plus
+// every other demonstration's labelled counts, never its own.
+TEST(RandomTasks, OthersLabelledPriorLeavesTheTrajectoryOut) {
+  const RandomTask task = make_random_task(3);
+  const size_t n = task.demonstrations.size();
+  ASSERT_GT(n, 2u);
+  for (size_t i : {size_t{0}, n / 2, n - 1}) {
+    AlphaCounts expected{task.prior.subject_alpha, task.prior.confounder_alpha, {}};
+    for (size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const AlphaCounts c = labelled_counts(task, j);
+      expected.subject += c.subject;
+      expected.confounders += c.confounders;
+    }
+    const AlphaCounts prior = others_labelled_prior(task, i);
+    EXPECT_EQ(prior.subject, expected.subject) << i;
+    EXPECT_EQ(prior.confounders, expected.confounders) << i;
+    const AlphaCounts own = labelled_counts(task, i);
+    EXPECT_GT(own.subject.sum(), 0.0);
+    EXPECT_NE(prior.subject, expected.subject + own.subject) << i;
   }
 }
 
+// theta of two runs differs by more than rounding.
+bool different_theta(const RandomTaskRun& a, const RandomTaskRun& b) {
+  double diff = 0.0;
+  for (size_t k = 0; k < a.theta.size(); ++k) diff = std::max(diff, std::abs(a.theta[k] - b.theta[k]));
+  return diff > 1e-6;
+}
+
 // The labelled oracles each learn something else: the labelled O with each trajectory's
-// own symbols (a leak), without them, and without them but learned from them as the
-// default learns O.
+// own symbols (a leak), without them, learned from them on that prior, and learned from
+// them on the controlled run's prior alone.
 TEST(RandomTasks, EachLabelledOracleChangesTheAnswer) {
   const std::vector<RandomTaskRun> runs = runs_on_one_data_set(
       3,
       "oracle_sensor,oracle_sensor_labelled_o,oracle_sensor_labelled_o_cf,oracle_sensor_labelled_others,"
-      "oracle_labelled_o");
-  ASSERT_EQ(runs.size(), 5u);
-  EXPECT_NE(runs[1].theta, runs[0].theta) << "oracle_sensor_labelled_o";
-  EXPECT_NE(runs[2].theta, runs[1].theta) << "oracle_sensor_labelled_o_cf";
-  EXPECT_NE(runs[3].theta, runs[2].theta) << "oracle_sensor_labelled_others";
-  EXPECT_NE(runs[4].theta, runs[1].theta) << "oracle_labelled_o";
+      "oracle_sensor_own_o,oracle_labelled_o");
+  ASSERT_EQ(runs.size(), 6u);
+  EXPECT_TRUE(different_theta(runs[1], runs[0])) << "oracle_sensor_labelled_o";
+  EXPECT_TRUE(different_theta(runs[2], runs[1])) << "oracle_sensor_labelled_o_cf";
+  EXPECT_TRUE(different_theta(runs[3], runs[2])) << "oracle_sensor_labelled_others";
+  EXPECT_TRUE(different_theta(runs[4], runs[3])) << "oracle_sensor_own_o";
+  EXPECT_TRUE(different_theta(runs[5], runs[1])) << "oracle_labelled_o";
 }
 
 // A committed runs CSV can be summarised again (hbirl experiment random-tasks --summarise):

@@ -52,15 +52,17 @@
 //   posterior_elements0.1 .. posterior_elements1000  the default with the elements' flat
 //                      prior weighed 0.1-1000 times
 //   oracle_labelled_o, oracle_sensor_labelled_o  O at what the data set says of it with
-//                      every label revealed (labelled_counts: the controlled run and each
-//                      observation at its true (s, a) and source), held while eta is
+//                      every label revealed (the controlled run's counts and each
+//                      observation at its true (s, a) or element, labelled_counts), held while eta is
 //                      learned / with oracle_sensor's eta. Each trajectory's own symbols
 //                      then point its posterior at its true path: not a limit, a leak
 //   oracle_sensor_labelled_o_cf  each trajectory's posterior under the labelled O of the
 //                      controlled run and the other demonstrations only (oracle_sensor's eta)
 //   oracle_sensor_labelled_others  that O as the prior of each trajectory's own O, learned
-//                      from its own observations as the default learns O (strength 1): the
-//                      default's knowledge plus every label of the other trajectories
+//                      from its own observations by the posterior update (strength 1,
+//                      oracle_sensor's eta; the pairs the controlled run never saw held)
+//   oracle_sensor_own_o  the same on the controlled run's prior alone: what the other
+//                      trajectories' labels add to it, all else equal
 // with one observation-model refinement per E-step (the paper experiments' schedule) and
 // hbirl learn's tolerances (1e-4 on theta and O, 1e-7 on the objective; up to 3000 EM
 // iterations). A run is "optimal" when the learned reward's optimal
@@ -82,7 +84,8 @@ struct RandomTaskMethod {
   std::string kind;  // "truth", "fixed", "paper", "posterior", "oracle", "oracle_o",
                      // "oracle_subject_o", "oracle_elements_o", "oracle_seen_subject_o",
                      // "oracle_unseen_subject_o", "unheld", "from_truth", "labelled_o",
-                     // "oracle_labelled", "oracle_labelled_cf", "oracle_labelled_others"
+                     // "oracle_labelled", "oracle_labelled_cf", "oracle_labelled_others",
+                     // "oracle_own_o"
   double c = 0.1;
   int restarts = 1;
   // What was seen of how each trajectory ended, besides that it did: nothing, the terminal
@@ -102,6 +105,10 @@ const std::vector<RandomTaskMethod>& all_random_task_methods();
 // What a labeller that knew every source and every step would add to O's Dirichlet prior
 // (the labelled oracles above).
 AlphaCounts labelled_counts(const RandomTask& task, size_t i);
+// The prior of demonstration i's O in the labelled oracles that leave it out: the
+// controlled run's (task.prior's subject and element parameters) plus every other
+// demonstration's labelled_counts.
+AlphaCounts others_labelled_prior(const RandomTask& task, size_t i);
 // The listed keys (comma-separated) or "all"; throws InputError naming an unknown key.
 std::vector<RandomTaskMethod> parse_random_task_methods(const std::string& keys);
 
