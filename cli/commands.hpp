@@ -23,9 +23,6 @@ Command add_report(CLI::App& app);
 Command add_publish(CLI::App& app);
 Command add_export(CLI::App& app);
 Command add_keygen(CLI::App& app);
-// Runs hbirl again with its heap on transparent huge pages, unless it already is, or
-// HBIRL_HUGE_PAGES=0 (huge_pages.cpp); returns only when it does not.
-void use_huge_pages(char** argv);
 // In `hbirl`, the commands of hbirl-full (full_commands.hpp) run it with main's arguments,
 // which remember_arguments() keeps (forward.cpp).
 struct FullCommand;

@@ -19,7 +19,6 @@ constexpr const char* kDescription =
 }
 
 int main(int argc, char** argv) {
-  hbirl::cli::use_huge_pages(argv);
   CLI::App app{kDescription, "hbirl"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("hbirl ") + HBIRL_VERSION);

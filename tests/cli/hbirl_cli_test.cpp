@@ -121,32 +121,6 @@ TEST_F(Cli, LearningCommandsLoadNothingElse) {
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
 }
 
-// The heap on huge pages (cli/huge_pages.cpp): hbirl starts once more, with glibc's
-// tunable set -- counted by the dynamic loader, which says so each time it starts a
-// program (LD_DEBUG=files) -- unless told not to or the user's tunables already say;
-// the results are the same bits either way.
-TEST_F(Cli, StartsAgainOnHugePagesWithTheSameResults) {
-  auto starts = [&](const std::string& environment) {
-    const Outcome r = hbirl::testing::run_command(environment + " LD_DEBUG=files '" + HBIRL_BIN + "' --version", dir_);
-    EXPECT_EQ(r.status, 0) << environment << ": " << r.err;
-    size_t n = 0;
-    for (size_t at = r.err.find("initialize program"); at != std::string::npos;
-         at = r.err.find("initialize program", at + 1))
-      ++n;
-    return n;
-  };
-  const size_t off = starts("HBIRL_HUGE_PAGES=0");
-  EXPECT_GE(off, 1u);
-  EXPECT_EQ(starts("env -u GLIBC_TUNABLES -u HBIRL_HUGE_PAGES"), off + 1);
-  EXPECT_EQ(starts("env -u HBIRL_HUGE_PAGES GLIBC_TUNABLES=glibc.malloc.hugetlb=0"), off);
-  const std::string learn = "learn --from truth --problem '" + example("gridworld_5x5.json") + "'";
-  const Outcome on = run(learn);
-  ASSERT_EQ(on.status, 0) << on.err;
-  const Outcome without =
-      hbirl::testing::run_command("HBIRL_HUGE_PAGES=0 '" + std::string(HBIRL_BIN) + "' " + learn, dir_);
-  EXPECT_EQ(on.out, without.out);
-}
-
 TEST_F(Cli, UsageErrors) {
   for (const char* args :
        {"", "frobnicate", "learn", "learn --problem x.json --from nowhere", "learn --problem x.json --restarts 0",
