@@ -108,13 +108,14 @@ void BM_MaxCausalEntSolve(benchmark::State& state) {
 BENCHMARK(BM_MaxCausalEntSolve)->Args({1, 0})->Args({4, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
 
 // How close the sparse operations run to this machine's memory bandwidth (issue 17, "Large
-// MDPs"): BM_StreamTriad is the bandwidth (a = b + s c over 3 x 128 MB; bytes counted as
-// read b, c and write a), BM_TransitionProduct one product q = T v with the N x N
-// Gridworld's transitions (bytes: the values, column indices and row starts read, q
-// written; v is small enough to stay in cache at N = 200: 320 kB), the operation the soft
-// Bellman backups and BiCGSTAB's products are made of.
+// MDPs"; issue 35): BM_StreamTriad is the bandwidth of a = b + s c (bytes counted as read b,
+// c and write a) over 3 x 128 MB (memory) and over 3 x 2 MB (larger than the 1 MB L2, held
+// in L3, as a 40,000-state gradient's matrices and vectors are), BM_TransitionProduct one
+// product q = T v with the N x N Gridworld's transitions (bytes: the values, column
+// indices and row starts read, q written; v is small enough to stay in cache at N = 200:
+// 320 kB), the operation the soft Bellman backups and BiCGSTAB's products are made of.
 void BM_StreamTriad(benchmark::State& state) {
-  const Eigen::Index n = 16 * 1024 * 1024;
+  const Eigen::Index n = state.range(0);
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
   const Eigen::VectorXd c = Eigen::VectorXd::LinSpaced(n, 1.0, 2.0);
   Eigen::VectorXd a(n);
@@ -125,7 +126,40 @@ void BM_StreamTriad(benchmark::State& state) {
   }
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * 3 * n * static_cast<int64_t>(sizeof(double)));
 }
-BENCHMARK(BM_StreamTriad)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StreamTriad)->Arg(16 * 1024 * 1024)->Arg(256 * 1024)->Unit(benchmark::kMicrosecond);
+
+// One solve with PolicyMatrix (BiCGSTAB, diagonal preconditioner, to working precision
+// from zero) for the N x N Gridworld's soft policy at the probe weights: the solves a
+// gradient is made of. range(1) = 1: the transposed (adjoint) system. Bytes per iteration
+// as docs/BENCHMARKS.md counts them: two products (PolicyOperator::bytes_per_product: its
+// storage, the input and the output) and the vector passes of Eigen's BiCGSTAB iteration
+// (30 reads and writes of S doubles: its dots, norms, updates and the preconditioner's
+// two applications).
+void BM_PolicySolve(benchmark::State& state) {
+  const GridworldTask t = task(static_cast<int>(state.range(0)), 1, 1);
+  const bool transposed = state.range(1) == 1;
+  SoftBellmanSolver soft(t.mdp, SoftViOptions{});
+  const Eigen::VectorXd policy = soft.solve(t.mdp.reward(probe_weights())).policy;
+  PolicyMatrix matrix(t.mdp);
+  matrix.set_policy(policy);
+  const int S = t.mdp.num_states;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(S);
+  for (int s = 0; s < S; ++s) b[s] = t.mdp.is_terminal(s) ? 0.0 : 1.0;
+  Eigen::VectorXd x(S);
+  for (auto _ : state) {
+    x.setZero();
+    const bool solved = transposed ? matrix.solve_transposed(b, x) : matrix.solve(b, x);
+    if (!solved) state.SkipWithError("PolicyMatrix did not solve");
+    benchmark::DoNotOptimize(x.data());
+  }
+  const int64_t per_iteration =
+      2 * matrix.bytes_per_product(transposed) + 30 * S * static_cast<int64_t>(sizeof(double));
+  state.counters["iterations"] = matrix.last_iterations();
+  state.counters["MB_per_iteration"] = static_cast<double>(per_iteration) / 1e6;
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * matrix.last_iterations() * per_iteration);
+  state.SetLabel(transposed ? "adjoint" : "policy evaluation");
+}
+BENCHMARK(BM_PolicySolve)->ArgsProduct({{200}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 void BM_TransitionProduct(benchmark::State& state) {
   const GridworldTask t = task(static_cast<int>(state.range(0)), 1, 1);

@@ -35,15 +35,8 @@ PolicyMatrix::PolicyMatrix(const Mdp& mdp) : mdp_(mdp) {
   matrix_.setFromTriplets(pattern.begin(), pattern.end());
   matrix_.makeCompressed();
 
-  // The transpose's pattern once; each solve_transposed then copies values through
-  // transposed_slot_ (what Eigen's transpose would give, without its allocation and count).
-  transposed_ = matrix_.transpose();
-  transposed_slot_.resize(static_cast<size_t>(transposed_.nonZeros()));
-  for (int col = 0; col < S; ++col) {
-    for (int j = transposed_.outerIndexPtr()[col]; j < transposed_.outerIndexPtr()[col + 1]; ++j) {
-      transposed_slot_[static_cast<size_t>(j)] = slot_of(matrix_, transposed_.innerIndexPtr()[j], col);
-    }
-  }
+  operator_ = PolicyOperator(matrix_, false);
+  transposed_operator_ = PolicyOperator(matrix_, true);
 
   entry_slot_.assign(static_cast<size_t>(t.nonZeros()), -1);
   diagonal_slot_.resize(static_cast<size_t>(S));
@@ -78,6 +71,7 @@ void PolicyMatrix::set_policy(const Eigen::VectorXd& policy) {
       }
     }
   }
+  operator_stale_ = true;
   transposed_stale_ = true;
 }
 
@@ -89,31 +83,32 @@ void PolicyMatrix::set_policy(const std::vector<int>& actions) {
   set_policy(policy);
 }
 
-bool PolicyMatrix::run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+bool PolicyMatrix::run(Solver& solver, PolicyOperator& op, bool& stale, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                        double tolerance) {
+  if (stale) {
+    op.update_values(matrix_);
+    stale = false;
+  }
   solver.setTolerance(tolerance);
-  solver.compute(a);
+  solver.compute(op);
   Eigen::VectorXd guess = x;
   x = solver.solveWithGuess(b, guess);
+  last_iterations_ = static_cast<int>(solver.iterations());
   if (solver.info() == Eigen::Success) return true;
   // BiCGSTAB may stop a hair above a very tight tolerance; accept what a direct residual
   // check says is accurate to working precision.
   const double scale = std::max(1.0, b.lpNorm<Eigen::Infinity>());
-  return x.allFinite() && (b - a * x).lpNorm<Eigen::Infinity>() <= std::max(1e-11, tolerance) * scale;
+  if (!x.allFinite()) return false;
+  const Eigen::VectorXd residual = b - op * x;
+  return residual.lpNorm<Eigen::Infinity>() <= std::max(1e-11, tolerance) * scale;
 }
 
 bool PolicyMatrix::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance) {
-  return run(solver_, matrix_, b, x, tolerance);
+  return run(solver_, operator_, operator_stale_, b, x, tolerance);
 }
 
 bool PolicyMatrix::solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  if (transposed_stale_) {
-    const double* value = matrix_.valuePtr();
-    double* out = transposed_.valuePtr();
-    for (size_t j = 0; j < transposed_slot_.size(); ++j) out[j] = value[transposed_slot_[j]];
-    transposed_stale_ = false;
-  }
-  return run(transposed_solver_, transposed_, b, x, kWorkingTolerance);
+  return run(transposed_solver_, transposed_operator_, transposed_stale_, b, x, kWorkingTolerance);
 }
 
 }  // namespace hbirl

@@ -11,6 +11,7 @@
 #include <Eigen/IterativeLinearSolvers>
 
 #include "learner/mdp.hpp"
+#include "learner/policy_operator.hpp"
 
 namespace hbirl {
 
@@ -34,20 +35,31 @@ class PolicyMatrix {
   bool solve_transposed(const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
   const SparseRowMatrix& matrix() const { return matrix_; }
+  // BiCGSTAB's iterations in the last solve (each two products with the matrix): what
+  // docs/BENCHMARKS.md counts bytes by.
+  int last_iterations() const { return last_iterations_; }
+  long long bytes_per_product(bool transposed) const {
+    return (transposed ? transposed_operator_ : operator_).bytes_per_product();
+  }
 
  private:
-  using Solver = Eigen::BiCGSTAB<SparseRowMatrix, Eigen::DiagonalPreconditioner<double>>;
-  bool run(Solver& solver, const SparseRowMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance);
+  // BiCGSTAB with Eigen's diagonal preconditioner, its products by PolicyOperator (the
+  // same bits as Eigen's sparse product, faster on grids).
+  using Solver = Eigen::BiCGSTAB<PolicyOperator, InverseDiagonalPreconditioner>;
+  bool run(Solver& solver, PolicyOperator& op, bool& stale, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+           double tolerance);
 
   const Mdp& mdp_;
-  SparseRowMatrix matrix_;      // S x S
-  SparseRowMatrix transposed_;  // its pattern fixed at construction, its values copied on demand
+  SparseRowMatrix matrix_;  // S x S
+  PolicyOperator operator_;
+  PolicyOperator transposed_operator_;
+  bool operator_stale_ = true;  // the operators' copies of matrix_'s values
   bool transposed_stale_ = true;
-  std::vector<int> transposed_slot_;  // transposed_ entry -> index into matrix_ values
-  std::vector<int> entry_slot_;       // transitions nnz -> index into matrix_ values
-  std::vector<int> diagonal_slot_;    // state -> index of its diagonal entry
+  std::vector<int> entry_slot_;     // transitions nnz -> index into matrix_ values
+  std::vector<int> diagonal_slot_;  // state -> index of its diagonal entry
   Solver solver_;
   Solver transposed_solver_;
+  int last_iterations_ = 0;
 };
 
 }  // namespace hbirl
