@@ -1,4 +1,4 @@
-# Written by hbirl; run `gnuplot docs/results/onion/onion.gp` to redraw.
+# Written by hbirl; run `gnuplot /tmp/on_new/onion.gp` to redraw.
 $m0 << EOD
 1 5.38966 0.685941
 2 0 0
@@ -12,19 +12,19 @@ $m0 << EOD
 10 0 0
 EOD
 $m1 << EOD
-1 7.32885 0.867371
-2 3.7305 0.890171
-3 3.06533 0.82057
-4 1.8796 0.652383
-5 1.88069 0.678338
-6 1.14455 0.496823
-7 1.12614 0.53074
-8 0.753466 0.412705
+1 7.8104 0.817824
+2 3.66171 0.884951
+3 2.72136 0.777844
+4 1.39805 0.530981
+5 1.39914 0.562602
+6 1.28214 0.540865
+7 1.05735 0.508102
+8 0.61588 0.344727
 9 0.626173 0.378526
-10 0.735052 0.467224
+10 0.45988 0.336769
 EOD
 $m2 << EOD
-1 4.52514 0.674156
+1 5.48825 0.695574
 2 0 0
 3 0 0
 4 0 0
@@ -36,7 +36,7 @@ $m2 << EOD
 10 0 0
 EOD
 $m3 << EOD
-1 4.68223 0.676358
+1 5.43895 0.690844
 2 0 0
 3 0 0
 4 0 0
@@ -48,7 +48,7 @@ $m3 << EOD
 10 0 0
 EOD
 $m4 << EOD
-1 2.70404 0.706148
+1 3.73593 0.82263
 2 0 0
 3 0 0
 4 0 0
@@ -73,14 +73,14 @@ set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
 set terminal pngcairo size 900,600 noenhanced font 'sans,11'
-set output 'docs/results/onion/onion.png'
+set output '/tmp/on_new/onion.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
 set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
-set output 'docs/results/onion/onion.svg'
+set output '/tmp/on_new/onion.svg'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \

@@ -1,4 +1,4 @@
-# Written by hbirl; run `gnuplot docs/results/onion_controlled/onion.gp` to redraw.
+# Written by hbirl; run `gnuplot /tmp/onc/onion.gp` to redraw.
 $m0 << EOD
 1 5.38966 0.685941
 2 0 0
@@ -12,7 +12,7 @@ $m0 << EOD
 10 0 0
 EOD
 $m1 << EOD
-1 4.50781 0.745647
+1 6.02126 0.755679
 2 0 0
 3 0 0
 4 0 0
@@ -24,7 +24,7 @@ $m1 << EOD
 10 0 0
 EOD
 $m2 << EOD
-1 5.04569 0.682503
+1 5.66483 0.683743
 2 0 0
 3 0 0
 4 0 0
@@ -36,7 +36,7 @@ $m2 << EOD
 10 0 0
 EOD
 $m3 << EOD
-1 4.63293 0.669136
+1 5.80242 0.680985
 2 0 0
 3 0 0
 4 0 0
@@ -73,14 +73,14 @@ set style line 4 lc rgb '#e7298a' lw 2 pt 11 ps 1.1
 set style line 5 lc rgb '#66a61e' lw 2 pt 13 ps 1.1
 set style line 6 lc rgb '#e6ab02' lw 2 pt 3 ps 1.0
 set terminal pngcairo size 900,600 noenhanced font 'sans,11'
-set output 'docs/results/onion_controlled/onion.png'
+set output '/tmp/onc/onion.png'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \
      $m3 using 1:2:3 with yerrorlines linestyle 4 title 'Plausible eta', \
      $m4 using 1:2:3 with yerrorlines linestyle 5 title 'Uniform eta'
 set terminal svg size 900,600 noenhanced font 'sans,11' background rgb 'white'
-set output 'docs/results/onion_controlled/onion.svg'
+set output '/tmp/onc/onion.svg'
 plot $m0 using 1:2:3 with yerrorlines linestyle 1 title 'True Trajectories', \
      $m1 using 1:2:3 with yerrorlines linestyle 2 title 'ML Trajectories', \
      $m2 using 1:2:3 with yerrorlines linestyle 3 title 'ML Observations', \

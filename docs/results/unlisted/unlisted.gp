@@ -1,24 +1,24 @@
-# Written by hbirl; run `gnuplot docs/results/unlisted/unlisted.gp` to redraw.
+# Written by hbirl; run `gnuplot /tmp/unl/unlisted.gp` to redraw.
 $p0t0m0 << EOD
 0 0.366806 0.361858
-1 172.019 69.5743
-3 219.867 67.8754
-5 289.465 55.6958
-7 331.216 41.854
+1 196.484 69.5896
+3 207.718 68.611
+5 289.382 55.5418
+7 331.213 41.8536
 EOD
 $p0t0m1 << EOD
 0 17.0196 12.9382
 1 48.8171 46.8934
-3 135.423 67.1216
-5 257.737 63.716
-7 330.975 41.8266
+3 135.433 67.1251
+5 270.009 61.4692
+7 325.948 42.5127
 EOD
 $p0t0m2 << EOD
 0 0.366748 0.361806
-1 13.8687 25.1275
-3 121.217 64.7098
-5 270.253 61.5812
-7 343.552 34.8651
+1 14.6349 25.2748
+3 121.224 64.7079
+5 258.077 63.8173
+7 343.607 34.8701
 EOD
 $p0t0m3 << EOD
 0 0.366806 0.361858
@@ -31,22 +31,22 @@ $p0t1m0 << EOD
 0 0.371685 0.361307
 1 2.77261 3.68218
 3 50.6479 47.3862
-5 77.3671 54.5773
-7 145.95 67.6186
+5 77.3148 54.5877
+7 146.138 67.7038
 EOD
 $p0t1m1 << EOD
 0 22.9264 17.0685
 1 7.90895 8.85779
 3 1.94106 2.66619
 5 76.7798 54.2937
-7 101.996 60.9409
+7 102.26 61.057
 EOD
 $p0t1m2 << EOD
 0 0.371233 0.361302
 1 2.77781 3.68167
-3 0.35188 0.365534
+3 0.358321 0.364989
 5 1.35866 1.42288
-7 24.8723 34.1983
+7 36.622 40.9224
 EOD
 $p0t1m3 << EOD
 0 0.366806 0.361858
@@ -64,17 +64,17 @@ $p1t0m0 << EOD
 EOD
 $p1t0m1 << EOD
 0 0.941175 0.00362496
-1 0.681612 0.0250274
-3 0.310242 0.0203559
-5 0.198696 0.0211106
-7 0.138387 0.00781981
+1 0.681567 0.0251266
+3 0.306717 0.0195797
+5 0.197258 0.0199453
+7 0.137383 0.00774768
 EOD
 $p1t0m2 << EOD
 0 0.999954 6.98615e-05
-1 0.771646 0.0231576
-3 0.733154 0.0339883
-5 0.751238 0.0499114
-7 0.715471 0.082979
+1 0.771608 0.0230778
+3 0.733412 0.0340249
+5 0.752517 0.0499402
+7 0.714654 0.0827666
 EOD
 $p1t0m3 << EOD
 0 1 0
@@ -86,23 +86,23 @@ EOD
 $p1t1m0 << EOD
 0 0.999342 0.000218906
 1 0.917483 0.00408847
-3 0.777954 0.027053
-5 0.773038 0.0359912
-7 0.795758 0.0357446
+3 0.778 0.0270572
+5 0.773042 0.0359523
+7 0.794937 0.0357807
 EOD
 $p1t1m1 << EOD
 0 0.706288 0.0553541
-1 0.833242 0.0136426
-3 0.789808 0.0124648
-5 0.787788 0.0110026
-7 0.790404 0.0147927
+1 0.833292 0.0136265
+3 0.789704 0.0125324
+5 0.787867 0.0110234
+7 0.790833 0.0145632
 EOD
 $p1t1m2 << EOD
 0 0.999254 0.00026446
-1 0.917829 0.00402263
-3 0.847858 0.0129313
+1 0.917837 0.00401793
+3 0.847883 0.0129332
 5 0.861525 0.0100392
-7 0.875867 0.00393314
+7 0.875896 0.00391261
 EOD
 $p1t1m3 << EOD
 0 1 0
@@ -120,7 +120,7 @@ set style line 2 lc rgb '#d95f02' lw 2 pt 5
 set style line 3 lc rgb '#7570b3' lw 2 pt 9
 set style line 4 lc rgb '#666666' lw 2 pt 11 dt 2
 set terminal pngcairo size 1100,800 noenhanced font 'sans,11'
-set output 'docs/results/unlisted/unlisted.png'
+set output '/tmp/unl/unlisted.png'
 set multiplot layout 2,2 title 'Unlisted confounders (95% CI)'
 set title 'ILE, told none (eta over the subject alone)'
 set ylabel 'ILE'
@@ -144,7 +144,7 @@ set key bottom left
 plot $p1t1m0 using 1:2:3 with yerrorlines ls 1 title 'as told', $p1t1m1 using 1:2:3 with yerrorlines ls 2 title 'catch-all, eta fixed', $p1t1m2 using 1:2:3 with yerrorlines ls 3 title 'catch-all, eta learned', $p1t1m3 using 1:2:3 with yerrorlines ls 4 title 'oracle (told every element)'
 unset multiplot
 set terminal svg size 1100,800 noenhanced font 'sans,11' background rgb 'white'
-set output 'docs/results/unlisted/unlisted.svg'
+set output '/tmp/unl/unlisted.svg'
 set multiplot layout 2,2 title 'Unlisted confounders (95% CI)'
 set title 'ILE, told none (eta over the subject alone)'
 set ylabel 'ILE'
