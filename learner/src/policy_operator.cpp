@@ -49,7 +49,8 @@ PolicyOperator::PolicyOperator(const SparseRowMatrix& matrix, bool transposed, S
     diagonal_slot_.resize(static_cast<size_t>(matrix.nonZeros()));
     for (int r = 0; r < n_; ++r) {
       for (int j = matrix.outerIndexPtr()[r]; j < matrix.outerIndexPtr()[r + 1]; ++j) {
-        const auto k = std::lower_bound(offsets_.begin(), offsets_.end(), matrix.innerIndexPtr()[j] - r) - offsets_.begin();
+        const auto k =
+            std::lower_bound(offsets_.begin(), offsets_.end(), matrix.innerIndexPtr()[j] - r) - offsets_.begin();
         diagonal_slot_[static_cast<size_t>(j)] = static_cast<int>(k) * n_ + r;
       }
     }
@@ -63,7 +64,8 @@ PolicyOperator::PolicyOperator(const SparseRowMatrix& matrix, bool transposed, S
         const int row = rows_.innerIndexPtr()[j];
         const int* begin = matrix.innerIndexPtr() + matrix.outerIndexPtr()[row];
         const int* end = matrix.innerIndexPtr() + matrix.outerIndexPtr()[row + 1];
-        rows_slot_[static_cast<size_t>(j)] = static_cast<int>(std::lower_bound(begin, end, col) - matrix.innerIndexPtr());
+        rows_slot_[static_cast<size_t>(j)] =
+            static_cast<int>(std::lower_bound(begin, end, col) - matrix.innerIndexPtr());
       }
     }
   }

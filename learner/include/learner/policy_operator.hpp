@@ -117,8 +117,9 @@ namespace Eigen::internal {
 // (res += alpha * row sum) forms them.
 template <typename Rhs>
 struct generic_product_impl<hbirl::PolicyOperator, Rhs, SparseShape, DenseShape, GemvProduct>
-    : generic_product_impl_base<hbirl::PolicyOperator, Rhs,
-                                generic_product_impl<hbirl::PolicyOperator, Rhs, SparseShape, DenseShape, GemvProduct>> {
+    : generic_product_impl_base<
+          hbirl::PolicyOperator, Rhs,
+          generic_product_impl<hbirl::PolicyOperator, Rhs, SparseShape, DenseShape, GemvProduct>> {
   template <typename Dest>
   static void evalTo(Dest& dst, const hbirl::PolicyOperator& lhs, const Rhs& rhs) {
     const Eigen::Ref<const Eigen::VectorXd> x(rhs);  // no copy for a plain vector
