@@ -154,6 +154,9 @@ nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app:
   if (used.learn && used.update == AlphaUpdate::kPosterior) {
     om["prior_strength"] = used.strength;
     om["prior_strength_chosen"] = used.automatic_strength;
+    // The share of each row's base given to its state's other actions (docs/MODEL.md "A
+    // state's actions share their view"), when the file asked for the tie.
+    if (used.tie_actions) om["tie_share"] = used.subject_tie;
     if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
   }
   if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta, context_names);

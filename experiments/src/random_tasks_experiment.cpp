@@ -340,6 +340,7 @@ void learn(const RandomTask& task, const RandomTaskMethod& method, RandomTaskRun
     if (method.kind == "oracle_unseen_subject_o") hold_unseen_subject_at_true_o(task, prior);
     if (method.base >= 0.0) rebase_subject_prior(prior, method.base);
     if (method.kind == "unheld") unhold_unseen_pairs(prior);
+    prior.tie_actions = method.tie;
     prior.confounder_alpha *= method.elements;
     prior.learn = method.kind != "fixed";
     use_alpha_update(prior, method.kind == "paper" ? AlphaUpdate::kPaper : AlphaUpdate::kPosterior);
@@ -524,6 +525,7 @@ const std::vector<RandomTaskMethod>& all_random_task_methods() {
       {"posterior_elements10", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 10.0},
       {"posterior_elements100", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 100.0},
       {"posterior_elements1000", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 1000.0},
+      {"posterior_tied", "posterior", 0.1, 1, RandomTaskMethod::End::kUnseen, 0.0, -1.0, false, 1.0, true},
       {"oracle_labelled_o", "labelled_o", 0.1, 1},
       {"oracle_sensor_labelled_o", "oracle_labelled", 0.1, 1},
       {"oracle_sensor_labelled_o_cf", "oracle_labelled_cf", 0.1, 1},
@@ -743,6 +745,7 @@ void write_paired_comparisons(std::ostream& out, const std::vector<RandomTaskRun
   compare("posterior", "posterior_cross_fit");
   compare("posterior", "posterior_elements100");
   compare("posterior", "posterior_elements1000");
+  compare("posterior", "posterior_tied");
   compare("oracle_elements_o", "posterior_elements1000");
   compare("posterior", "oracle_labelled_o");
   compare("oracle_labelled_o", "oracle_o");

@@ -89,6 +89,10 @@ void ObservationEStep::check_data(const std::vector<ObservedTrajectory>& traject
 // What the merged trajectories are read for: the executor's digest, learned eta's
 // contexts and the kind table (nothing here refuses what check_data accepted).
 void ObservationEStep::finish() {
+  // The tie reads the controlled run's counts only, so every E-step built from one prior
+  // (restarts, the optimiser, anytime learning) ties it alike.
+  if (prior_.tie_actions && prior_.learn && prior_.update == AlphaUpdate::kPosterior)
+    tie_subject_prior_across_actions(prior_, mdp_.num_actions);
   if (options_.executor) {
     input_digest_ = dataset_digest(trajectories_);
   }

@@ -1,6 +1,8 @@
 #include "learner/observation_model.hpp"
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 namespace hbirl {
 
@@ -42,7 +44,11 @@ Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPri
 
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
   const double base = prior.subject_alpha_base;
-  Eigen::MatrixXd out = prior.subject_alpha.array().min(base) + s * (prior.subject_alpha.array() - base).max(0.0);
+  const auto counts = (prior.subject_alpha.array() - base).max(0.0);
+  Eigen::MatrixXd out =
+      prior.subject_base_shape.size() == 0
+          ? Eigen::MatrixXd(prior.subject_alpha.array().min(base) + s * counts)
+          : Eigen::MatrixXd(prior.subject_alpha.array().min(base) * prior.subject_base_shape.array() + s * counts);
   // Pairs the prior has no counts for keep its mean (docs/MODEL.md, "The observation
   // model"): a pair whose O the demonstration alone could set would explain observations
   // by the expert doing what it did not do. Unless no pair has counts (no controlled run:
@@ -54,6 +60,66 @@ Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
     }
   }
   return out;
+}
+
+namespace {
+// log Pr(counts | Dir(beta)) for one multinomial row, up to the counts' multinomial
+// coefficient (the same for every beta): the lgamma form, so counts may be fractional
+// (a per-visit controlled run).
+double log_dirichlet_multinomial(const Eigen::RowVectorXd& counts, const Eigen::RowVectorXd& beta) {
+  double sum = std::lgamma(beta.sum()) - std::lgamma(beta.sum() + counts.sum());
+  for (Eigen::Index w = 0; w < counts.size(); ++w) {
+    if (counts[w] > 0.0) sum += std::lgamma(beta[w] + counts[w]) - std::lgamma(beta[w]);
+  }
+  return sum;
+}
+
+// Row r's base shape at share rho: W * (rho * m + (1 - rho) / W), m = others / sum(others),
+// its mean 1; the flat base (1s) where the state's other actions have no counts.
+Eigen::RowVectorXd base_shape(const Eigen::RowVectorXd& others, double rho) {
+  const double total = others.sum();
+  if (total <= 0.0) return Eigen::RowVectorXd::Ones(others.size());
+  return (rho * static_cast<double>(others.size()) / total) * others.array() + (1.0 - rho);
+}
+}  // namespace
+
+void tie_subject_prior_across_actions(ObservationPrior& prior, int num_actions) {
+  prior.subject_base_shape.resize(0, 0);
+  prior.subject_tie = 0.0;
+  const Eigen::Index P = prior.subject_alpha.rows();
+  if (num_actions < 2 || P % num_actions != 0) return;
+  const double base = prior.subject_alpha_base;
+  const Eigen::MatrixXd counts = (prior.subject_alpha.array() - base).max(0.0);
+  const Eigen::MatrixXd flat = prior.subject_alpha.array().min(base);
+  // others.row(r): the counts of r's state's other actions.
+  Eigen::MatrixXd others(P, counts.cols());
+  for (Eigen::Index first = 0; first < P; first += num_actions) {
+    const Eigen::RowVectorXd state = counts.middleRows(first, num_actions).colwise().sum();
+    for (Eigen::Index r = first; r < first + num_actions; ++r) others.row(r) = state - counts.row(r);
+  }
+  std::vector<Eigen::Index> scored;  // counted rows whose state has another counted action
+  for (Eigen::Index r = 0; r < P; ++r) {
+    if (counts.row(r).sum() > 0.0 && others.row(r).sum() > 0.0) scored.push_back(r);
+  }
+  if (scored.empty()) return;
+  double best_rho = 0.0;
+  double best = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 20; ++k) {
+    const double rho = k / 20.0;
+    double score = 0.0;
+    for (Eigen::Index r : scored) {
+      const Eigen::RowVectorXd beta = flat.row(r).array() * base_shape(others.row(r), rho).array();
+      score += log_dirichlet_multinomial(counts.row(r), beta);
+    }
+    if (score > best) {  // ties keep the smaller share
+      best = score;
+      best_rho = rho;
+    }
+  }
+  if (best_rho == 0.0) return;
+  prior.subject_base_shape.resize(P, counts.cols());
+  for (Eigen::Index r = 0; r < P; ++r) prior.subject_base_shape.row(r) = base_shape(others.row(r), best_rho);
+  prior.subject_tie = best_rho;
 }
 
 Eigen::MatrixXd weighed_end_prior(const ObservationPrior& prior) {

@@ -115,6 +115,7 @@ const JsonShape& observation_model_shape() {
                                                     {"prior_strength", nullptr},
                                                     {"learn_eta", nullptr},
                                                     {"eta_prior_strength", nullptr},
+                                                    {"tie_actions", nullptr},
                                                     {"unlisted_source", &unlisted},
                                                     {"end_sensor", &end_sensor}});
   return shape;
@@ -475,7 +476,7 @@ void read_end_sensor(const JsonNode& node, const Mdp& mdp, ObservationPrior& pri
   }
 }
 
-// How the prior is learned: learn, update, c, learn_eta, eta_prior_strength,
+// How the prior is learned: learn, update, c, learn_eta, eta_prior_strength, tie_actions,
 // unlisted_source and prior_strength.
 void read_learning_options(const JsonNode& node, ObservationPrior& prior, std::vector<std::string>* warnings) {
   if (auto l = node.find("learn")) prior.learn = l->as_bool();
@@ -495,6 +496,7 @@ void read_learning_options(const JsonNode& node, ObservationPrior& prior, std::v
     if (!(prior.eta_strength > 0.0 && prior.eta_strength <= 1e12))
       k->fail("expected a number in (0, 1e12], got " + fmt(prior.eta_strength));
   }
+  if (auto t = node.find("tie_actions")) prior.tie_actions = t->as_bool();
   if (auto u = node.find("unlisted_source")) {
     u->check_keys({"eta"}, warnings);  // as observation_model_shape()
     const JsonNode eta = u->at("eta");
@@ -898,6 +900,7 @@ OrderedJson observation_model_to_json(const ObservationPrior& p, const Mdp& mdp)
   // Only when it differs from the update's default: said explicitly, it must have an eta to learn.
   if (p.learn_eta != (p.update == AlphaUpdate::kPosterior)) om["learn_eta"] = p.learn_eta;
   om["eta_prior_strength"] = p.eta_strength;
+  if (p.tie_actions) om["tie_actions"] = true;  // only when on: files without it stay as they were
   if (p.unlisted_eta > 0.0) om["unlisted_source"] = J{{"eta", p.unlisted_eta}};
   om["c"] = p.c;
   if (p.automatic_strength) {

@@ -190,7 +190,7 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
                             const std::string& update, double c, const py::object& prior_strength,
                             std::optional<bool> learn, std::optional<bool> learn_eta, double eta_strength,
                             double unlisted_eta, int num_end_symbols, const py::object& end_alpha,
-                            std::optional<double> end_alpha_default) {
+                            std::optional<double> end_alpha_default, bool tie_actions) {
   ObservationPrior prior = sized_prior(mdp, num_symbols, num_confounders);
   set_subject_alpha(prior, mdp, subject_alpha, subject_alpha_default);
   set_confounder_alpha(prior, confounder_alpha);
@@ -209,6 +209,7 @@ ObservationPrior make_prior(const Mdp& mdp, int num_symbols, int num_confounders
   if (!(unlisted_eta >= 0.0 && unlisted_eta < 1.0))
     throw InputError("unlisted_eta", "must be in [0, 1) (0: no catch-all source)");
   prior.unlisted_eta = unlisted_eta;
+  prior.tie_actions = tie_actions;
   return prior;
 }
 
@@ -224,7 +225,7 @@ void bind_observation_prior(py::module_& m) {
            py::arg("subject_alpha_default") = py::none(), py::arg("update") = "posterior", py::arg("c") = 0.1,
            py::arg("prior_strength") = "auto", py::arg("learn") = py::none(), py::arg("learn_eta") = py::none(),
            py::arg("eta_strength") = 10.0, py::arg("unlisted_eta") = 0.0, py::arg("num_end_symbols") = 0,
-           py::arg("end_alpha") = py::none(), py::arg("end_alpha_default") = py::none())
+           py::arg("end_alpha") = py::none(), py::arg("end_alpha_default") = py::none(), py::arg("tie_actions") = false)
       .def_property_readonly("num_symbols", [](const ObservationPrior& p) { return p.num_symbols; })
       .def_property_readonly("num_confounders", [](const ObservationPrior& p) { return p.num_confounders; })
       .def_property_readonly("confounder_alpha", [](const ObservationPrior& p) { return p.confounder_alpha; })
@@ -248,6 +249,9 @@ void bind_observation_prior(py::module_& m) {
       .def_property_readonly("learn_eta", [](const ObservationPrior& p) { return p.learn_eta; })
       .def_property_readonly("eta_strength", [](const ObservationPrior& p) { return p.eta_strength; })
       .def_property_readonly("unlisted_eta", [](const ObservationPrior& p) { return p.unlisted_eta; })
+      .def_property_readonly(
+          "tie_actions", [](const ObservationPrior& p) { return p.tie_actions; },
+          "Whether the subject's prior is tied across each state's actions (docs/MODEL.md).")
       .def_property_readonly("prior_strength", [](const ObservationPrior& p) {
         return p.automatic_strength ? py::object(py::str("auto")) : py::object(py::float_(p.strength));
       });

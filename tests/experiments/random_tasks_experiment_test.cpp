@@ -89,13 +89,14 @@ std::vector<RandomTaskRun> runs_on_one_data_set(std::uint64_t seed, const std::s
 // The diagnostics of the subject's O (issue 33) each change what is learned: the true O
 // held on the pairs the controlled run saw, or on those it never saw (both against the
 // counts at strength 1), the unseen pairs learned instead of held, a smaller base, a
-// cross-fitted E-step, and a stronger prior on the elements' O.
+// cross-fitted E-step, a stronger prior on the elements' O, and the subject's prior tied
+// across a state's actions.
 TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
   const std::vector<RandomTaskRun> runs = runs_on_one_data_set(
       1,
       "posterior,posterior_unheld,posterior_base0.3,posterior_s1,oracle_seen_subject_o,oracle_unseen_subject_o,"
-      "posterior_cross_fit,posterior_elements1000");
-  ASSERT_EQ(runs.size(), 8u);
+      "posterior_cross_fit,posterior_elements1000,posterior_tied");
+  ASSERT_EQ(runs.size(), 9u);
   EXPECT_NE(runs[1].theta, runs[0].theta) << "posterior_unheld";
   EXPECT_NE(runs[2].theta, runs[0].theta) << "posterior_base0.3";
   EXPECT_NE(runs[4].theta, runs[3].theta) << "oracle_seen_subject_o";
@@ -103,6 +104,7 @@ TEST(RandomTasks, EachDiagnosticOfTheSubjectsOChangesTheAnswer) {
   EXPECT_NE(runs[5].theta, runs[4].theta);
   EXPECT_NE(runs[6].theta, runs[0].theta) << "posterior_cross_fit";
   EXPECT_NE(runs[7].theta, runs[0].theta) << "posterior_elements1000";
+  EXPECT_NE(runs[8].theta, runs[0].theta) << "posterior_tied";
 }
 
 // The subject's observations of demonstration i alone (those whose true source is the

@@ -498,6 +498,49 @@ TEST(ObservationEStep, PosteriorUpdateIsThePriorPlusBruteForceCounts) {
   EXPECT_GT(checked, 20);
 }
 
+// tie_actions: the posterior update's E-step ties the prior as tie_subject_prior_across_actions
+// does (the Gridworld's sensor sees the state alone, so the share is large); the paper's
+// update and a fixed O are left untied.
+TEST(ObservationEStep, TiesThePriorAcrossAStatesActionsWhenAsked) {
+  ObservedGridworld g = observed_gridworld(5, 1, 8, EtaKind::kPlausible);
+  g.prior.tie_actions = true;
+  ObservationPrior by_hand = g.prior;
+  tie_subject_prior_across_actions(by_hand, g.task.mdp.num_actions);
+  ASSERT_GT(by_hand.subject_tie, 0.5);
+  const ObservationEStep tied(g.task.mdp, g.observations.trajectories, g.prior);
+  EStepState state = tied.initial_state(1);
+  EXPECT_EQ(state.alpha->subject_tie, by_hand.subject_tie);
+  EXPECT_EQ(state.alpha->subject_base_shape, by_hand.subject_base_shape);
+  // One refinement, tied or not, from the same first O: the tied weighed prior plus the
+  // same expected counts as the untied prior's.
+  const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d::Zero()));
+  ObservationEStepOptions one;
+  one.max_alpha_iterations = 1;
+  auto counts_after_one = [&](bool tie) {
+    ObservationPrior prior = g.prior;
+    prior.tie_actions = tie;
+    prior.automatic_strength = false;
+    const ObservationEStep once(g.task.mdp, g.observations.trajectories, prior, one);
+    EStepState s = once.initial_state(1);
+    once.expect(policy, s);
+    return Eigen::MatrixXd(s.alpha->subject_alpha -
+                           weighed_subject_prior(*once.initial_state(1).alpha, s.alpha->strength));
+  };
+  const Eigen::MatrixXd tied_counts = counts_after_one(true);
+  EXPECT_LT((tied_counts - counts_after_one(false)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(tied_counts.sum(), 100.0);  // 20 trajectories x 10 steps x 8 observations, the subject's share
+  for (bool paper : {true, false}) {
+    ObservationPrior untied = g.prior;
+    if (paper)
+      use_alpha_update(untied, AlphaUpdate::kPaper);
+    else
+      untied.learn = false;
+    const ObservationEStep e(g.task.mdp, g.observations.trajectories, untied);
+    EXPECT_EQ(e.initial_state(1).alpha->subject_tie, 0.0);
+    EXPECT_EQ(e.initial_state(1).alpha->subject_base_shape.size(), 0);
+  }
+}
+
 // Pairs the prior has no counts for keep its mean whatever the strength, as long as some
 // pair has counts; with no counts anywhere the demonstration alone sets O.
 TEST(ObservationEStep, PairsWithoutCountsKeepTheirPriorMean) {

@@ -192,5 +192,130 @@ TEST(ObservationModel, StrengthGridSpansThreeDecadesEachWay) {
   EXPECT_EQ(grid[6], 1.0);  // the prior as written is on the grid
 }
 
+// A controlled run of `visits` observations per counted (s, a) of a sensor whose rows are
+// share * (the state's row) + (1 - share) * (the action's own row); pairs with a = A - 1
+// never visited; S states. Base 1 per symbol.
+ObservationPrior shared_view_prior(double share, int visits, std::uint64_t seed, int S = 6) {
+  const int A = 3, W = 8;
+  Rng rng(seed);
+  auto random_row = [&] {
+    Eigen::VectorXd row(W);
+    for (int w = 0; w < W; ++w) row[w] = std::pow(rng.uniform(), 4.0);  // peaked
+    return Eigen::VectorXd(row / row.sum());
+  };
+  ObservationPrior prior;
+  prior.num_symbols = W;
+  prior.subject_alpha = Eigen::MatrixXd::Ones(S * A, W);
+  for (int s = 0; s < S; ++s) {
+    const Eigen::VectorXd state = random_row();
+    for (int a = 0; a + 1 < A; ++a) {
+      const Eigen::VectorXd o = share * state + (1.0 - share) * random_row();
+      for (int n = 0; n < visits; ++n) prior.subject_alpha(s * A + a, rng.categorical(o)) += 1.0;
+    }
+  }
+  return prior;
+}
+
+// log Pr(a sequence with these counts | Dir(beta)) by the Polya urn, one draw at a time:
+// an independent route to the lgamma form the share is chosen by.
+double polya_urn_log(const Eigen::RowVectorXd& counts, const Eigen::RowVectorXd& beta) {
+  Eigen::RowVectorXd urn = beta;
+  double sum = 0.0;
+  for (Eigen::Index w = 0; w < counts.size(); ++w) {
+    for (int n = 0; n < static_cast<int>(counts[w]); ++n) {
+      sum += std::log(urn[w] / urn.sum());
+      urn[w] += 1.0;
+    }
+  }
+  return sum;
+}
+
+TEST(ObservationModel, TieChoosesTheShareThatBestPredictsEachActionFromItsSiblings) {
+  const int A = 3;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    ObservationPrior prior = shared_view_prior(0.8, 12, seed);
+    tie_subject_prior_across_actions(prior, A);
+    // The brute-force choice: each counted row's urn likelihood under the base its state's
+    // other counted rows give it, at every share on the grid.
+    const Eigen::MatrixXd counts = (prior.subject_alpha.array() - 1.0).max(0.0);
+    double best = -INFINITY, best_rho = -1.0;
+    for (int k = 0; k < 20; ++k) {
+      const double rho = k / 20.0;
+      double score = 0.0;
+      for (int s = 0; s < counts.rows() / A; ++s) {
+        for (int a = 0; a < A; ++a) {
+          Eigen::RowVectorXd others = Eigen::RowVectorXd::Zero(counts.cols());
+          for (int b = 0; b < A; ++b)
+            if (b != a) others += counts.row(s * A + b);
+          if (counts.row(s * A + a).sum() == 0.0 || others.sum() == 0.0) continue;
+          const double W = static_cast<double>(counts.cols());
+          const Eigen::RowVectorXd mean =
+              rho * others / others.sum() + Eigen::RowVectorXd::Constant(counts.cols(), (1.0 - rho) / W);
+          score += polya_urn_log(counts.row(s * A + a), mean * W);
+        }
+      }
+      if (score > best + 1e-9) {
+        best = score;
+        best_rho = rho;
+      }
+    }
+    EXPECT_DOUBLE_EQ(prior.subject_tie, best_rho) << "seed " << seed;
+    EXPECT_GT(prior.subject_tie, 0.3) << "seed " << seed;  // these actions share 80% of their view
+  }
+}
+
+TEST(ObservationModel, TieIsOffWhenActionsShareNothing) {
+  int tied = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    ObservationPrior prior = shared_view_prior(0.0, 200, seed, 40);
+    const Eigen::MatrixXd flat = weighed_subject_prior(prior, 0.5);
+    tie_subject_prior_across_actions(prior, 3);
+    EXPECT_LE(prior.subject_tie, 0.1) << "seed " << seed;
+    if (prior.subject_tie == 0.0) {
+      ++tied;
+      EXPECT_EQ(prior.subject_base_shape.size(), 0);
+      EXPECT_EQ(weighed_subject_prior(prior, 0.5), flat);  // bit for bit: the flat base
+    }
+  }
+  EXPECT_GE(tied, 7);
+}
+
+TEST(ObservationModel, TiedPriorHoldsAnUnseenActionAtItsStatesView) {
+  const int A = 3;
+  ObservationPrior prior = shared_view_prior(1.0, 40, 7);
+  tie_subject_prior_across_actions(prior, A);
+  ASSERT_GT(prior.subject_tie, 0.5);
+  const double rho = prior.subject_tie;
+  const Eigen::MatrixXd weighed = weighed_subject_prior(prior, 0.3);
+  const Eigen::MatrixXd counts = (prior.subject_alpha.array() - 1.0).max(0.0);
+  const double W = static_cast<double>(counts.cols());
+  for (int s = 0; s < counts.rows() / A; ++s) {
+    // Row a = A - 1 was never visited: held (1000 x the base) at rho * the state's pooled
+    // view + (1 - rho) * uniform.
+    const Eigen::RowVectorXd pooled = counts.row(s * A) + counts.row(s * A + 1);
+    const Eigen::RowVectorXd mean =
+        rho * pooled / pooled.sum() + Eigen::RowVectorXd::Constant(counts.cols(), (1.0 - rho) / W);
+    const Eigen::RowVectorXd unseen = weighed.row(s * A + A - 1);
+    EXPECT_NEAR(unseen.sum(), ObservationPrior::kMaxStrength * W, 1e-6);
+    EXPECT_LT((unseen / unseen.sum() - mean).cwiseAbs().maxCoeff(), 1e-12);
+    // A counted row: its sibling's view as the base's shape (mean 1), its own counts weighed.
+    const Eigen::RowVectorXd sibling = counts.row(s * A + 1);
+    const Eigen::RowVectorXd base = (rho * W / sibling.sum()) * sibling.array() + (1.0 - rho);
+    EXPECT_LT((weighed.row(s * A) - (base + 0.3 * counts.row(s * A))).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(ObservationModel, TieNeedsAStateWithTwoCountedActions) {
+  ObservationPrior prior;
+  prior.subject_alpha = Eigen::MatrixXd::Ones(4, 3);
+  prior.subject_alpha(0, 1) = 5.0;  // state 0, action 0 only
+  prior.subject_alpha(3, 2) = 5.0;  // state 1, action 1 only
+  tie_subject_prior_across_actions(prior, 2);
+  EXPECT_EQ(prior.subject_tie, 0.0);
+  EXPECT_EQ(prior.subject_base_shape.size(), 0);
+  tie_subject_prior_across_actions(prior, 3);  // 4 rows are not whole states of 3 actions
+  EXPECT_EQ(prior.subject_base_shape.size(), 0);
+}
+
 }  // namespace
 }  // namespace hbirl

@@ -282,6 +282,8 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
   EXPECT_EQ(defaults.observation_model->update, AlphaUpdate::kPosterior);
   EXPECT_TRUE(defaults.observation_model->automatic_strength);
   EXPECT_TRUE(defaults.observation_model->learn_eta);
+  EXPECT_FALSE(defaults.observation_model->tie_actions);
+  EXPECT_FALSE(problem_to_json(defaults)["observation_model"].contains("tie_actions"));  // files stay as they were
   json d = spec_example();
   d["observation_model"]["update"] = "paper";
   d["observation_model"]["prior_strength"] = 0.5;
@@ -295,6 +297,7 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
   d["observation_model"]["update"] = "posterior";
   d["observation_model"]["learn_eta"] = false;
   d["observation_model"]["eta_prior_strength"] = 25.0;
+  d["observation_model"]["tie_actions"] = true;
   const Problem p = parse_problem(d.dump());
   const Problem q = parse_problem(problem_to_json(p).dump());
   for (const Problem* x : {&p, &q}) {
@@ -303,7 +306,10 @@ TEST(ProblemFile, ObservationModelLearningOptions) {
     EXPECT_EQ(x->observation_model->eta_strength, 25.0);
     EXPECT_EQ(x->observation_model->strength, 0.5);
     EXPECT_EQ(x->observation_model->subject_alpha_base, 2.0);
+    EXPECT_TRUE(x->observation_model->tie_actions);
   }
+  expect_error([](json& e) { e["observation_model"]["tie_actions"] = 1; }, "observation_model.tie_actions",
+               "true or false");
   expect_error([](json& e) { e["observation_model"]["update"] = "bayes"; }, "observation_model.update",
                "expected \"posterior\" or \"paper\"");
   expect_error([](json& e) { e["observation_model"]["prior_strength"] = "high"; }, "observation_model.prior_strength",

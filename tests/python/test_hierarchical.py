@@ -659,3 +659,27 @@ def test_the_end_sensor_prior_reads_back():
     expected[3:] = 2.5
     assert prior.num_end_symbols == 3 and prior.end_alpha.tolist() == expected.tolist()
     assert hbirl.ObservationPrior(mdp, 2, 0, num_end_symbols=3, end_alpha=end).end_alpha.tolist() == end.tolist()
+
+
+def test_a_prior_tied_across_actions_fits_as_hbirl_learn(tmp_path):
+    """observation_model.tie_actions: the file's setting reaches the Python prior, the fit is
+    hbirl learn's bit for bit, and the tie changes the answer on a task whose controlled run
+    shows a state's actions sharing their view."""
+    path = str(tmp_path / "task.json")
+    cli("generate", "random-task", "--seed", "1", "-o", path)
+    doc = json.load(open(path))
+    untied = json.loads(cli("learn", "--problem", path))
+    doc["observation_model"]["tie_actions"] = True
+    tied_path = str(tmp_path / "tied.json")
+    with open(tied_path, "w") as f:
+        json.dump(doc, f)
+    out = json.loads(cli("learn", "--problem", tied_path))
+    assert 0.0 < out["observation_model"]["tie_share"] < 1.0
+    assert "tie_share" not in untied["observation_model"]
+    assert out["weights"] != untied["weights"]
+    problem = hbirl.load_problem(tied_path)
+    assert problem.observation_prior.tie_actions
+    model = hbirl.HierarchicalIRL().fit(problem.mdp, problem.observations(), problem.observation_prior)
+    assert model.theta_.tolist() == out["weights"]
+    assert hbirl.ObservationPrior(problem.mdp, 3, 0, tie_actions=True).tie_actions
+    assert not hbirl.ObservationPrior(problem.mdp, 3, 0).tie_actions

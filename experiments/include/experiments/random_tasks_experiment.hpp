@@ -96,6 +96,7 @@ struct RandomTaskMethod {
   double base = -1.0;      // the subject prior's base pseudo-count instead of the stated one (-1: as stated)
   bool cross_fit = false;  // cross-fitted E-step passes (ObservationEStepOptions::cross_fit)
   double elements = 1.0;   // the elements' prior (confounder_alpha) times this; the task's is 1 per symbol
+  bool tie = false;        // the subject prior tied across a state's actions (ObservationPrior::tie_actions)
 };
 
 const std::vector<RandomTaskMethod>& all_random_task_methods();

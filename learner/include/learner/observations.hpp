@@ -143,6 +143,16 @@ struct ObservationPrior {
   // chosen from the data (ObservationEStep::choose_strength) on prior_strength_grid()
   // and `strength` holds the current value.
   double subject_alpha_base = 1.0;
+  // The base's shape, tied across a state's actions (docs/MODEL.md "A state's actions share
+  // their view"): the base of row (s, a) times subject_base_shape(row), each row's mean 1,
+  // so that a row with few or no counts is drawn towards what the controlled run saw at
+  // the state's other actions, not towards uniform. Empty: the flat base (no tie).
+  // Set by tie_subject_prior_across_actions, which ObservationEStep calls when tie_actions
+  // is on (the posterior update only: a problem file's observation_model.tie_actions, off
+  // by default); subject_tie is the share rho it chose.
+  bool tie_actions = false;
+  Eigen::MatrixXd subject_base_shape;
+  double subject_tie = 0.0;
   bool automatic_strength = true;
   double strength = 1.0;
   // Learned eta (docs/MODEL.md, "Learned eta"): the source distribution of each context
