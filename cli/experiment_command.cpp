@@ -235,7 +235,8 @@ int run_gridworld_experiment_command(GridworldExperimentArgs& args) {
   spec.x_header = "|E|";
   std::ostringstream footer;
   footer << o.runs << " runs per point, " << o.trajectories << " trajectories of " << o.length << " steps, "
-         << o.per_step << " observations per step, " << update_description(o.update, o.c) << ", seed " << o.seed << "; "
+         << o.per_step << " observations per step, " << update_description(o.update, o.c)
+         << (o.tie_actions ? ", the subject prior tied across actions" : "") << ", seed " << o.seed << "; "
          << runs.size() << " learning runs in " << static_cast<long>(seconds + 0.5) << " s on "
          << (o.threads > 0 ? o.threads : default_thread_count()) << " threads" << failed_note(c.failed) << ".";
   spec.footer = footer.str();
@@ -697,6 +698,8 @@ CLI::App* add_gridworld_experiment(CLI::App* cmd, GridworldExperimentArgs& args)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   grid->add_flag("!--plain-em", args.options.accelerate, "Plain EM iterations instead of SQUAREM-accelerated EM");
+  grid->add_flag("--tie-actions", args.options.tie_actions,
+                 "Tie the subject's prior across each state's actions (observation_model.tie_actions; docs/MODEL.md)");
   return grid;
 }
 

@@ -78,6 +78,7 @@ GridworldRun run_method(const GridworldExperimentOptions& o, const Scenario& s, 
     auto [observations, prior] = gridworld_method_data(s, method, o.seed, run, confounders);
     use_alpha_update(prior, o.update);
     prior.c = o.c;
+    prior.tie_actions = o.tie_actions;
     ObservationEStepOptions estep_options;
     estep_options.max_alpha_iterations = o.max_alpha_iterations;
     estep_options.alpha_tolerance = o.alpha_tolerance;

@@ -90,8 +90,9 @@ void ObservationEStep::check_data(const std::vector<ObservedTrajectory>& traject
 // contexts and the kind table (nothing here refuses what check_data accepted).
 void ObservationEStep::finish() {
   // The tie reads the controlled run's counts only, so every E-step built from one prior
-  // (restarts, the optimiser, anytime learning) ties it alike.
-  if (prior_.tie_actions && prior_.learn && prior_.update == AlphaUpdate::kPosterior)
+  // (restarts, the optimiser, anytime learning) ties it alike; with O held (learn false:
+  // the confidence's second opinion) the held O is the tied prior's mean (initial_state).
+  if (prior_.tie_actions && prior_.update == AlphaUpdate::kPosterior)
     tie_subject_prior_across_actions(prior_, mdp_.num_actions);
   if (options_.executor) {
     input_digest_ = dataset_digest(trajectories_);
@@ -175,6 +176,10 @@ EStepState ObservationEStep::initial_state(std::uint64_t seed) const {
   EStepState state;
   state.seed = seed;
   state.alpha = prior_;
+  // Tied, EM starts where the tie says (a pair the controlled run never saw at its state's
+  // view) and a held O is held there: the weighed prior's mean. Untied, EM starts at the
+  // prior's own mean, as it always has.
+  if (prior_.subject_base_shape.size() > 0) state.alpha->subject_alpha = weighed_subject_prior(prior_, prior_.strength);
   if (num_contexts() > 0) state.alpha->eta_alpha = prior_.eta_strength * context_eta_;
   return state;
 }

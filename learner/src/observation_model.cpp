@@ -4,6 +4,8 @@
 #include <limits>
 #include <vector>
 
+#include "learner/input_error.hpp"
+
 namespace hbirl {
 
 AlphaCounts AlphaCounts::zero(int pairs, int confounders, int symbols) {
@@ -45,6 +47,9 @@ Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPri
 Eigen::MatrixXd weighed_subject_prior(const ObservationPrior& prior, double s) {
   const double base = prior.subject_alpha_base;
   const auto counts = (prior.subject_alpha.array() - base).max(0.0);
+  if (prior.subject_base_shape.size() > 0 && (prior.subject_base_shape.rows() != prior.subject_alpha.rows() ||
+                                              prior.subject_base_shape.cols() != prior.subject_alpha.cols()))
+    throw InputError("observation_model.subject_base_shape", "is not the shape of subject_alpha");
   Eigen::MatrixXd out =
       prior.subject_base_shape.size() == 0
           ? Eigen::MatrixXd(prior.subject_alpha.array().min(base) + s * counts)
@@ -67,9 +72,15 @@ namespace {
 // coefficient (the same for every beta): the lgamma form, so counts may be fractional
 // (a per-visit controlled run).
 double log_dirichlet_multinomial(const Eigen::RowVectorXd& counts, const Eigen::RowVectorXd& beta) {
-  double sum = std::lgamma(beta.sum()) - std::lgamma(beta.sum() + counts.sum());
+  // lgamma_r: std::lgamma writes glibc's global signgam, a data race between E-steps built
+  // on several threads (the values are the same).
+  auto log_gamma = [](double x) {
+    int sign = 0;
+    return lgamma_r(x, &sign);
+  };
+  double sum = log_gamma(beta.sum()) - log_gamma(beta.sum() + counts.sum());
   for (Eigen::Index w = 0; w < counts.size(); ++w) {
-    if (counts[w] > 0.0) sum += std::lgamma(beta[w] + counts[w]) - std::lgamma(beta[w]);
+    if (counts[w] > 0.0) sum += log_gamma(beta[w] + counts[w]) - log_gamma(beta[w]);
   }
   return sum;
 }
@@ -97,9 +108,12 @@ void tie_subject_prior_across_actions(ObservationPrior& prior, int num_actions) 
     const Eigen::RowVectorXd state = counts.middleRows(first, num_actions).colwise().sum();
     for (Eigen::Index r = first; r < first + num_actions; ++r) others.row(r) = state - counts.row(r);
   }
-  std::vector<Eigen::Index> scored;  // counted rows whose state has another counted action
+  // Scored: rows with at least one observation's worth of counts whose state's other
+  // actions have as much (a few hundredths of an observation must not set the share that
+  // holds every unseen pair).
+  std::vector<Eigen::Index> scored;
   for (Eigen::Index r = 0; r < P; ++r) {
-    if (counts.row(r).sum() > 0.0 && others.row(r).sum() > 0.0) scored.push_back(r);
+    if (counts.row(r).sum() >= 1.0 && others.row(r).sum() >= 1.0) scored.push_back(r);
   }
   if (scored.empty()) return;
   double best_rho = 0.0;

@@ -57,6 +57,7 @@ class ObservationPrior:
         num_end_symbols: int = ...,  # the end sensor's alphabet; 0: none
         end_alpha: Union[None, float, npt.ArrayLike] = ...,  # number (every terminal state; default 1) or (S, K)
         end_alpha_default: Optional[float] = ...,
+        tie_actions: bool = ...,  # the subject's prior tied across each state's actions
     ) -> None: ...
     @property
     def num_symbols(self) -> int: ...
@@ -64,6 +65,8 @@ class ObservationPrior:
     def num_confounders(self) -> int: ...
     @property
     def confounder_alpha(self) -> np.ndarray: ...  # (E, W)
+    @property
+    def tie_actions(self) -> bool: ...
     @property
     def num_end_symbols(self) -> int: ...
     @property

@@ -86,6 +86,9 @@ ENTRIES = [
     # hbirl experiment gridworld --runs 65
     Entry("gridworld", "gridworld_runs.csv", GRIDWORLD_KEY,
           ["gridworld", "--runs", "2", "--confounders", "0,3,15", "--threads", "1"]),
+    # hbirl experiment gridworld --runs 65 --tie-actions
+    Entry("gridworld_tied", "gridworld_runs.csv", GRIDWORLD_KEY,
+          ["gridworld", "--runs", "2", "--confounders", "0,3", "--tie-actions", "--threads", "1"]),
     # hbirl experiment onion --runs 100
     Entry("onion", "onion_runs.csv", ONION_KEY,
           ["onion", "--runs", "2", "--trajectories", "1,2,10", "--threads", "1"]),
@@ -145,6 +148,12 @@ ENTRIES = [
     random_tasks("random_tasks_elements", "elements_runs.csv", "posterior_elements100", "--first-seed", "1001"),
     # random_tasks' posterior rows and --tasks 200 --draws 3 --methods posterior_elements1000
     random_tasks("random_tasks_elements", "benchmark_runs.csv", "posterior_elements1000"),
+    # --tasks 100|100|800 --first-seed 1001|2001|3001 --draws 3, --methods posterior(,oracle_sensor)
+    # and --methods posterior_tied, joined
+    random_tasks("random_tasks_tied", "seeds1001_runs.csv", "posterior,oracle_sensor,posterior_tied",
+                 "--first-seed", "1001"),
+    random_tasks("random_tasks_tied", "seeds2001_runs.csv", "posterior,posterior_tied", "--first-seed", "2001"),
+    random_tasks("random_tasks_tied", "seeds3001_runs.csv", "posterior,posterior_tied", "--first-seed", "3001"),
     # --tasks 200 --draws 3 --methods posterior_base0.3,posterior_base0.1
     random_tasks("random_tasks_base", "base_runs.csv", "posterior_base0.3"),
 ]

@@ -499,46 +499,47 @@ TEST(ObservationEStep, PosteriorUpdateIsThePriorPlusBruteForceCounts) {
 }
 
 // tie_actions: the posterior update's E-step ties the prior as tie_subject_prior_across_actions
-// does (the Gridworld's sensor sees the state alone, so the share is large); the paper's
-// update and a fixed O are left untied.
+// does (the Gridworld's sensor sees the state alone, so the share is large), starts EM at the
+// tied prior's mean and, with O held, holds it there; the paper's update is left untied.
 TEST(ObservationEStep, TiesThePriorAcrossAStatesActionsWhenAsked) {
   ObservedGridworld g = observed_gridworld(5, 1, 8, EtaKind::kPlausible);
   g.prior.tie_actions = true;
+  g.prior.automatic_strength = false;
+  g.prior.strength = 0.5;
   ObservationPrior by_hand = g.prior;
   tie_subject_prior_across_actions(by_hand, g.task.mdp.num_actions);
   ASSERT_GT(by_hand.subject_tie, 0.5);
-  const ObservationEStep tied(g.task.mdp, g.observations.trajectories, g.prior);
-  EStepState state = tied.initial_state(1);
-  EXPECT_EQ(state.alpha->subject_tie, by_hand.subject_tie);
-  EXPECT_EQ(state.alpha->subject_base_shape, by_hand.subject_base_shape);
-  // One refinement, tied or not, from the same first O: the tied weighed prior plus the
-  // same expected counts as the untied prior's.
+  const Eigen::MatrixXd tied_mean = dirichlet_mean(weighed_subject_prior(by_hand, 0.5));
   const SoftSolution policy = soft_value_iteration(g.task.mdp, g.task.mdp.reward(Eigen::Vector4d::Zero()));
   ObservationEStepOptions one;
   one.max_alpha_iterations = 1;
-  auto counts_after_one = [&](bool tie) {
+  Eigen::VectorXd visits[2];
+  for (bool learn : {true, false}) {
     ObservationPrior prior = g.prior;
-    prior.tie_actions = tie;
-    prior.automatic_strength = false;
-    const ObservationEStep once(g.task.mdp, g.observations.trajectories, prior, one);
-    EStepState s = once.initial_state(1);
-    once.expect(policy, s);
-    return Eigen::MatrixXd(s.alpha->subject_alpha -
-                           weighed_subject_prior(*once.initial_state(1).alpha, s.alpha->strength));
-  };
-  const Eigen::MatrixXd tied_counts = counts_after_one(true);
-  EXPECT_LT((tied_counts - counts_after_one(false)).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_GT(tied_counts.sum(), 100.0);  // 20 trajectories x 10 steps x 8 observations, the subject's share
-  for (bool paper : {true, false}) {
-    ObservationPrior untied = g.prior;
-    if (paper)
-      use_alpha_update(untied, AlphaUpdate::kPaper);
-    else
-      untied.learn = false;
-    const ObservationEStep e(g.task.mdp, g.observations.trajectories, untied);
-    EXPECT_EQ(e.initial_state(1).alpha->subject_tie, 0.0);
-    EXPECT_EQ(e.initial_state(1).alpha->subject_base_shape.size(), 0);
+    prior.learn = learn;
+    const ObservationEStep estep(g.task.mdp, g.observations.trajectories, prior, one);
+    EStepState state = estep.initial_state(1);
+    EXPECT_EQ(state.alpha->subject_tie, by_hand.subject_tie);
+    EXPECT_EQ(state.alpha->subject_base_shape, by_hand.subject_base_shape);
+    EXPECT_LT((dirichlet_mean(state.alpha->subject_alpha) - tied_mean).cwiseAbs().maxCoeff(), 1e-12) << learn;
+    const EStepResult r = estep.expect(policy, state);
+    visits[learn ? 0 : 1] = r.counts;
+    if (learn) {  // one refinement: the tied weighed prior plus the subject's expected counts
+      const Eigen::MatrixXd added = state.alpha->subject_alpha - weighed_subject_prior(by_hand, 0.5);
+      EXPECT_GT(added.minCoeff(), -1e-9);
+      EXPECT_GT(added.sum(), 100.0);  // of 20 x 10 x 8 observations, the subject's share
+      EXPECT_LT(added.sum(), 1600.0 + 1e-9);
+    } else {
+      EXPECT_LT((dirichlet_mean(state.alpha->subject_alpha) - tied_mean).cwiseAbs().maxCoeff(), 1e-12);  // held
+    }
   }
+  EXPECT_LT((visits[0] - visits[1]).cwiseAbs().maxCoeff(), 1e-9);  // the same first O, learned or held
+  ObservationPrior paper = g.prior;
+  use_alpha_update(paper, AlphaUpdate::kPaper);
+  const ObservationEStep untied(g.task.mdp, g.observations.trajectories, paper);
+  EXPECT_EQ(untied.initial_state(1).alpha->subject_tie, 0.0);
+  EXPECT_EQ(untied.initial_state(1).alpha->subject_base_shape.size(), 0);
+  EXPECT_EQ(untied.initial_state(1).alpha->subject_alpha, g.prior.subject_alpha);
 }
 
 // Pairs the prior has no counts for keep its mean whatever the strength, as long as some

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "learner/rng.hpp"
@@ -303,6 +304,48 @@ TEST(ObservationModel, TiedPriorHoldsAnUnseenActionAtItsStatesView) {
     const Eigen::RowVectorXd base = (rho * W / sibling.sum()) * sibling.array() + (1.0 - rho);
     EXPECT_LT((weighed.row(s * A) - (base + 0.3 * counts.row(s * A))).cwiseAbs().maxCoeff(), 1e-12);
   }
+}
+
+// Siblings whose view is uniform say nothing: every share scores the same, and a tie keeps
+// the smaller share, 0 (no shape). A share chosen from a few hundredths of an observation
+// would hold every unseen pair; rows need one observation's worth to be scored.
+TEST(ObservationModel, TieNeedsEvidence) {
+  ObservationPrior uniform;
+  uniform.subject_alpha = Eigen::MatrixXd::Constant(4, 3, 3.0);  // two states, two actions, 2 counts per symbol
+  tie_subject_prior_across_actions(uniform, 2);
+  EXPECT_EQ(uniform.subject_tie, 0.0);
+  EXPECT_EQ(uniform.subject_base_shape.size(), 0);
+  ObservationPrior faint;
+  faint.subject_alpha = Eigen::MatrixXd::Ones(4, 3);
+  faint.subject_alpha(0, 1) += 0.05;  // state 0: both actions on symbol 1, a twentieth of a count each
+  faint.subject_alpha(1, 1) += 0.04;
+  tie_subject_prior_across_actions(faint, 2);
+  EXPECT_EQ(faint.subject_tie, 0.0);
+  faint.subject_alpha(0, 1) += 1.0;  // one observation each: now they count, and they agree
+  faint.subject_alpha(1, 1) += 1.0;
+  tie_subject_prior_across_actions(faint, 2);
+  EXPECT_GT(faint.subject_tie, 0.0);
+  EXPECT_GE(faint.subject_base_shape.minCoeff(), 0.05 - 1e-12);  // rho <= 0.95: no structural zeros
+}
+
+// A row with entries below the base (a problem file may give them) keeps them as its base,
+// times the shape: min(alpha, base) * shape + s * counts, checked entry by entry.
+TEST(ObservationModel, TiedBaseOfEntriesBelowTheBase) {
+  ObservationPrior prior = shared_view_prior(0.9, 30, 11);
+  prior.subject_alpha(2, 0) = 0.25;  // state 0's never-visited action (row 2): entries below the base
+  prior.subject_alpha(2, 3) = 0.0;
+  tie_subject_prior_across_actions(prior, 3);
+  ASSERT_GT(prior.subject_tie, 0.0);
+  const Eigen::MatrixXd weighed = weighed_subject_prior(prior, 2.0);
+  for (Eigen::Index r = 0; r < 3; ++r) {
+    for (Eigen::Index w = 0; w < prior.subject_alpha.cols(); ++w) {
+      const double alpha = prior.subject_alpha(r, w);
+      const double base = std::min(alpha, 1.0) * prior.subject_base_shape(r, w);
+      const double expected = r == 2 ? ObservationPrior::kMaxStrength * base : base + 2.0 * std::max(alpha - 1.0, 0.0);
+      EXPECT_DOUBLE_EQ(weighed(r, w), expected) << r << "," << w;
+    }
+  }
+  EXPECT_EQ(weighed(2, 3), 0.0);  // a zero stays a zero
 }
 
 TEST(ObservationModel, TieNeedsAStateWithTwoCountedActions) {

@@ -51,7 +51,8 @@ struct GridworldExperimentOptions {
   double likelihood_tolerance = 1e-6;
   bool accelerate = true;  // SQUAREM-accelerated EM (see LearnOptions; converges properly)
   int restarts = 1;
-  int threads = 0;                                    // over (run, |E|, method) items; results do not depend on it
+  bool tie_actions = false;  // the subject prior tied across a state's actions (ObservationPrior::tie_actions)
+  int threads = 0;           // over (run, |E|, method) items; results do not depend on it
   std::function<void(int done, int total)> progress;  // called from worker threads
 };
 

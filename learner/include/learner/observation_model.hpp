@@ -49,11 +49,14 @@ Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPri
 // Ties the subject's prior across each state's actions (docs/MODEL.md "A state's actions
 // share their view"): sets prior.subject_base_shape so that row (s, a)'s base has the
 // mean rho * m_{s,-a} + (1 - rho) * uniform, m_{s,-a} the normalised counts (above the
-// base) of the state's *other* actions, and prior.subject_tie = rho. rho is chosen on
-// k / 20, k = 0 .. 19, by the Dirichlet-multinomial likelihood of each counted row's counts
-// under the base its state's other rows give it (one action left out at a time): what the
-// controlled run itself says of how much a state's actions share. rho = 0 (no counted
-// state with two counted actions, or a sensor whose actions share nothing) leaves the
+// base) of the state's *other* actions, and prior.subject_tie = rho (exactly so where every
+// entry of the row is at least the base; an entry below it keeps its share of the shape,
+// min(alpha, base) * shape). rho is chosen on k / 20, k = 0 .. 19, by the
+// Dirichlet-multinomial likelihood of each counted row's counts under the base its state's
+// other rows give it (one action left out at a time; rows with at least one observation's
+// worth of counts whose siblings have as much): what the controlled run itself says of how
+// much a state's actions share. rho = 0 (no state with two such actions -- a controlled run
+// that takes one action per state -- or a sensor whose actions share nothing) leaves the
 // shape empty, so the prior is the flat base, bit for bit. Rows are s * num_actions + a.
 void tie_subject_prior_across_actions(ObservationPrior& prior, int num_actions);
 
