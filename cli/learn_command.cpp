@@ -154,11 +154,12 @@ nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app:
   if (used.learn && used.update == AlphaUpdate::kPosterior) {
     om["prior_strength"] = used.strength;
     om["prior_strength_chosen"] = used.automatic_strength;
-    // The share of each row's base given to its state's other actions (docs/MODEL.md "A
-    // state's actions share their view"), when the file asked for the tie.
-    if (used.tie_actions) om["tie_share"] = used.subject_tie;
     if (best.held_out_log_likelihood) om["held_out_log_likelihood"] = *best.held_out_log_likelihood;
   }
+  // The share of each row's base given to its state's other actions (docs/MODEL.md "A
+  // state's actions share their view"), when the file asked for the tie: a learned O starts
+  // from it, a held O is held at it.
+  if (used.tie_actions && used.update == AlphaUpdate::kPosterior) om["tie_share"] = used.subject_tie;
   if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta, context_names);
   return om;
 }
