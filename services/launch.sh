@@ -240,17 +240,40 @@ if [ -z "$inner" ] && [ -n "$dashboard_port" ]; then
   fi
 fi
 # Stops a process and waits for it, whatever its state: SIGTERM, SIGCONT (a stopped process
-# acts on SIGTERM only once continued), and SIGKILL if it is still there after 5 s.
+# acts on SIGTERM only once continued), and SIGKILL if it is still there after GRACE seconds
+# (5 unless given; then the status is 1).
 stop_process() {
-  local pid="$1" _
+  local pid="$1" grace="${2:-5}" _ status=0
   kill -TERM "$pid" 2>/dev/null || return 0
   kill -CONT "$pid" 2>/dev/null || true
-  for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-  kill -KILL "$pid" 2>/dev/null || true
+  for _ in $(seq 1 $((grace * 10))); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  ! kill -KILL "$pid" 2>/dev/null || status=1
   wait "$pid" 2>/dev/null || true
+  return "$status"
+}
+# The distinct scheduler states of a process's threads (R running, S asleep, D waiting on
+# the disk, T stopped: proc(5)), sorted, on one line.
+thread_states() {
+  local stat line
+  for stat in /proc/"$1"/task/*/stat; do
+    read -r line <"$stat" 2>/dev/null || continue
+    line="${line##*) }"  # after the command name, which may hold spaces and parentheses
+    echo "${line%% *}"
+  done | sort -u | tr -d '\n'
+}
+# A receiver has caught up with the bus: every thread asleep (none running or writing to
+# the disk) and nothing waiting in its sockets' receive queues (/proc/PID/net/udp).
+logger_caught_up() {
+  local pid="$1" inodes
+  [ "$(thread_states "$pid")" = S ] || return 1
+  inodes="$(for fd in /proc/"$pid"/fd/*; do readlink "$fd" || true; done 2>/dev/null | sed -n 's/^socket:\[\([0-9]*\)\]$/\1/p' | tr '\n' ' ')"
+  [ -n "$inodes" ] || return 1
+  awk -v inodes="$inodes" 'BEGIN { split(inodes, list, " "); for (i in list) mine[list[i]] = 1 }
+    NR > 1 && ($10 in mine) { split($5, queues, ":"); if (queues[2] !~ /^0+$/) waiting = 1 }
+    END { exit waiting }' /proc/"$pid"/net/udp
 }
 stop_dashboard() {
-  if [ -n "$dashboard_pid" ]; then stop_process "$dashboard_pid"; fi
+  if [ -n "$dashboard_pid" ]; then stop_process "$dashboard_pid" || true; fi
   dashboard_pid=""
 }
 # After the run (outer launch.sh): the report, and the dashboard kept up or stopped.
@@ -372,17 +395,21 @@ stop_all() {  # the services, then the logger (it records their last heartbeats)
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || kill -KILL "$pid" 2>/dev/null || true; done
   for pid in "${pids[@]}"; do [ "$pid" = "$logger" ] || wait "$pid" 2>/dev/null || true; done
   if [ -n "$logger" ]; then
-    # What the services sent last (their last heartbeats, the result) may still be on its
-    # socket on a loaded machine: stop it once the recording has stopped growing (0.2 s
-    # apart), after 3 s at most.
-    local size=-1 now
-    for _ in $(seq 1 15); do
-      sleep 0.2
-      now="$(stat -c %s "$out/run.lcmlog" 2>/dev/null || echo 0)"
-      [ "$now" != "$size" ] || break
-      size="$now"
+    # lcm-logger (1.3) drops the messages still in its write queue when it is stopped, and
+    # the file's size says nothing of that queue (it writes through a stdio buffer, and a
+    # disk busy with its fdatasync holds the queue for seconds: the run's final REWARD was
+    # lost so). Stop it once it has caught up with what the services sent last (their last
+    # heartbeats, the result), 0.3 s in a row, after 30 s at most.
+    local calm=0
+    for _ in $(seq 1 600); do
+      if logger_caught_up "$logger"; then calm=$((calm + 1)); else calm=0; fi
+      [ "$calm" -lt 6 ] || break
+      if ! kill -0 "$logger" 2>/dev/null || [ "$(thread_states "$logger")" = T ]; then break; fi  # gone, or stopped: it cannot catch up
+      sleep 0.05
     done
-    stop_process "$logger"
+    [ "$calm" -ge 6 ] || ! kill -0 "$logger" 2>/dev/null ||
+      echo "launch.sh: lcm-logger had not caught up with the bus when it was stopped: the recording may lack the last messages" >&2
+    stop_process "$logger" 30 || echo "launch.sh: lcm-logger did not stop in 30 s: killed; the recording may lack the last messages" >&2
   fi
 }
 trap 'end_progress; echo "launch.sh: interrupted: stopping the services"; stop_all; stop_dashboard; exit 130' INT TERM

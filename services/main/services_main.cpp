@@ -390,7 +390,8 @@ int optimiser(int argc, char** argv) {
   app.add_option("--recording", o.recording.path,
                  "The run's lcm-logger recording (services/launch.sh --record): once the run is complete, wait\n"
                  "until the recording holds it too, asking again for what lcm-logger lost, so that hbirl learn\n"
-                 "--log finds the whole run (read with --key, as its readers read it)");
+                 "--log finds the whole run (read with --key, as its readers read it); after learning, publish\n"
+                 "the REWARD again until the recording holds it (hbirl report: a finished run)");
   CLI11_PARSE(app, argc, argv);
   o.recording.key_file = c.key_file;
   o.executor.spot_check = !no_spot_check;

@@ -128,6 +128,50 @@ class RunCollector {
   const std::string& incomplete() const { return incomplete_; }
   // FRAME_REQUEST messages sent (for the optimiser's losses and the recording's).
   int frame_requests() const { return frame_requests_; }
+
+  // The run's REWARD is published: until the recording holds it too, it is published again
+  // whenever the recording has caught up without it for resend_after_ms. lcm-logger drops
+  // what comes faster than it reads (LCM keeps at most ~30 messages per subscription
+  // waiting; the end of learning is such a burst) and cannot ask again; a recording without
+  // its REWARD is a run that never finished to its readers (docs/RELIABILITY.md "A
+  // recording holds the whole run"). Only for a recording that holds the run; given up,
+  // and said, after recording_patience_ms.
+  void record_the_reward(std::int64_t utime, const std::function<void()>& publish_again) {
+    if (!watch_ || recording_ != "complete") return;
+    say("the reward is published; waiting for the recording to hold it too");
+    const auto patience =
+        std::chrono::milliseconds(std::max(options_.recording_patience_ms, 3 * options_.resend_after_ms));
+    const auto since = Clock::now();
+    auto last_publish = since;
+    int again = 0;
+    while (!stopped() && !ended_) {
+      try {
+        watch_->read(std::chrono::milliseconds(200));
+      } catch (const InputError& e) {  // rewritten as something else meanwhile: nothing to wait for
+        recording_ = std::string("cannot be followed: ") + e.what();
+        say("the recording " + recording_);
+        return;
+      }
+      if (watch_->holds_reward(utime)) {
+        if (again > 0) say("the recording holds the reward now: lcm-logger lost it, and it came again");
+        return;
+      }
+      const auto now = Clock::now();
+      if (now - since > patience) {
+        recording_ = "lacks the run's reward (REWARD)";
+        say("the recording " + watch_->path() + " " + recording_ + ", though published " + std::to_string(again + 1) +
+            " times (lcm-logger stopped?): hbirl report will call the run unfinished");
+        return;
+      }
+      if (watch_->caught_up() && now - last_publish > std::chrono::milliseconds(options_.resend_after_ms)) {
+        publish_again();
+        ++again;
+        last_publish = now;
+      }
+      if (options_.beat) options_.beat("recording");  // (its heartbeats make lcm-logger write what it has)
+      ended_ = bus_.handle(50) < 0;
+    }
+  }
   // What became of the run's recording: "complete", "lacks ...", "cannot be followed: ..."
   // ("": none followed, OptimiserOptions::recording).
   const std::string& recording() const { return recording_; }
@@ -216,7 +260,9 @@ class RunCollector {
   // learned from all the same. The watch (a second copy of the data) ends here.
   void complete_the_recording() {
     if (options_.recording.path.empty()) return;
-    RecordingWatch recording(options_.recording.path, options_.recording.key_file, options_.max_dataset_bytes);
+    watch_ = std::make_unique<RecordingWatch>(options_.recording.path, options_.recording.key_file,
+                                              options_.max_dataset_bytes);
+    RecordingWatch& recording = *watch_;
     const auto patience =
         std::chrono::milliseconds(std::max(options_.recording_patience_ms, 3 * options_.resend_after_ms));
     std::int64_t had = -2;
@@ -228,6 +274,7 @@ class RunCollector {
       } catch (const InputError& e) {  // not a recording: nothing to complete, the run is
         recording_ = std::string("cannot be followed: ") + e.what();
         say("the recording " + recording_ + "; learning from the complete run");
+        watch_.reset();
         break;
       }
       if (recording.complete()) {
@@ -311,7 +358,8 @@ class RunCollector {
   Clock::time_point last_frame_ = Clock::now();
   Clock::time_point last_request_ = Clock::now();
   int frame_requests_ = 0;
-  std::string recording_;  // what became of the recording ("": none followed)
+  std::string recording_;                  // what became of the recording ("": none followed)
+  std::unique_ptr<RecordingWatch> watch_;  // the recording followed, once the run is complete
   bool announced_end_ = false;
   Clock::time_point last_progress_ = Clock::now();
   std::string incomplete_;
@@ -479,8 +527,8 @@ void publish_progress(Bus& bus, Counters& counters, const Mdp& mdp, std::int64_t
 
 // REWARD: the learned theta, its soft policy and optimal actions and, when known, the true
 // weights and the ILE.
-void publish_reward(Bus& bus, Counters& counters, const Mdp& mdp, const OptimiserResult& result, std::int64_t utime,
-                    const std::optional<Eigen::VectorXd>& truth) {
+hbirl::reward_t reward_message(const Mdp& mdp, const OptimiserResult& result, std::int64_t utime,
+                               const std::optional<Eigen::VectorXd>& truth) {
   hbirl::reward_t r{};
   r.utime = utime;
   r.domain = result.data.domain;
@@ -497,7 +545,7 @@ void publish_reward(Bus& bus, Counters& counters, const Mdp& mdp, const Optimise
   for (const app::PolicyStep& step : result.learned.policy) r.action[static_cast<size_t>(step.state)] = step.action;
   r.log_likelihood = result.learned.log_likelihood;
   r.ile = result.learned.ile.value_or(-1.0);
-  publish(bus, channels::kReward, r, counters);
+  return r;
 }
 
 }  // namespace
@@ -574,7 +622,11 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   for (int k = 0; k < 1000000 && bus.handle(0) > 0; ++k) {
   }
   collector.check_contradiction();
-  publish_reward(bus, counters, mdp, result, utime, truth);
+  const hbirl::reward_t reward = reward_message(mdp, result, utime, truth);
+  const auto publish_reward = [&] { publish(bus, channels::kReward, reward, counters); };
+  publish_reward();
+  collector.record_the_reward(utime, publish_reward);
+  result.recording = collector.recording();
   return result;
 }
 

@@ -3,8 +3,10 @@
 
 #include <filesystem>
 
+#include "services/channels.hpp"
 #include "services/keyed_bus.hpp"
 #include "services/log_bus.hpp"
+#include "services/typed.hpp"
 
 namespace hbirl::services {
 
@@ -27,6 +29,10 @@ void RecordingWatch::open() {
   builder_->tally_only();
   builder_->limit(max_dataset_bytes_);
   builder_->subscribe(*log_, *counters_);
+  final_rewards_.clear();
+  subscribe(*log_, channels::kReward, *counters_, [this](const hbirl::reward_t& m, const Message&) {
+    if (m.final) final_rewards_.insert(m.utime);
+  });
   size_ = 0;
 }
 

@@ -28,6 +28,7 @@
 #include "services/log_bus.hpp"
 #include "services/memory_bus.hpp"
 #include "services/process.hpp"
+#include "services/recording_watch.hpp"
 #include "service_threads.hpp"
 #include "sim_driver/onion/onion.hpp"
 #include "sim_driver/file/recorded_run.hpp"
@@ -578,6 +579,49 @@ TEST(Pipeline, WhatTheRecordingLostIsAskedForAgain) {
   EXPECT_NE(given_up_said.find("which did not come again (lcm-logger stopped?)"), std::string::npos) << given_up_said;
   EXPECT_EQ(given_up.recording.rfind("lacks 0 episode end(s), ", 0), 0u) << given_up.recording;
   for (int k = 0; k < 4; ++k) EXPECT_EQ(given_up.learned.theta[k], unwatched.learned.theta[k]) << k;
+  std::filesystem::remove_all(tmp);
+}
+
+// The run's REWARD that the logger lost (LCM drops what comes faster than lcm-logger reads,
+// and the end of learning is a burst) is published again until the recording holds it, so
+// that its readers see a finished run; a logger that never records it is given up on after
+// recording_patience_ms, and said. Either way the run's theta is the same.
+TEST(Pipeline, TheRewardTheRecordingLostIsPublishedAgain) {
+  const auto tmp = std::filesystem::temp_directory_path() / ("hbirl_reward_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(tmp);
+  const auto run_with = [&](bool lose_for_good, const std::string& name) {
+    auto hub = std::make_shared<MemoryHub>();
+    const std::string path = (tmp / name).string();
+    std::atomic<int> rewards{0};
+    Recorder recorder(hub, path, [&](const std::string& channel, const std::uint8_t*, int) {
+      return channel == channels::kReward.name && (rewards++ == 0 || lose_for_good);
+    });
+    std::string said;
+    const auto live = run_serving_requests(
+        hub, *builtin_domain("gridworld"), gridworld_run(13, 6, 5), 100, nullptr,
+        [&](OptimiserOptions& options) {
+          options.recording_patience_ms = 500;
+          options.confirm_ms = 100;
+          options.recording.path = path;
+        },
+        [&said](const std::string& s) { said += s + "\n"; });
+    recorder.stop();
+    RecordingWatch watch(path, "", std::int64_t{1} << 30);
+    watch.read(std::chrono::seconds(10));
+    EXPECT_TRUE(watch.caught_up());
+    EXPECT_EQ(watch.holds_reward(live->data.last_utime), !lose_for_good) << name;
+    return std::make_tuple(*live, said, rewards.load());
+  };
+  const auto [once, once_said, once_published] = run_with(false, "reward_lost_once.lcmlog");
+  EXPECT_NE(once_said.find("the recording holds the reward now"), std::string::npos) << once_said;
+  EXPECT_EQ(once.recording, "complete");
+  EXPECT_GE(once_published, 2);
+
+  const auto [never, never_said, never_published] = run_with(true, "reward_never_recorded.lcmlog");
+  EXPECT_NE(never_said.find("lacks the run's reward (REWARD), though published"), std::string::npos) << never_said;
+  EXPECT_EQ(never.recording, "lacks the run's reward (REWARD)");
+  EXPECT_GE(never_published, 2);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(never.learned.theta[k], once.learned.theta[k]) << k;
   std::filesystem::remove_all(tmp);
 }
 

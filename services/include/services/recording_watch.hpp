@@ -6,6 +6,7 @@
 // is (docs/RELIABILITY.md "A recording holds the whole run").
 #include <chrono>
 #include <memory>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -39,6 +40,9 @@ class RecordingWatch {
   std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
   // What it lacks, in words.
   std::string lacks() const;
+  // It holds the run's final REWARD (the one whose utime is `utime`, as the optimiser
+  // published it): the run's readers see it learned (hbirl report).
+  bool holds_reward(std::int64_t utime) const { return final_rewards_.count(utime) > 0; }
   const std::string& path() const { return path_; }
 
  private:
@@ -51,6 +55,7 @@ class RecordingWatch {
   std::unique_ptr<Counters> counters_;  // its own: a recording's bad messages are not the bus's
   std::unique_ptr<Bus> log_;
   std::unique_ptr<DatasetBuilder> builder_;  // (after log_: its subscriptions end before the log)
+  std::set<std::int64_t> final_rewards_;     // the utime of every final REWARD read
   const LogBus* file_ = nullptr;             // log_'s file, for its damage count
 };
 
