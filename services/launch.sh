@@ -251,26 +251,37 @@ stop_process() {
   wait "$pid" 2>/dev/null || true
   return "$status"
 }
-# The distinct scheduler states of a process's threads (R running, S asleep, D waiting on
-# the disk, T stopped: proc(5)), sorted, on one line.
+# The scheduler states of a process's threads, one letter each (R running, S asleep, D
+# waiting on the disk, T or t stopped: proc(5)); bash alone, for it is asked 20 times a second.
 thread_states() {
-  local stat line
+  local stat line states=""
   for stat in /proc/"$1"/task/*/stat; do
-    read -r line <"$stat" 2>/dev/null || continue
+    read -r line 2>/dev/null <"$stat" || continue
     line="${line##*) }"  # after the command name, which may hold spaces and parentheses
-    echo "${line%% *}"
-  done | sort -u | tr -d '\n'
+    states+="${line%% *}"
+  done
+  echo "$states"
+}
+# The inodes of a process's sockets, space-separated (once: its sockets do not change).
+socket_inodes() {
+  local fd link inodes=""
+  for fd in /proc/"$1"/fd/*; do
+    link="$(readlink "$fd" 2>/dev/null)" || continue
+    [[ "$link" =~ ^socket:\[([0-9]+)\]$ ]] && inodes+=" ${BASH_REMATCH[1]}"
+  done
+  echo "$inodes "
 }
 # A receiver has caught up with the bus: every thread asleep (none running or writing to
-# the disk) and nothing waiting in its sockets' receive queues (/proc/PID/net/udp).
-logger_caught_up() {
-  local pid="$1" inodes
-  [ "$(thread_states "$pid")" = S ] || return 1
-  inodes="$(for fd in /proc/"$pid"/fd/*; do readlink "$fd" || true; done 2>/dev/null | sed -n 's/^socket:\[\([0-9]*\)\]$/\1/p' | tr '\n' ' ')"
-  [ -n "$inodes" ] || return 1
-  awk -v inodes="$inodes" 'BEGIN { split(inodes, list, " "); for (i in list) mine[list[i]] = 1 }
-    NR > 1 && ($10 in mine) { split($5, queues, ":"); if (queues[2] !~ /^0+$/) waiting = 1 }
-    END { exit waiting }' /proc/"$pid"/net/udp
+# the disk) and nothing waiting in the receive queues of its sockets (INODES, from
+# socket_inodes; /proc/PID/net/udp: field 5 is tx_queue:rx_queue, field 10 the inode).
+caught_up() {
+  local pid="$1" inodes="$2" states _ queues rest inode
+  states="$(thread_states "$pid")"
+  if [ -z "$states" ] || [ -n "${states//S/}" ]; then return 1; fi
+  while read -r _ _ _ _ queues _ _ _ _ inode rest; do
+    [[ "$inodes" == *" $inode "* ]] || continue
+    [[ "${queues#*:}" =~ ^0+$ ]] || return 1
+  done <"/proc/$pid/net/udp"
 }
 stop_dashboard() {
   if [ -n "$dashboard_pid" ]; then stop_process "$dashboard_pid" || true; fi
@@ -397,14 +408,16 @@ stop_all() {  # the services, then the logger (it records their last heartbeats)
   if [ -n "$logger" ]; then
     # lcm-logger (1.3) drops the messages still in its write queue when it is stopped, and
     # the file's size says nothing of that queue (it writes through a stdio buffer, and a
-    # disk busy with its fdatasync holds the queue for seconds: the run's final REWARD was
-    # lost so). Stop it once it has caught up with what the services sent last (their last
-    # heartbeats, the result), 0.3 s in a row, after 30 s at most.
-    local calm=0
-    for _ in $(seq 1 600); do
-      if logger_caught_up "$logger"; then calm=$((calm + 1)); else calm=0; fi
+    # disk busy with its fdatasync holds the queue for seconds; docs/RELIABILITY.md). Stop
+    # it once it has caught up with what the services sent last (their last heartbeats),
+    # 0.3 s in a row, after 30 s at most.
+    local calm=0 inodes states deadline=$((SECONDS + 30))
+    inodes="$(socket_inodes "$logger")"
+    while [ "$SECONDS" -lt "$deadline" ]; do
+      if caught_up "$logger" "$inodes"; then calm=$((calm + 1)); else calm=0; fi
       [ "$calm" -lt 6 ] || break
-      if ! kill -0 "$logger" 2>/dev/null || [ "$(thread_states "$logger")" = T ]; then break; fi  # gone, or stopped: it cannot catch up
+      states="$(thread_states "$logger")"
+      if [ -z "$states" ] || [[ "$states" == *[Tt]* ]]; then break; fi  # gone, or stopped: it cannot catch up
       sleep 0.05
     done
     [ "$calm" -ge 6 ] || ! kill -0 "$logger" 2>/dev/null ||

@@ -129,48 +129,67 @@ class RunCollector {
   // FRAME_REQUEST messages sent (for the optimiser's losses and the recording's).
   int frame_requests() const { return frame_requests_; }
 
-  // The run's REWARD is published: until the recording holds it too, it is published again
-  // whenever the recording has caught up without it for resend_after_ms. lcm-logger drops
-  // what comes faster than it reads (LCM keeps at most ~30 messages per subscription
-  // waiting; the end of learning is such a burst) and cannot ask again; a recording without
-  // its REWARD is a run that never finished to its readers (docs/RELIABILITY.md "A
-  // recording holds the whole run"). Only for a recording that holds the run; given up,
-  // and said, after recording_patience_ms.
-  void record_the_reward(std::int64_t utime, const std::function<void()>& publish_again) {
-    if (!watch_ || recording_ != "complete") return;
-    say("the reward is published; waiting for the recording to hold it too");
+  // The run's REWARD is published (at `sent`; publish_reward sends it again and returns when): until
+  // the recording holds it too, it is published again each time the recording shows it
+  // lost -- a message that reached lcm-logger after the REWARD was sent is recorded, the
+  // REWARD is not (lcm-logger reads its socket in arrival order). lcm-logger drops what
+  // comes faster than it reads (LCM keeps at most ~30 messages per subscription waiting;
+  // the end of learning is such a burst) and cannot ask again, and a recording without its
+  // REWARD is a run that never finished to its readers (docs/RELIABILITY.md "A recording
+  // holds the whole run"). Our heartbeats, once a second, make lcm-logger write what it
+  // has. Not for a recording given up on (lcm-logger stopped or dead); given up, and said,
+  // after recording_patience_ms in which the recording gained nothing, or 30 sendings.
+  void record_the_reward(std::int64_t utime, std::int64_t sent, const std::function<std::int64_t()>& publish_reward) {
+    const bool followed = recording_ == "complete" || (recording_.empty() && !options_.recording.path.empty());
+    if (!followed) return;
+    if (!watch_) {  // learned as allowed from an incomplete run: the REWARD alone is followed
+      watch_ = std::make_unique<RecordingWatch>(options_.recording.path, options_.recording.key_file,
+                                                options_.max_dataset_bytes);
+    }
+    watch_->follow_rewards_only();  // (the run's tally is not held any longer)
     const auto patience =
         std::chrono::milliseconds(std::max(options_.recording_patience_ms, 3 * options_.resend_after_ms));
-    const auto since = Clock::now();
-    auto last_publish = since;
-    int again = 0;
+    constexpr int kMostSendings = 30;
+    int sendings = 1;
+    std::int64_t had = -1;
+    auto last_gain = Clock::now();
+    const auto give_up = [&](const std::string& why) {
+      recording_ = "lacks the run's reward (REWARD)";
+      say("the recording " + options_.recording.path + " " + recording_ + ", " + why +
+          ": hbirl report will call the run unfinished");
+    };
     while (!stopped() && !ended_) {
       try {
         watch_->read(std::chrono::milliseconds(200));
-      } catch (const InputError& e) {  // rewritten as something else meanwhile: nothing to wait for
-        recording_ = std::string("cannot be followed: ") + e.what();
-        say("the recording " + recording_);
+      } catch (const InputError& e) {  // rewritten as something else meanwhile
+        give_up(std::string("for it cannot be followed: ") + e.what());
         return;
       }
       if (watch_->holds_reward(utime)) {
-        if (again > 0) say("the recording holds the reward now: lcm-logger lost it, and it came again");
+        if (sendings > 1) say("the recording holds the reward now: lcm-logger lost it, and it came again");
         return;
       }
       const auto now = Clock::now();
-      if (now - since > patience) {
-        recording_ = "lacks the run's reward (REWARD)";
-        say("the recording " + watch_->path() + " " + recording_ + ", though published " + std::to_string(again + 1) +
-            " times (lcm-logger stopped?): hbirl report will call the run unfinished");
+      if (watch_->last_arrival_utime() != had) {
+        had = watch_->last_arrival_utime();
+        last_gain = now;
+      }
+      if (now - last_gain > patience) {
+        give_up("and has gained nothing for " + std::to_string(patience.count() / 1000) + " s (lcm-logger stopped?)");
         return;
       }
-      if (watch_->caught_up() && now - last_publish > std::chrono::milliseconds(options_.resend_after_ms)) {
-        publish_again();
-        ++again;
-        last_publish = now;
+      if (watch_->caught_up() && watch_->last_arrival_utime() > sent) {  // lost: what came after it is there
+        if (sendings == kMostSendings) {
+          give_up("though sent " + std::to_string(sendings) + " times (lcm-logger lost it each time)");
+          return;
+        }
+        sent = publish_reward();
+        ++sendings;
       }
-      if (options_.beat) options_.beat("recording");  // (its heartbeats make lcm-logger write what it has)
+      if (options_.beat) options_.beat("recording");
       ended_ = bus_.handle(50) < 0;
     }
+    give_up("for the optimiser stopped before lcm-logger wrote it");
   }
   // What became of the run's recording: "complete", "lacks ...", "cannot be followed: ..."
   // ("": none followed, OptimiserOptions::recording).
@@ -257,7 +276,8 @@ class RunCollector {
   // what lcm-logger lost is asked for again once a second -- the sensor side sends it to
   // every listener, the logger among them. Given up, and said, once the recording has
   // gained nothing for recording_patience_ms (at least three requests' time): the run is
-  // learned from all the same. The watch (a second copy of the data) ends here.
+  // learned from all the same. The watch's tally (a second copy of the data's keys) is
+  // dropped before learning (record_the_reward follows the REWARD alone).
   void complete_the_recording() {
     if (options_.recording.path.empty()) return;
     watch_ = std::make_unique<RecordingWatch>(options_.recording.path, options_.recording.key_file,
@@ -306,6 +326,11 @@ class RunCollector {
     // The wait is no silence of the run's (quiet_too_long counts from the last frame).
     last_frame_ = Clock::now();
     frames_ = builder_.frames();
+    if (watch_ && recording_ == "complete") {
+      watch_->follow_rewards_only();
+    } else {
+      watch_.reset();
+    }
   }
 
   // Nothing for too long after the end of the run: the run fails (RunFailed) or, with
@@ -623,9 +648,17 @@ std::optional<OptimiserResult> run_optimiser(Bus& bus, const OptimiserOptions& o
   }
   collector.check_contradiction();
   const hbirl::reward_t reward = reward_message(mdp, result, utime, truth);
-  const auto publish_reward = [&] { publish(bus, channels::kReward, reward, counters); };
-  publish_reward();
-  collector.record_the_reward(utime, publish_reward);
+  const auto publish_reward = [&] {
+    publish(bus, channels::kReward, reward, counters);
+    return wall_utime();
+  };
+  const std::int64_t sent = publish_reward();
+  {
+    std::ostringstream line;
+    line << "learned (log-likelihood " << result.learned.log_likelihood << "): the REWARD is published";
+    say(line.str());
+  }
+  collector.record_the_reward(utime, sent, publish_reward);
   result.recording = collector.recording();
   return result;
 }

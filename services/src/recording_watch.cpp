@@ -1,6 +1,7 @@
 // The run's recording, followed (recording_watch.hpp).
 #include "services/recording_watch.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "services/channels.hpp"
@@ -23,16 +24,21 @@ void RecordingWatch::open() {
   log->follow(true);  // lcm-logger is still writing it
   file_ = log.get();
   log_ = with_key(std::move(log), key_file_, *counters_, KeyUse::kReader);
-  builder_ = std::make_unique<DatasetBuilder>();
-  // Whether the recording holds the run, not the run again: the optimiser has its data
-  // already (a second copy made it 2.4x the data's size on a run of 10^6 observations).
-  builder_->tally_only();
-  builder_->limit(max_dataset_bytes_);
-  builder_->subscribe(*log_, *counters_);
+  if (!rewards_only_) {
+    builder_ = std::make_unique<DatasetBuilder>();
+    // Whether the recording holds the run, not the run again: the optimiser has its data
+    // already (a second copy made it 2.4x the data's size on a run of 10^6 observations).
+    builder_->tally_only();
+    builder_->limit(max_dataset_bytes_);
+    builder_->subscribe(*log_, *counters_);
+  }
   final_rewards_.clear();
+  last_arrival_utime_ = 0;
   subscribe(*log_, channels::kReward, *counters_, [this](const hbirl::reward_t& m, const Message&) {
     if (m.final) final_rewards_.insert(m.utime);
   });
+  log_->subscribe(".*",
+                  [this](const Message& m) { last_arrival_utime_ = std::max(last_arrival_utime_, m.recv_utime); });
   size_ = 0;
 }
 
@@ -53,6 +59,11 @@ void RecordingWatch::read(std::chrono::milliseconds budget) {
       break;
     }
   }
+}
+
+void RecordingWatch::follow_rewards_only() {
+  rewards_only_ = true;
+  builder_.reset();  // (its subscriptions end; the log and the REWARD's stay)
 }
 
 bool RecordingWatch::complete() const {

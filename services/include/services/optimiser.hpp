@@ -55,7 +55,8 @@ struct OptimiserOptions {
   // The run's lcm-logger recording (its path and the run's key; no path: none): once the
   // run is complete, followed until it holds the whole run too, what lcm-logger lost asked
   // for again (RecordingWatch); given up, and said, after recording_patience_ms in which
-  // it gained nothing (lcm-logger stopped?): the run is learned from all the same.
+  // it gained nothing (lcm-logger stopped?): the run is learned from all the same. After
+  // learning, the REWARD is sent again until the recording holds it (the same patience).
   RecordedRun recording;
   int recording_patience_ms = 10000;
   // The most memory the run's observations may take (hbirl-optimiser --max-dataset-mb):
@@ -94,7 +95,8 @@ struct OptimiserResult {
   std::vector<hbirl::estimate_t> estimates;  // published while collecting (OptimiserOptions::anytime)
   int stop_sent_after = 0;                   // demonstrations when STOP was first sent (0: never)
 };
-// Collects the run, learns, publishes EM_PROGRESS and the final REWARD. nullopt if asked
+// Collects the run, learns, publishes EM_PROGRESS and the final REWARD (with a recording
+// followed, returns once the recording holds it, or once given up). nullopt if asked
 // to stop first; throws RunFailed for a run that is incomplete (unless allowed) or
 // contradicts itself (then no REWARD is published).
 // `ready` is called once it listens (so a simulator may start).

@@ -40,9 +40,17 @@ class RecordingWatch {
   std::vector<std::tuple<int, int, int>> missing_frame_keys(size_t limit) const;
   // What it lacks, in words.
   std::string lacks() const;
+  // From now on only the REWARDs are followed: the tally of the run (a map entry per frame)
+  // is dropped, and complete(), progress() and what it lacks are no longer known. Called
+  // before the first read(), nothing but the REWARDs is ever read.
+  void follow_rewards_only();
   // It holds the run's final REWARD (the one whose utime is `utime`, as the optimiser
   // published it): the run's readers see it learned (hbirl report).
   bool holds_reward(std::int64_t utime) const { return final_rewards_.count(utime) > 0; }
+  // When the latest message it holds arrived at lcm-logger (its receive time, as recorded;
+  // 0 before any). lcm-logger reads one socket in arrival order: a message it holds that
+  // arrived after another was sent means that other was received before it, or lost.
+  std::int64_t last_arrival_utime() const { return last_arrival_utime_; }
   const std::string& path() const { return path_; }
 
  private:
@@ -56,7 +64,9 @@ class RecordingWatch {
   std::unique_ptr<Bus> log_;
   std::unique_ptr<DatasetBuilder> builder_;  // (after log_: its subscriptions end before the log)
   std::set<std::int64_t> final_rewards_;     // the utime of every final REWARD read
-  const LogBus* file_ = nullptr;             // log_'s file, for its damage count
+  std::int64_t last_arrival_utime_ = 0;
+  bool rewards_only_ = false;
+  const LogBus* file_ = nullptr;  // log_'s file, for its damage count
 };
 
 }  // namespace hbirl::services
