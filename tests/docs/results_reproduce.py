@@ -154,6 +154,10 @@ ENTRIES = [
                  "--first-seed", "1001"),
     random_tasks("random_tasks_tied", "seeds2001_runs.csv", "posterior,posterior_tied", "--first-seed", "2001"),
     random_tasks("random_tasks_tied", "seeds3001_runs.csv", "posterior,posterior_tied", "--first-seed", "3001"),
+    # --tasks 100 --first-seed 1001 --draws 3: posterior,oracle_sensor (above) joined with
+    # --methods oracle_sensor_labelled_others,posterior_from_truth
+    random_tasks("random_tasks_heldout", "seeds1001_runs.csv",
+                 "posterior,oracle_sensor,oracle_sensor_labelled_others,posterior_from_truth", "--first-seed", "1001"),
     # --tasks 200 --draws 3 --methods posterior_base0.3,posterior_base0.1
     random_tasks("random_tasks_base", "base_runs.csv", "posterior_base0.3"),
 ]
