@@ -138,11 +138,12 @@ class RunCollector {
   // REWARD is a run that never finished to its readers (docs/RELIABILITY.md "A recording
   // holds the whole run"). Our heartbeats, once a second, make lcm-logger write what it
   // has. Not for a recording given up on (lcm-logger stopped or dead); given up, and said,
-  // after recording_patience_ms in which the recording gained nothing, or 30 sendings.
+  // after recording_patience_ms in which the recording gained nothing, 30 sendings, or six
+  // times that patience in all.
   void record_the_reward(std::int64_t utime, std::int64_t sent, const std::function<std::int64_t()>& publish_reward) {
     const bool followed = recording_ == "complete" || (recording_.empty() && !options_.recording.path.empty());
-    if (!followed) return;
-    if (!watch_) {  // learned as allowed from an incomplete run: the REWARD alone is followed
+    if (!followed || ended_) return;  // (an ended bus: a log, where nothing more comes or goes)
+    if (!watch_) {                    // learned as allowed from an incomplete run: the REWARD alone is followed
       watch_ = std::make_unique<RecordingWatch>(options_.recording.path, options_.recording.key_file,
                                                 options_.max_dataset_bytes);
     }
@@ -152,7 +153,8 @@ class RunCollector {
     constexpr int kMostSendings = 30;
     int sendings = 1;
     std::int64_t had = -1;
-    auto last_gain = Clock::now();
+    const auto since = Clock::now();
+    auto last_gain = since;
     const auto give_up = [&](const std::string& why) {
       recording_ = "lacks the run's reward (REWARD)";
       say("the recording " + options_.recording.path + " " + recording_ + ", " + why +
@@ -178,6 +180,10 @@ class RunCollector {
         give_up("and has gained nothing for " + std::to_string(patience.count() / 1000) + " s (lcm-logger stopped?)");
         return;
       }
+      if (now - since > 6 * patience) {  // (a watch that never reads to the end of what comes)
+        give_up("after " + std::to_string(6 * patience.count() / 1000) + " s");
+        return;
+      }
       if (watch_->caught_up() && watch_->last_arrival_utime() > sent) {  // lost: what came after it is there
         if (sendings == kMostSendings) {
           give_up("though sent " + std::to_string(sendings) + " times (lcm-logger lost it each time)");
@@ -189,7 +195,7 @@ class RunCollector {
       if (options_.beat) options_.beat("recording");
       ended_ = bus_.handle(50) < 0;
     }
-    give_up("for the optimiser stopped before lcm-logger wrote it");
+    give_up(ended_ ? "for the bus ended first" : "for the optimiser was stopped first");
   }
   // What became of the run's recording: "complete", "lacks ...", "cannot be followed: ..."
   // ("": none followed, OptimiserOptions::recording).

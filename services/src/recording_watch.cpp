@@ -37,8 +37,7 @@ void RecordingWatch::open() {
   subscribe(*log_, channels::kReward, *counters_, [this](const hbirl::reward_t& m, const Message&) {
     if (m.final) final_rewards_.insert(m.utime);
   });
-  log_->subscribe(".*",
-                  [this](const Message& m) { last_arrival_utime_ = std::max(last_arrival_utime_, m.recv_utime); });
+  if (rewards_only_) arrivals();
   size_ = 0;
 }
 
@@ -61,9 +60,19 @@ void RecordingWatch::read(std::chrono::milliseconds budget) {
   }
 }
 
+// Every message's arrival time, once only the REWARDs are followed: before, a message of
+// another channel signed for another run (a worker's heartbeat from its last run) would
+// count against the recording here, as its readers do not count it.
+void RecordingWatch::arrivals() {
+  log_->subscribe(".*",
+                  [this](const Message& m) { last_arrival_utime_ = std::max(last_arrival_utime_, m.recv_utime); });
+}
+
 void RecordingWatch::follow_rewards_only() {
+  if (rewards_only_) return;
   rewards_only_ = true;
   builder_.reset();  // (its subscriptions end; the log and the REWARD's stay)
+  if (log_) arrivals();
 }
 
 bool RecordingWatch::complete() const {

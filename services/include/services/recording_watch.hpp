@@ -55,6 +55,7 @@ class RecordingWatch {
 
  private:
   void open();
+  void arrivals();
   std::string path_;
   std::string key_file_;
   std::int64_t max_dataset_bytes_;
