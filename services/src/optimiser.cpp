@@ -129,17 +129,17 @@ class RunCollector {
   // FRAME_REQUEST messages sent (for the optimiser's losses and the recording's).
   int frame_requests() const { return frame_requests_; }
 
-  // The run's REWARD is published (at `sent`; publish_reward sends it again and returns when): until
-  // the recording holds it too, it is published again each time the recording shows it
-  // lost -- a message that reached lcm-logger after the REWARD was sent is recorded, the
-  // REWARD is not (lcm-logger reads its socket in arrival order). lcm-logger drops what
-  // comes faster than it reads (LCM keeps at most ~30 messages per subscription waiting;
-  // the end of learning is such a burst) and cannot ask again, and a recording without its
-  // REWARD is a run that never finished to its readers (docs/RELIABILITY.md "A recording
-  // holds the whole run"). Our heartbeats, once a second, make lcm-logger write what it
-  // has. Not for a recording given up on (lcm-logger stopped or dead); given up, and said,
-  // after recording_patience_ms in which the recording gained nothing, 30 sendings, or six
-  // times that patience in all.
+  // The run's REWARD was published at `sent` (publish_reward sends it again and returns
+  // when it did). Until the recording holds it too, it is sent again each time the
+  // recording shows it lost: a message that reached lcm-logger after the REWARD was sent
+  // is recorded, the REWARD is not (lcm-logger reads its socket in arrival order).
+  // lcm-logger drops what comes faster than it reads (LCM keeps at most ~30 messages per
+  // subscription waiting; the end of learning is such a burst) and cannot ask again, and a
+  // recording without its REWARD is a run that never finished to its readers
+  // (docs/RELIABILITY.md "A recording holds the whole run"). Our heartbeats, once a second,
+  // make lcm-logger write what it has. Not for a recording given up on (lcm-logger stopped
+  // or dead); given up, and said, after recording_patience_ms in which the recording
+  // gained nothing, 30 sendings, or six times that patience in all.
   void record_the_reward(std::int64_t utime, std::int64_t sent, const std::function<std::int64_t()>& publish_reward) {
     const bool followed = recording_ == "complete" || (recording_.empty() && !options_.recording.path.empty());
     if (!followed || ended_) return;  // (an ended bus: a log, where nothing more comes or goes)

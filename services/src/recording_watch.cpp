@@ -34,10 +34,7 @@ void RecordingWatch::open() {
   }
   final_rewards_.clear();
   last_arrival_utime_ = 0;
-  subscribe(*log_, channels::kReward, *counters_, [this](const hbirl::reward_t& m, const Message&) {
-    if (m.final) final_rewards_.insert(m.utime);
-  });
-  if (rewards_only_) arrivals();
+  if (rewards_only_) follow_rewards();
   size_ = 0;
 }
 
@@ -60,10 +57,14 @@ void RecordingWatch::read(std::chrono::milliseconds budget) {
   }
 }
 
-// Every message's arrival time, once only the REWARDs are followed: before, a message of
-// another channel signed for another run (a worker's heartbeat from its last run) would
-// count against the recording here, as its readers do not count it.
-void RecordingWatch::arrivals() {
+// The final REWARDs and every message's arrival time, once only the REWARDs are followed:
+// before, a message of a channel the run's readers do not read, signed for another run (a
+// worker's heartbeat from its last run, another run's REWARD on a shared bus), would count
+// against the recording here and not there.
+void RecordingWatch::follow_rewards() {
+  subscribe(*log_, channels::kReward, *counters_, [this](const hbirl::reward_t& m, const Message&) {
+    if (m.final) final_rewards_.insert(m.utime);
+  });
   log_->subscribe(".*",
                   [this](const Message& m) { last_arrival_utime_ = std::max(last_arrival_utime_, m.recv_utime); });
 }
@@ -72,7 +73,7 @@ void RecordingWatch::follow_rewards_only() {
   if (rewards_only_) return;
   rewards_only_ = true;
   builder_.reset();  // (its subscriptions end; the log and the REWARD's stay)
-  if (log_) arrivals();
+  if (log_) follow_rewards();
 }
 
 bool RecordingWatch::complete() const {

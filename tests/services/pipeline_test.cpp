@@ -617,6 +617,7 @@ TEST(Pipeline, TheRewardTheRecordingLostIsPublishedAgain) {
     heartbeat.join();
     recorder.stop();
     RecordingWatch watch(path, "", std::int64_t{1} << 30);
+    watch.follow_rewards_only();
     watch.read(std::chrono::seconds(10));
     EXPECT_TRUE(watch.caught_up());
     EXPECT_EQ(watch.holds_reward(live->data.last_utime), !lose_for_good) << name;

@@ -45,7 +45,8 @@ class RecordingWatch {
   // before the first read(), nothing but the REWARDs is ever read.
   void follow_rewards_only();
   // It holds the run's final REWARD (the one whose utime is `utime`, as the optimiser
-  // published it): the run's readers see it learned (hbirl report).
+  // published it): the run's readers see it learned (hbirl report). Known once only the
+  // REWARDs are followed (of what is read from then on), as last_arrival_utime().
   bool holds_reward(std::int64_t utime) const { return final_rewards_.count(utime) > 0; }
   // When the latest message it holds arrived at lcm-logger (its receive time, as recorded;
   // 0 before any). lcm-logger reads one socket in arrival order: a message it holds that
@@ -55,7 +56,7 @@ class RecordingWatch {
 
  private:
   void open();
-  void arrivals();
+  void follow_rewards();
   std::string path_;
   std::string key_file_;
   std::int64_t max_dataset_bytes_;
