@@ -13,6 +13,7 @@
 #include "learner/hidden_data_em.hpp"
 #include "learner/input_error.hpp"
 #include "learner/metrics.hpp"
+#include "learner/observation_model.hpp"
 #include "learner/observation_support.hpp"
 #include "learner/value_iteration.hpp"
 #include "problem/json_format.hpp"
@@ -159,7 +160,7 @@ nlohmann::ordered_json learned_observation_model_json(const Mdp& mdp, const app:
   // The share of each row's base given to its state's other actions (docs/MODEL.md "A
   // state's actions share their view"), when the file asked for the tie: a learned O starts
   // from it, a held O is held at it.
-  if (used.tie_actions && used.update == AlphaUpdate::kPosterior) om["tie_share"] = used.subject_tie;
+  if (ties_subject_prior(used)) om["tie_share"] = used.subject_tie;
   if (learned_all.learned_eta) om["learned_eta"] = learned_eta_json(*learned_all.learned_eta, context_names);
   return om;
 }

@@ -92,8 +92,7 @@ void ObservationEStep::finish() {
   // The tie reads the controlled run's counts only, so every E-step built from one prior
   // (restarts, the optimiser, anytime learning) ties it alike; with O held (learn false:
   // the confidence's second opinion) the held O is the tied prior's mean (initial_state).
-  if (prior_.tie_actions && prior_.update == AlphaUpdate::kPosterior)
-    tie_subject_prior_across_actions(prior_, mdp_.num_actions);
+  if (ties_subject_prior(prior_)) tie_subject_prior_across_actions(prior_, mdp_.num_actions);
   if (options_.executor) {
     input_digest_ = dataset_digest(trajectories_);
   }

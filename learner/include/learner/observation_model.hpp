@@ -59,6 +59,12 @@ Eigen::Array<bool, Eigen::Dynamic, 1> counted_subject_pairs(const ObservationPri
 // that takes one action per state -- or a sensor whose actions share nothing) leaves the
 // shape empty, so the prior is the flat base, bit for bit. Rows are s * num_actions + a.
 void tie_subject_prior_across_actions(ObservationPrior& prior, int num_actions);
+// Whether the tie applies: asked for (tie_actions) and the posterior update (the paper's
+// update has no base to shape). ObservationEStep ties the prior when it does; what prints
+// the share asks the same.
+inline bool ties_subject_prior(const ObservationPrior& prior) {
+  return prior.tie_actions && prior.update == AlphaUpdate::kPosterior;
+}
 
 // The subject's power prior at strength s: min(alpha, base) + s * max(alpha - base, 0)
 // (ObservationPrior).
